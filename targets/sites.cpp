@@ -1,0 +1,223 @@
+#include "sites.hpp"
+
+#include "cell_grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace mesopen {
+
+std::size_t grainCount(const TargetSpec &spec) {
+  const double d = spec.meanDiameter();
+  return static_cast<std::size_t>(std::llround(spec.area() * (1.0 - spec.porosity) / (M_PI * d * d / 4.0)));
+}
+
+std::vector<double> grainDiameters(const TargetSpec &spec, Random &random) {
+  const std::size_t n = grainCount(spec);
+  std::vector<double> d(n);
+  for (std::size_t i = 0; i < n; ++i)
+    d[i] = spec.diameter_min + (spec.diameter_max - spec.diameter_min) * (i + 0.5) / n;
+  random.shuffle(d);
+  return d;
+}
+
+namespace {
+
+// Renumber grains and voids separately in the row-by-row order of a grid: neighbours in
+// space become neighbours in memory.
+void sortSpatially(Sites &s, double width, double height, double cell) {
+  CellGrid grid(width, height, cell);
+  std::vector<std::uint32_t> order;
+  order.reserve(s.size());
+  grid.fill(s.x.data(), s.y.data(), 0, static_cast<std::uint32_t>(s.grains));
+  order.insert(order.end(), grid.ordered().begin(), grid.ordered().end());
+  grid.fill(s.x.data(), s.y.data(), static_cast<std::uint32_t>(s.grains),
+            static_cast<std::uint32_t>(s.size()));
+  order.insert(order.end(), grid.ordered().begin(), grid.ordered().end());
+  auto permute = [&](std::vector<double> &v) {
+    std::vector<double> w(v.size());
+    for (std::size_t i = 0; i < order.size(); ++i)
+      w[i] = v[order[i]];
+    v.swap(w);
+  };
+  permute(s.x);
+  permute(s.y);
+  permute(s.r);
+}
+
+} // namespace
+
+Sites initialSites(const TargetSpec &spec) {
+  Random random(spec.seed);
+  const std::vector<double> diameters = grainDiameters(spec, random);
+  const std::size_t n = diameters.size();
+  double grain_area = 0.0;
+  for (double d : diameters)
+    grain_area += M_PI * d * d / 4.0;
+  const double void_d = spec.void_ratio * spec.meanDiameter();
+  const double free_area = std::max(0.0, spec.area() - grain_area);
+  const std::size_t v = static_cast<std::size_t>(std::llround(free_area / (M_PI * void_d * void_d / 4.0)));
+
+  Sites s;
+  s.grains = n;
+  s.x.resize(n + v);
+  s.y.resize(n + v);
+  s.r.resize(n + v);
+  for (std::size_t i = 0; i < n; ++i)
+    s.r[i] = 0.5 * diameters[i];
+  for (std::size_t i = n; i < n + v; ++i)
+    s.r[i] = 0.5 * void_d;
+
+  const double w = spec.width, h = spec.height;
+  std::size_t placed_grains = 0, placed_voids = 0;
+  if (spec.placement == Placement::regular) {
+    // Thesis 4.2.5: N sub-boxes, one grain site and V/N void sites in each; the rest at random.
+    const int nx = std::max(1, static_cast<int>(std::floor(std::sqrt(n * w / h))));
+    const int ny = std::max(1, static_cast<int>(n / nx));
+    const std::size_t per_box = v / (static_cast<std::size_t>(nx) * ny);
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const double x0 = w * i / nx, x1 = w * (i + 1) / nx, y0 = h * j / ny, y1 = h * (j + 1) / ny;
+        s.x[placed_grains] = random.uniform(x0, x1);
+        s.y[placed_grains++] = random.uniform(y0, y1);
+        for (std::size_t k = 0; k < per_box; ++k, ++placed_voids) {
+          s.x[n + placed_voids] = random.uniform(x0, x1);
+          s.y[n + placed_voids] = random.uniform(y0, y1);
+        }
+      }
+  }
+  for (; placed_grains < n; ++placed_grains) {
+    s.x[placed_grains] = random.uniform(0.0, w);
+    s.y[placed_grains] = random.uniform(0.0, h);
+  }
+  for (; placed_voids < v; ++placed_voids) {
+    s.x[n + placed_voids] = random.uniform(0.0, w);
+    s.y[n + placed_voids] = random.uniform(0.0, h);
+  }
+  sortSpatially(s, w, h, spec.diameter_max);
+  return s;
+}
+
+namespace {
+
+// Eq. 4.1 with sigma^2 = 1: G = exp(-(1/2) (2 pi d / (r_i + r_j))^2), for d < r_i + r_j.
+inline double gaussian(double d2, double reach) {
+  return std::exp(-2.0 * M_PI * M_PI * d2 / (reach * reach));
+}
+
+struct Conflicts {
+  std::vector<double> dx, dy, energy; // composite conflict vector and energy share per site
+};
+
+// Conflict vectors of all sites (thesis 4.2.1): the sum over overlapping sites j of G_ij times
+// the unit vector from j to i, and the same against each wall through the site's mirror image.
+// Each site gathers its own sum, so the pass is parallel and its result independent of threads.
+void conflicts(const Sites &s, const TargetSpec &spec, const CellGrid &grains, const CellGrid &voids,
+               double r_grain_max, double r_void, Conflicts &c) {
+  const std::size_t n = s.size();
+  const double *x = s.x.data(), *y = s.y.data(), *r = s.r.data();
+  const double w = spec.width, h = spec.height;
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n; ++i) {
+    double fx = 0.0, fy = 0.0, e = 0.0;
+    const double xi = x[i], yi = y[i], ri = r[i];
+    auto pair = [&](std::uint32_t j) {
+      if (j == i)
+        return;
+      const double ex = xi - x[j], ey = yi - y[j], reach = ri + r[j];
+      const double d2 = ex * ex + ey * ey;
+      if (d2 >= reach * reach)
+        return;
+      const double g = gaussian(d2, reach);
+      e += 0.5 * g; // each pair is seen from both sides
+      if (d2 > 0.0) {
+        const double inv = 1.0 / std::sqrt(d2);
+        fx += g * ex * inv;
+        fy += g * ey * inv;
+      }
+    };
+    grains.forNear(xi, yi, ri + r_grain_max, pair);
+    voids.forNear(xi, yi, ri + r_void, pair);
+    // Walls: the image of the site in a wall at distance delta is 2 delta away, reach 2 r_i.
+    auto wall = [&](double delta, double nx, double ny) {
+      if (delta >= ri)
+        return;
+      const double d = 2.0 * std::max(delta, 0.0);
+      const double g = gaussian(d * d, 2.0 * ri);
+      e += g;
+      fx += g * nx;
+      fy += g * ny;
+    };
+    wall(xi, 1.0, 0.0);
+    wall(w - xi, -1.0, 0.0);
+    wall(yi, 0.0, 1.0);
+    wall(h - yi, 0.0, -1.0);
+    c.dx[i] = fx;
+    c.dy[i] = fy;
+    c.energy[i] = e;
+  }
+}
+
+} // namespace
+
+PlacementReport relaxSites(Sites &s, const TargetSpec &spec, double step_decay) {
+  const std::size_t n = s.size();
+  const double r_grain_max = 0.5 * spec.diameter_max;
+  const double r_void = 0.5 * spec.void_ratio * spec.meanDiameter();
+  CellGrid grains(spec.width, spec.height, r_grain_max);
+  CellGrid voids(spec.width, spec.height, 2.0 * r_void);
+  Conflicts c{std::vector<double>(n), std::vector<double>(n), std::vector<double>(n)};
+
+  const double step0 = spec.step_scale * spec.meanDiameter();
+  double step = step0;
+  PlacementReport report;
+  for (int it = 0;; ++it) {
+    grains.fill(s.x.data(), s.y.data(), 0, static_cast<std::uint32_t>(s.grains));
+    voids.fill(s.x.data(), s.y.data(), static_cast<std::uint32_t>(s.grains),
+               static_cast<std::uint32_t>(n));
+    conflicts(s, spec, grains, voids, r_grain_max, r_void, c);
+    // Serial sums keep the result the same for any number of threads.
+    double energy = 0.0, largest = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      energy += c.energy[i];
+      largest = std::max(largest, c.dx[i] * c.dx[i] + c.dy[i] * c.dy[i]);
+    }
+    report.energy.push_back(energy);
+    const std::size_t k = report.energy.size();
+    if (k >= 2 && energy > report.energy[k - 2])
+      step *= step_decay;
+    const bool flat = k > 20 && std::abs(report.energy[k - 21] - energy) < 1e-4 * report.energy[k - 21];
+    if (largest == 0.0 || step < 0.01 * step0 || flat) {
+      report.converged = true;
+      break;
+    }
+    if (it >= spec.max_iterations)
+      break;
+    // Normalise by the largest move, scale to the step, move, stay inside the box.
+    const double scale = step / std::sqrt(largest);
+#pragma omp parallel for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      s.x[i] = std::clamp(s.x[i] + scale * c.dx[i], 0.0, spec.width);
+      s.y[i] = std::clamp(s.y[i] + scale * c.dy[i], 0.0, spec.height);
+    }
+    report.iterations = it + 1;
+  }
+  return report;
+}
+
+double overlapEnergy(const Sites &s, const TargetSpec &spec) {
+  const double r_grain_max = 0.5 * spec.diameter_max;
+  const double r_void = 0.5 * spec.void_ratio * spec.meanDiameter();
+  CellGrid grains(spec.width, spec.height, r_grain_max);
+  CellGrid voids(spec.width, spec.height, 2.0 * r_void);
+  grains.fill(s.x.data(), s.y.data(), 0, static_cast<std::uint32_t>(s.grains));
+  voids.fill(s.x.data(), s.y.data(), static_cast<std::uint32_t>(s.grains),
+             static_cast<std::uint32_t>(s.size()));
+  Conflicts c{std::vector<double>(s.size()), std::vector<double>(s.size()),
+              std::vector<double>(s.size())};
+  conflicts(s, spec, grains, voids, r_grain_max, r_void, c);
+  return std::accumulate(c.energy.begin(), c.energy.end(), 0.0);
+}
+
+} // namespace mesopen
