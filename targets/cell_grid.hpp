@@ -1,4 +1,5 @@
-// A uniform grid of buckets over the box for neighbour searches (counting sort, O(n)).
+// A uniform grid of buckets over the box for neighbour searches. Points are copied into bucket
+// order (counting sort, O(n)), so a search reads memory front to back.
 #pragma once
 
 #include <algorithm>
@@ -10,47 +11,55 @@ namespace mesopen {
 
 class CellGrid {
 public:
+  struct Item {
+    double x, y, r;
+    std::uint32_t index;
+  };
+
   // Buckets of edge >= `cell` covering [0, width] x [0, height]; points outside go to the
   // nearest edge bucket.
   CellGrid(double width, double height, double cell)
       : nx_(std::max(1, static_cast<int>(width / cell))),
         ny_(std::max(1, static_cast<int>(height / cell))), sx_(nx_ / width), sy_(ny_ / height) {}
 
-  int nx() const { return nx_; }
-  int ny() const { return ny_; }
   int column(double x) const { return std::clamp(static_cast<int>(std::floor(x * sx_)), 0, nx_ - 1); }
   int row(double y) const { return std::clamp(static_cast<int>(std::floor(y * sy_)), 0, ny_ - 1); }
   int bucket(double x, double y) const { return row(y) * nx_ + column(x); }
 
-  // Sort the points [first, last) of x, y into buckets.
-  void fill(const double *x, const double *y, std::uint32_t first, std::uint32_t last) {
+  // Sort the points [first, last) of x, y, r into buckets.
+  void fill(const double *x, const double *y, const double *r, std::uint32_t first, std::uint32_t last) {
     start_.assign(static_cast<std::size_t>(nx_) * ny_ + 1, 0);
     items_.resize(last - first);
+    bucket_of_.resize(last - first);
     for (std::uint32_t i = first; i < last; ++i)
-      ++start_[bucket(x[i], y[i]) + 1];
+      ++start_[(bucket_of_[i - first] = bucket(x[i], y[i])) + 1];
     for (std::size_t b = 1; b < start_.size(); ++b)
       start_[b] += start_[b - 1];
-    std::vector<std::uint32_t> fillp(start_.begin(), start_.end() - 1);
+    fill_.assign(start_.begin(), start_.end() - 1);
     for (std::uint32_t i = first; i < last; ++i)
-      items_[fillp[bucket(x[i], y[i])]++] = i;
+      items_[fill_[bucket_of_[i - first]]++] = {x[i], y[i], r[i], i};
   }
 
-  // Call f(j) for every point whose bucket meets the square [x - reach, x + reach]^2.
+  // Call f(item) for every point whose bucket meets the square [x - reach, x + reach]^2.
   template <class F> void forNear(double x, double y, double reach, F &&f) const {
     const int c0 = column(x - reach), c1 = column(x + reach);
     const int r0 = row(y - reach), r1 = row(y + reach);
-    for (int r = r0; r <= r1; ++r)
-      for (std::uint32_t k = start_[r * nx_ + c0]; k < start_[r * nx_ + c1 + 1]; ++k)
-        f(items_[k]);
+    for (int r = r0; r <= r1; ++r) {
+      const Item *it = items_.data() + start_[r * nx_ + c0], *end = items_.data() + start_[r * nx_ + c1 + 1];
+      for (; it != end; ++it)
+        f(*it);
+    }
   }
 
-  // The points in bucket order (row by row), for a cache-friendly renumbering.
-  const std::vector<std::uint32_t> &ordered() const { return items_; }
+  // The points in bucket order (row by row).
+  const std::vector<Item> &items() const { return items_; }
 
 private:
   int nx_, ny_;
   double sx_, sy_;
-  std::vector<std::uint32_t> start_, items_;
+  std::vector<std::uint32_t> start_, fill_;
+  std::vector<int> bucket_of_;
+  std::vector<Item> items_;
 };
 
 } // namespace mesopen

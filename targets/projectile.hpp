@@ -19,7 +19,7 @@ struct ProjectileSpec {
   double tip_half_angle = 60.0;    // facet half-angle to the axis [deg]
   double tip_facet_length = 40e-6; // length of each facet [m] (0: no facets, sharp tip)
   double mesh_size = 0.0;          // triangle edge [m]; 0 takes the target's mesh_size
-  double min_angle = 25.0;         // smallest triangle angle [deg]
+  double min_angle = 20.7;         // smallest triangle angle [deg]
 };
 
 // Derived dimensions. The half-width at distance s from the sharp tip is

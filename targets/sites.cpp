@@ -30,11 +30,13 @@ void sortSpatially(Sites &s, double width, double height, double cell) {
   CellGrid grid(width, height, cell);
   std::vector<std::uint32_t> order;
   order.reserve(s.size());
-  grid.fill(s.x.data(), s.y.data(), 0, static_cast<std::uint32_t>(s.grains));
-  order.insert(order.end(), grid.ordered().begin(), grid.ordered().end());
-  grid.fill(s.x.data(), s.y.data(), static_cast<std::uint32_t>(s.grains),
+  grid.fill(s.x.data(), s.y.data(), s.r.data(), 0, static_cast<std::uint32_t>(s.grains));
+  for (const auto &item : grid.items())
+    order.push_back(item.index);
+  grid.fill(s.x.data(), s.y.data(), s.r.data(), static_cast<std::uint32_t>(s.grains),
             static_cast<std::uint32_t>(s.size()));
-  order.insert(order.end(), grid.ordered().begin(), grid.ordered().end());
+  for (const auto &item : grid.items())
+    order.push_back(item.index);
   auto permute = [&](std::vector<double> &v) {
     std::vector<double> w(v.size());
     for (std::size_t i = 0; i < order.size(); ++i)
@@ -48,8 +50,9 @@ void sortSpatially(Sites &s, double width, double height, double cell) {
 
 } // namespace
 
-Sites initialSites(const TargetSpec &spec) {
-  Random random(spec.seed);
+Sites initialSites(const TargetSpec &spec, double void_scale) {
+  // Grains and voids draw from streams of their own: the grains are the same whatever V is.
+  Random random(spec.seed), void_random(spec.seed ^ 0x9E3779B97F4A7C15ull);
   const std::vector<double> diameters = grainDiameters(spec, random);
   const std::size_t n = diameters.size();
   double grain_area = 0.0;
@@ -57,7 +60,8 @@ Sites initialSites(const TargetSpec &spec) {
     grain_area += M_PI * d * d / 4.0;
   const double void_d = spec.void_ratio * spec.meanDiameter();
   const double free_area = std::max(0.0, spec.area() - grain_area);
-  const std::size_t v = static_cast<std::size_t>(std::llround(free_area / (M_PI * void_d * void_d / 4.0)));
+  const std::size_t v =
+      static_cast<std::size_t>(std::llround(void_scale * free_area / (M_PI * void_d * void_d / 4.0)));
 
   Sites s;
   s.grains = n;
@@ -82,8 +86,8 @@ Sites initialSites(const TargetSpec &spec) {
         s.x[placed_grains] = random.uniform(x0, x1);
         s.y[placed_grains++] = random.uniform(y0, y1);
         for (std::size_t k = 0; k < per_box; ++k, ++placed_voids) {
-          s.x[n + placed_voids] = random.uniform(x0, x1);
-          s.y[n + placed_voids] = random.uniform(y0, y1);
+          s.x[n + placed_voids] = void_random.uniform(x0, x1);
+          s.y[n + placed_voids] = void_random.uniform(y0, y1);
         }
       }
   }
@@ -92,8 +96,8 @@ Sites initialSites(const TargetSpec &spec) {
     s.y[placed_grains] = random.uniform(0.0, h);
   }
   for (; placed_voids < v; ++placed_voids) {
-    s.x[n + placed_voids] = random.uniform(0.0, w);
-    s.y[n + placed_voids] = random.uniform(0.0, h);
+    s.x[n + placed_voids] = void_random.uniform(0.0, w);
+    s.y[n + placed_voids] = void_random.uniform(0.0, h);
   }
   sortSpatially(s, w, h, spec.diameter_max);
   return s;
@@ -117,15 +121,16 @@ void conflicts(const Sites &s, const TargetSpec &spec, const CellGrid &grains, c
                double r_grain_max, double r_void, Conflicts &c) {
   const std::size_t n = s.size();
   const double *x = s.x.data(), *y = s.y.data(), *r = s.r.data();
+  (void)r;
   const double w = spec.width, h = spec.height;
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < n; ++i) {
     double fx = 0.0, fy = 0.0, e = 0.0;
     const double xi = x[i], yi = y[i], ri = r[i];
-    auto pair = [&](std::uint32_t j) {
-      if (j == i)
+    auto pair = [&](const CellGrid::Item &j) {
+      if (j.index == i)
         return;
-      const double ex = xi - x[j], ey = yi - y[j], reach = ri + r[j];
+      const double ex = xi - j.x, ey = yi - j.y, reach = ri + j.r;
       const double d2 = ex * ex + ey * ey;
       if (d2 >= reach * reach)
         return;
@@ -161,7 +166,7 @@ void conflicts(const Sites &s, const TargetSpec &spec, const CellGrid &grains, c
 
 } // namespace
 
-PlacementReport relaxSites(Sites &s, const TargetSpec &spec, double step_decay) {
+PlacementReport relaxSites(Sites &s, const TargetSpec &spec) {
   const std::size_t n = s.size();
   const double r_grain_max = 0.5 * spec.diameter_max;
   const double r_void = 0.5 * spec.void_ratio * spec.meanDiameter();
@@ -173,8 +178,8 @@ PlacementReport relaxSites(Sites &s, const TargetSpec &spec, double step_decay) 
   double step = step0;
   PlacementReport report;
   for (int it = 0;; ++it) {
-    grains.fill(s.x.data(), s.y.data(), 0, static_cast<std::uint32_t>(s.grains));
-    voids.fill(s.x.data(), s.y.data(), static_cast<std::uint32_t>(s.grains),
+    grains.fill(s.x.data(), s.y.data(), s.r.data(), 0, static_cast<std::uint32_t>(s.grains));
+    voids.fill(s.x.data(), s.y.data(), s.r.data(), static_cast<std::uint32_t>(s.grains),
                static_cast<std::uint32_t>(n));
     conflicts(s, spec, grains, voids, r_grain_max, r_void, c);
     // Serial sums keep the result the same for any number of threads.
@@ -186,7 +191,7 @@ PlacementReport relaxSites(Sites &s, const TargetSpec &spec, double step_decay) 
     report.energy.push_back(energy);
     const std::size_t k = report.energy.size();
     if (k >= 2 && energy > report.energy[k - 2])
-      step *= step_decay;
+      step *= spec.step_decay;
     const bool flat = k > 20 && std::abs(report.energy[k - 21] - energy) < 1e-4 * report.energy[k - 21];
     if (largest == 0.0 || step < 0.01 * step0 || flat) {
       report.converged = true;
@@ -211,8 +216,8 @@ double overlapEnergy(const Sites &s, const TargetSpec &spec) {
   const double r_void = 0.5 * spec.void_ratio * spec.meanDiameter();
   CellGrid grains(spec.width, spec.height, r_grain_max);
   CellGrid voids(spec.width, spec.height, 2.0 * r_void);
-  grains.fill(s.x.data(), s.y.data(), 0, static_cast<std::uint32_t>(s.grains));
-  voids.fill(s.x.data(), s.y.data(), static_cast<std::uint32_t>(s.grains),
+  grains.fill(s.x.data(), s.y.data(), s.r.data(), 0, static_cast<std::uint32_t>(s.grains));
+  voids.fill(s.x.data(), s.y.data(), s.r.data(), static_cast<std::uint32_t>(s.grains),
              static_cast<std::uint32_t>(s.size()));
   Conflicts c{std::vector<double>(s.size()), std::vector<double>(s.size()),
               std::vector<double>(s.size())};

@@ -22,17 +22,19 @@ std::size_t grainCount(const TargetSpec &spec);
 // the assigned sizes have exactly the requested mean and spread.
 std::vector<double> grainDiameters(const TargetSpec &spec, Random &random);
 
-// Sites with their radii at their initial random positions. Void sites have diameter
-// void_ratio * dbar; their number fills the area the grain disks leave: V = (A - sum A_grain) / A_void.
-Sites initialSites(const TargetSpec &spec);
+// Sites with their radii at their initial random positions (thesis 4.2.1, 4.2.5). Void sites
+// have diameter void_ratio * dbar; their number sets the porosity:
+// V = void_scale * (A - sum A_grain) / A_void, void_scale calibrated by the generator.
+Sites initialSites(const TargetSpec &spec, double void_scale);
 
-// Steepest descent on the summed Gaussian overlap (Eq. 4.1) with cell lists: each site moves
-// along the sum of G_ij * e_ij over the sites it overlaps (and its mirror images in the walls),
-// moves normalised by the largest and scaled by step_scale * dbar. When the energy rises the
-// step shrinks by `step_decay` (1 keeps the thesis's fixed step); the descent stops at a local
-// minimum: the step below 1 % of its start, or a relative energy change under 1e-4 over 20
-// iterations, or max_iterations.
-PlacementReport relaxSites(Sites &sites, const TargetSpec &spec, double step_decay = 0.7);
+// Steepest descent of the Gaussian overlap (Eq. 4.1) with cell lists: each site moves along its
+// conflict vector, the sum of G_ij e_ij over the sites it overlaps (and over its mirror images in
+// the walls), with moves normalised by the largest and scaled by step_scale * dbar (thesis
+// 4.2.1). The conflict vector is minus the gradient of sum_pairs int_d^R G(s) ds, so this is a
+// true descent. When the energy rises the step shrinks by step_decay (1 keeps the thesis's fixed
+// step). It stops at a local minimum (the step below 1 % of its start, or the energy changing by
+// less than 1e-4 of itself over 20 iterations) or after max_iterations.
+PlacementReport relaxSites(Sites &sites, const TargetSpec &spec);
 
 // Overlap energy of the sites (sum over overlapping pairs and wall images of Eq. 4.1).
 double overlapEnergy(const Sites &sites, const TargetSpec &spec);

@@ -23,11 +23,14 @@ struct TargetSpec {
   Placement placement = Placement::regular;
   std::uint64_t seed = 1;
   double step_scale = 0.3;        // placement step / mean diameter (thesis Fig. 4.6)
+  double step_decay = 0.7;        // step factor when the overlap energy rises (1: thesis)
   int max_iterations = 400;       // placement iterations at most
-  Tessellation tessellation = Tessellation::voronoi;
+  double void_scale = 0.6;        // void-site count over the area rule (see initialSites)
+  bool calibrate_porosity = true; // tune the void cells' size to the requested porosity
+  Tessellation tessellation = Tessellation::power;
   MeshKind mesh = MeshKind::quality;
   double mesh_size = 10e-6;       // target triangle edge and shortest polygon edge [m]
-  double min_angle = 25.0;        // smallest triangle angle of the quality mesh [deg]
+  double min_angle = 20.7;        // smallest triangle angle of the quality mesh [deg]
   double density = 2648.5;        // grain density for target.data [kg/m^3] (quartz, Table 3.3)
   int threads = 0;                // 0: all cores
 

@@ -1,0 +1,26 @@
+// Whole-or-absent output files: write beside the destination under `path + ".tmp"`, then
+// rename onto the destination (atomic within one file system).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <system_error>
+#include <utility>
+
+namespace mesopen {
+
+// Calls write(temp_path) and renames the temporary file onto `path`. When `write` or the rename
+// throws, the temporary file is removed and the exception passed on; `path` is left untouched.
+template <class Write> void writeAtomically(const std::string &path, Write &&write) {
+  const std::string temp = path + ".tmp";
+  try {
+    std::forward<Write>(write)(temp);
+    std::filesystem::rename(temp, path);
+  } catch (...) {
+    std::error_code ignored;
+    std::filesystem::remove(temp, ignored);
+    throw;
+  }
+}
+
+} // namespace mesopen

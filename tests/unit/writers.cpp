@@ -1,0 +1,296 @@
+// The target writers: HDF5 layout and read-back, byte-identical repeats, the LIGGGHTS data file's
+// contents, atomic writing (no temporary left, nothing written on failure).
+#include "writers.hpp"
+#include "h5file.hpp"
+#include "mesh.hpp"
+#include "polygon.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <thread>
+
+namespace fs = std::filesystem;
+using namespace mesopen;
+
+namespace {
+
+std::string readFile(const fs::path &p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A fresh directory under the system temporary directory, removed at the end.
+class WritersTest : public ::testing::Test {
+protected:
+  void SetUp() override {
+    std::random_device rd;
+    dir = fs::temp_directory_path() /
+          ("mesopen-writers-" + std::to_string(rd()) + "-" + std::to_string(rd()));
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  std::string file(const std::string &name) const { return (dir / name).string(); }
+  bool anyTemporary() const {
+    for (const auto &entry : fs::directory_iterator(dir))
+      if (entry.path().extension() == ".tmp")
+        return true;
+    return false;
+  }
+  fs::path dir;
+};
+
+// Two unit squares side by side (50 um) and a hexagon above them, all fan-meshed.
+Target smallTarget(bool meshed) {
+  Target t;
+  t.spec.width = 200e-6;
+  t.spec.height = 150e-6;
+  t.spec.seed = 42;
+  t.spec.density = 2648.5;
+  const double s = 50e-6;
+  t.grains.add({10e-6, 10e-6 + s, 10e-6 + s, 10e-6}, {10e-6, 10e-6, 10e-6 + s, 10e-6 + s});
+  t.grains.add({70e-6, 70e-6 + s, 70e-6 + s, 70e-6}, {10e-6, 10e-6, 10e-6 + s, 10e-6 + s});
+  std::vector<double> hx, hy;
+  for (int k = 0; k < 6; ++k) {
+    hx.push_back(100e-6 + 30e-6 * std::cos(k * M_PI / 3));
+    hy.push_back(100e-6 + 30e-6 * std::sin(k * M_PI / 3));
+  }
+  t.grains.add(hx, hy);
+  t.sites.x = {35e-6, 95e-6, 100e-6, 150e-6};
+  t.sites.y = {35e-6, 35e-6, 100e-6, 30e-6};
+  t.sites.r = {25e-6, 25e-6, 30e-6, 5e-6};
+  t.sites.grains = 3;
+  t.grain_site = {0, 1, 2};
+  if (meshed)
+    for (std::size_t g = 0; g < t.grains.size(); ++g)
+      appendBody(t.mesh, fanMesh(t.grains.x.data() + t.grains.offset[g],
+                                 t.grains.y.data() + t.grains.offset[g], t.grains.corners(g)));
+  return t;
+}
+
+// A triangle standing in for the projectile (its shape figures set by hand).
+PlacedProjectile smallProjectile() {
+  PlacedProjectile p{};
+  p.shape.diameter = 20e-6;
+  p.shape.ogive_radius = 70e-6;
+  p.shape.nose_length = 40e-6;
+  p.shape.length = 77e-6;
+  p.shape.tip_cut = 2e-6;
+  p.outline_x = {90e-6, 110e-6, 100e-6};
+  p.outline_y = {145e-6, 145e-6, 135e-6};
+  p.mesh = fanMesh(p.outline_x.data(), p.outline_y.data(), 3);
+  p.offset_x = 100e-6;
+  p.offset_y = 135e-6;
+  return p;
+}
+
+double polygonArea(const Polygons &p, std::size_t g) {
+  return signedArea(p.x.data() + p.offset[g], p.y.data() + p.offset[g], p.corners(g));
+}
+
+} // namespace
+
+TEST_F(WritersTest, H5ReadsBack) {
+  const Target t = smallTarget(true);
+  const PlacedProjectile p = smallProjectile();
+  writeTargetH5(file("target.h5"), t, &p);
+
+  const H5File h5 = H5File::open(file("target.h5"));
+  EXPECT_EQ(h5.readStringAttribute("/", "format"), "mesopen-target");
+  EXPECT_EQ(h5.readAttribute<int>("/", "version"), 1);
+  EXPECT_EQ(h5.readAttribute<std::uint64_t>("/", "seed"), 42u);
+  EXPECT_DOUBLE_EQ(h5.readAttribute<double>("/", "width"), 200e-6);
+  for (const char *name : {"height", "porosity_requested", "diameter_min", "diameter_max",
+                           "void_ratio", "mesh_size", "density"})
+    EXPECT_TRUE(h5.hasAttribute("/", name)) << name;
+  EXPECT_EQ(h5.readAttribute<std::uint64_t>("/sites", "grains"), 3u);
+  EXPECT_EQ(h5.read<double>("/sites/r"), t.sites.r);
+
+  EXPECT_EQ(h5.read<std::uint64_t>("/grains/offset"), t.grains.offset);
+  EXPECT_EQ(h5.read<std::uint32_t>("/grains/site"), t.grain_site);
+  const auto area = h5.read<double>("/grains/area");
+  const auto diameter = h5.read<double>("/grains/diameter");
+  ASSERT_EQ(area.size(), 3u);
+  for (std::size_t g = 0; g < 3; ++g) {
+    EXPECT_DOUBLE_EQ(area[g], polygonArea(t.grains, g));
+    EXPECT_DOUBLE_EQ(diameter[g], equivalentDiameter(area[g]));
+  }
+  EXPECT_DOUBLE_EQ(area[0], 50e-6 * 50e-6);
+  EXPECT_DOUBLE_EQ(h5.read<double>("/grains/centroid_x")[1], 95e-6);
+  EXPECT_DOUBLE_EQ(h5.read<double>("/grains/centroid_y")[1], 35e-6);
+
+  EXPECT_EQ(h5.shape("/mesh/tri"), (std::vector<std::uint64_t>{t.mesh.triangles(), 3}));
+  EXPECT_EQ(h5.read<std::uint32_t>("/mesh/tri"), t.mesh.tri);
+  EXPECT_EQ(h5.read<std::uint64_t>("/mesh/node_offset"), t.mesh.node_offset);
+  EXPECT_EQ(h5.read<std::uint64_t>("/mesh/tri_offset"), t.mesh.tri_offset);
+
+  EXPECT_EQ(h5.shape("/projectile/tri"), (std::vector<std::uint64_t>{3, 3}));
+  EXPECT_EQ(h5.read<double>("/projectile/outline_y"), p.outline_y);
+  EXPECT_DOUBLE_EQ(h5.readAttribute<double>("/projectile", "crh"), 3.5);
+  for (const char *name : {"diameter", "length", "nose_length", "tip_cut", "offset_x", "offset_y"})
+    EXPECT_TRUE(h5.hasAttribute("/projectile", name)) << name;
+  EXPECT_FALSE(anyTemporary());
+}
+
+TEST_F(WritersTest, H5OmitsMeshAndProjectile) {
+  writeTargetH5(file("target.h5"), smallTarget(false), nullptr);
+  const H5File h5 = H5File::open(file("target.h5"));
+  EXPECT_TRUE(h5.exists("/grains/area"));
+  EXPECT_FALSE(h5.exists("/mesh"));
+  EXPECT_FALSE(h5.exists("/projectile"));
+  EXPECT_FALSE(h5.exists("/mesh/x"));
+}
+
+TEST_F(WritersTest, ByteIdenticalRepeats) {
+  const Target t = smallTarget(true);
+  const PlacedProjectile p = smallProjectile();
+  writeTargetH5(file("a.h5"), t, &p);
+  writeLiggghtsData(file("a.data"), t);
+  writeTargetVtu(file("a.vtu"), t, &p);
+  writeYadeSpheres(file("a.txt"), t);
+  // HDF5 time stamps have one-second resolution: wait past a second so that any would differ.
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  writeTargetH5(file("b.h5"), t, &p);
+  writeLiggghtsData(file("b.data"), t);
+  writeTargetVtu(file("b.vtu"), t, &p);
+  writeYadeSpheres(file("b.txt"), t);
+  EXPECT_EQ(readFile(dir / "a.h5"), readFile(dir / "b.h5"));
+  EXPECT_EQ(readFile(dir / "a.data"), readFile(dir / "b.data"));
+  EXPECT_EQ(readFile(dir / "a.vtu"), readFile(dir / "b.vtu"));
+  EXPECT_EQ(readFile(dir / "a.txt"), readFile(dir / "b.txt"));
+  // Writing over an existing file gives the same bytes too.
+  writeTargetH5(file("a.h5"), t, &p);
+  EXPECT_EQ(readFile(dir / "a.h5"), readFile(dir / "b.h5"));
+  EXPECT_FALSE(anyTemporary());
+}
+
+TEST_F(WritersTest, LiggghtsDataParses) {
+  const Target t = smallTarget(false);
+  writeLiggghtsData(file("target.data"), t);
+  std::ifstream in(file("target.data"));
+  std::string line;
+  std::getline(in, line); // title
+  std::size_t declared = 0, atoms = 0;
+  bool in_atoms = false, have_z = false;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    if (line.find(" atoms") != std::string::npos && !in_atoms) {
+      s >> declared;
+    } else if (line.find("zlo zhi") != std::string::npos) {
+      double zlo, zhi;
+      s >> zlo >> zhi;
+      EXPECT_LT(zlo, 0.0);
+      EXPECT_GT(zhi, 0.0);
+      have_z = true;
+    } else if (line == "Atoms") {
+      in_atoms = true;
+    } else if (in_atoms && !line.empty()) {
+      long id, type;
+      double d, rho, x, y, z;
+      ASSERT_TRUE(s >> id >> type >> d >> rho >> x >> y >> z) << line;
+      EXPECT_EQ(id, static_cast<long>(atoms + 1));
+      EXPECT_EQ(type, 1);
+      EXPECT_EQ(rho, t.spec.density);
+      EXPECT_EQ(z, 0.0);
+      const double area = polygonArea(t.grains, atoms);
+      const double mass = rho * M_PI * d * d / 4;
+      EXPECT_NEAR(mass, rho * area, 1e-12 * rho * area);
+      const Point c = centroid(t.grains.x.data() + t.grains.offset[atoms],
+                               t.grains.y.data() + t.grains.offset[atoms], t.grains.corners(atoms));
+      EXPECT_EQ(x, c.x);
+      EXPECT_EQ(y, c.y);
+      ++atoms;
+    }
+  }
+  EXPECT_TRUE(have_z);
+  EXPECT_EQ(declared, t.grains.size());
+  EXPECT_EQ(atoms, t.grains.size());
+}
+
+TEST_F(WritersTest, YadeSpheres) {
+  const Target t = smallTarget(false);
+  writeYadeSpheres(file("spheres.txt"), t);
+  std::ifstream in(file("spheres.txt"));
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line.rfind("#", 0), 0u);
+  std::size_t n = 0;
+  double x, y, z, r;
+  while (in >> x >> y >> z >> r) {
+    EXPECT_EQ(z, 0.0);
+    EXPECT_NEAR(M_PI * r * r, polygonArea(t.grains, n), 1e-12 * polygonArea(t.grains, n));
+    ++n;
+  }
+  EXPECT_EQ(n, t.grains.size());
+}
+
+TEST_F(WritersTest, VtuWritten) {
+  const PlacedProjectile p = smallProjectile();
+  for (bool meshed : {true, false}) {
+    writeTargetVtu(file("target.vtu"), smallTarget(meshed), meshed ? &p : nullptr);
+    const std::string text = readFile(dir / "target.vtu");
+    EXPECT_NE(text.find("UnstructuredGrid"), std::string::npos);
+    EXPECT_NE(text.find("Name=\"body\""), std::string::npos);
+    EXPECT_NE(text.find("Name=\"grain_diameter\""), std::string::npos);
+    // Fan meshes: 4 + 4 + 6 grain triangles and 3 projectile triangles; or 3 polygons.
+    EXPECT_NE(text.find(meshed ? "NumberOfCells=\"17\"" : "NumberOfCells=\"3\""),
+              std::string::npos);
+  }
+  EXPECT_FALSE(anyTemporary());
+}
+
+TEST_F(WritersTest, MissingDirectoryThrowsAndLeavesNothing) {
+  const Target t = smallTarget(true);
+  const PlacedProjectile p = smallProjectile();
+  const fs::path missing = dir / "no" / "such";
+  EXPECT_THROW(writeTargetH5((missing / "target.h5").string(), t, &p), std::runtime_error);
+  EXPECT_THROW(writeLiggghtsData((missing / "target.data").string(), t), std::runtime_error);
+  EXPECT_THROW(writeTargetVtu((missing / "target.vtu").string(), t, &p), std::runtime_error);
+  EXPECT_THROW(writeYadeSpheres((missing / "spheres.txt").string(), t), std::runtime_error);
+  EXPECT_FALSE(fs::exists(dir / "no"));
+  EXPECT_TRUE(fs::is_empty(dir));
+}
+
+TEST_F(WritersTest, FailedWriteKeepsOldFile) {
+  // The destination is a directory: the rename fails, the temporary goes, the directory stays.
+  const Target t = smallTarget(false);
+  fs::create_directory(dir / "target.data");
+  fs::create_directory(dir / "target.data" / "keep");
+  EXPECT_ANY_THROW(writeLiggghtsData(file("target.data"), t));
+  EXPECT_TRUE(fs::exists(dir / "target.data" / "keep"));
+  EXPECT_FALSE(anyTemporary());
+}
+
+TEST(H5File, ErrorsNameFileAndObject) {
+  const fs::path path =
+      fs::temp_directory_path() / ("mesopen-h5file-" + std::to_string(std::random_device{}()));
+  {
+    H5File h5 = H5File::create(path.string());
+    h5.createGroup("/g");
+    h5.write("/g/v", std::vector<int>{1, -2, 3});
+    h5.write("/g/empty", std::vector<double>{});
+    h5.attribute("/g/v", "unit", std::string(""));
+    try {
+      h5.write("/missing/v", std::vector<double>{1.0});
+      ADD_FAILURE() << "no exception";
+    } catch (const std::runtime_error &e) {
+      EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("/missing/v"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(h5.createGroup("/g"), std::runtime_error);
+    h5.close();
+  }
+  const H5File h5 = H5File::open(path.string());
+  EXPECT_EQ(h5.read<int>("/g/v"), (std::vector<int>{1, -2, 3}));
+  EXPECT_TRUE(h5.read<double>("/g/empty").empty());
+  EXPECT_EQ(h5.readStringAttribute("/g/v", "unit"), "");
+  EXPECT_THROW(h5.read<double>("/g/nothing"), std::runtime_error);
+  fs::remove(path);
+}

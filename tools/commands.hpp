@@ -1,0 +1,25 @@
+// The program's subcommands. Each returns the exit code: 0 success, 2 bad input (InputError,
+// message names file, key, value, allowed range), 1 a failure while running.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace mesopen {
+
+struct TargetOptions {
+  std::string scene;
+  std::string out_dir;
+  std::optional<std::uint64_t> seed;   // overrides target.seed
+  std::optional<int> threads;
+  bool no_mesh = false;                // skip meshing (grains as polygons only)
+  bool no_plot = false;                // skip the histogram PNG
+};
+
+int targetCommand(const TargetOptions &options);
+
+// Where the program's data files are (build/share/mesopen beside build/bin/mesopen).
+std::string shareDirectory();
+
+} // namespace mesopen

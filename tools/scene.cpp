@@ -1,0 +1,299 @@
+#include "scene.hpp"
+
+#include <toml++/toml.h>
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+namespace mesopen {
+
+namespace {
+
+// One scene key: where it lives, what it holds, what is allowed, and how it is stored.
+struct Key {
+  std::string table, name, type, unit, doc;
+  double lo = -HUGE_VAL, hi = HUGE_VAL; // allowed closed range for numbers
+  bool lo_open = false;                 // lo itself not allowed
+  std::vector<std::string> choices;     // for strings
+  std::function<void(Scene &, const toml::node &, const std::string &where)> set;
+  std::function<std::string(const Scene &)> get; // the default, printed
+};
+
+std::string show(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+std::string quoted(const toml::node &n) {
+  std::ostringstream s;
+  n.visit([&](const auto &v) { s << v; });
+  return s.str();
+}
+
+std::string allowed(const Key &k) {
+  if (!k.choices.empty()) {
+    std::string s;
+    for (const auto &c : k.choices)
+      s += (s.empty() ? "\"" : ", \"") + c + "\"";
+    return "one of " + s;
+  }
+  if (k.type == "bool")
+    return "true or false";
+  std::string lo = k.lo == -HUGE_VAL ? "" : show(k.lo) + (k.lo_open ? " < " : " <= ");
+  std::string hi = k.hi == HUGE_VAL ? "" : " <= " + show(k.hi);
+  return lo + k.name + hi;
+}
+
+[[noreturn]] void fail(const std::string &where, const Key &k, const std::string &value,
+                       const std::string &why) {
+  throw InputError(where + ": " + k.table + "." + k.name + " = " + value + " " + why + "; allowed: " +
+                   allowed(k) + (k.unit.empty() ? "" : " [" + k.unit + "]"));
+}
+
+double number(const Key &k, const toml::node &n, const std::string &where) {
+  double v;
+  if (auto f = n.as_floating_point())
+    v = f->get();
+  else if (auto i = n.as_integer())
+    v = static_cast<double>(i->get());
+  else
+    fail(where, k, quoted(n), "is not a number");
+  if (!std::isfinite(v) || v < k.lo || (k.lo_open && v == k.lo) || v > k.hi)
+    fail(where, k, quoted(n), "is out of range");
+  return v;
+}
+
+template <class Spec>
+Key real(std::string table, std::string name, Spec Scene::*part, double Spec::*field, std::string unit,
+         double lo, bool lo_open, double hi, std::string doc) {
+  Key k{table, name, "real", unit, doc, lo, hi, lo_open, {}, nullptr, nullptr};
+  k.set = [k, part, field](Scene &s, const toml::node &n, const std::string &where) {
+    (s.*part).*field = number(k, n, where);
+  };
+  k.get = [part, field](const Scene &s) { return show((s.*part).*field); };
+  return k;
+}
+
+template <class Spec, class Int>
+Key integer(std::string table, std::string name, Spec Scene::*part, Int Spec::*field, double lo,
+            double hi, std::string doc) {
+  Key k{table, name, "integer", "", doc, lo, hi, false, {}, nullptr, nullptr};
+  k.set = [k, part, field](Scene &s, const toml::node &n, const std::string &where) {
+    auto i = n.as_integer();
+    if (!i)
+      fail(where, k, quoted(n), "is not an integer");
+    if (static_cast<double>(i->get()) < k.lo || static_cast<double>(i->get()) > k.hi)
+      fail(where, k, quoted(n), "is out of range");
+    (s.*part).*field = static_cast<Int>(i->get());
+  };
+  k.get = [part, field](const Scene &s) { return std::to_string((s.*part).*field); };
+  return k;
+}
+
+template <class Spec, class Enum>
+Key choice(std::string table, std::string name, Spec Scene::*part, Enum Spec::*field,
+           std::vector<std::pair<std::string, Enum>> options, std::string doc) {
+  Key k{table, name, "string", "", doc, -HUGE_VAL, HUGE_VAL, false, {}, nullptr, nullptr};
+  for (const auto &o : options)
+    k.choices.push_back(o.first);
+  k.set = [k, part, field, options](Scene &s, const toml::node &n, const std::string &where) {
+    auto str = n.as_string();
+    if (!str)
+      fail(where, k, quoted(n), "is not a string");
+    for (const auto &o : options)
+      if (o.first == str->get()) {
+        (s.*part).*field = o.second;
+        return;
+      }
+    fail(where, k, quoted(n), "is not known");
+  };
+  k.get = [part, field, options](const Scene &s) {
+    for (const auto &o : options)
+      if (o.second == (s.*part).*field)
+        return "\"" + o.first + "\"";
+    return std::string("?");
+  };
+  return k;
+}
+
+template <class Spec>
+Key boolean(std::string table, std::string name, Spec Scene::*part, bool Spec::*field, std::string doc) {
+  Key k{table, name, "bool", "", doc, -HUGE_VAL, HUGE_VAL, false, {}, nullptr, nullptr};
+  k.set = [k, part, field](Scene &s, const toml::node &n, const std::string &where) {
+    auto b = n.as_boolean();
+    if (!b)
+      fail(where, k, quoted(n), "is not true or false");
+    (s.*part).*field = b->get();
+  };
+  k.get = [part, field](const Scene &s) { return std::string((s.*part).*field ? "true" : "false"); };
+  return k;
+}
+
+// The grain diameter: one number for a uniform size, or [min, max] for sizes uniformly
+// distributed in that range.
+Key diameter() {
+  Key k{"target", "diameter", "real or [min, max]", "m",
+        "grain diameter: one value (uniform size) or a range [min, max] (uniformly distributed)",
+        1e-7, 1.0, true, {}, nullptr, nullptr};
+  k.set = [k](Scene &s, const toml::node &n, const std::string &where) {
+    if (auto a = n.as_array()) {
+      if (a->size() != 2)
+        fail(where, k, quoted(n), "is not one number or a pair [min, max]");
+      const double lo = number(k, *a->get(0), where), hi = number(k, *a->get(1), where);
+      if (lo > hi)
+        fail(where, k, quoted(n), "has min > max");
+      s.target.diameter_min = lo, s.target.diameter_max = hi;
+    } else {
+      s.target.diameter_min = s.target.diameter_max = number(k, n, where);
+    }
+  };
+  k.get = [](const Scene &s) {
+    return "[" + show(s.target.diameter_min) + ", " + show(s.target.diameter_max) + "]";
+  };
+  return k;
+}
+
+const std::vector<Key> &keys() {
+  static const std::vector<Key> all = [] {
+    using T = TargetSpec;
+    using P = ProjectileSpec;
+    auto t = &Scene::target;
+    auto p = &Scene::projectile;
+    return std::vector<Key>{
+        real("target", "width", t, &T::width, "m", 0, true, 10, "box width W"),
+        real("target", "height", t, &T::height, "m", 0, true, 10, "box height H"),
+        diameter(),
+        real("target", "porosity", t, &T::porosity, "", 0.05, false, 0.6,
+             "requested porosity (A_T - A_G) / A_T (thesis Eq. 4.5)"),
+        real("target", "void_ratio", t, &T::void_ratio, "", 0.1, false, 0.5,
+             "void-site diameter over the mean grain diameter (thesis: 1/4)"),
+        choice("target", "placement", t, &T::placement,
+               {{"regular", Placement::regular}, {"clustered", Placement::clustered}},
+               "initial sites: one grain per sub-box (regular) or all random (clustered), thesis 4.2.5"),
+        integer("target", "seed", t, &T::seed, 0, 9.0e15, "random seed"),
+        real("target", "step_scale", t, &T::step_scale, "", 0, true, 3,
+             "largest placement move per iteration over the mean diameter (thesis Fig. 4.6)"),
+        real("target", "step_decay", t, &T::step_decay, "", 0.1, false, 1,
+             "step factor each time the overlap energy rises (1: the thesis's fixed step)"),
+        integer("target", "max_iterations", t, &T::max_iterations, 0, 100000,
+                "placement iterations at most"),
+        real("target", "void_scale", t, &T::void_scale, "", 0.05, false, 5,
+             "void-site count over the area rule V = (A - sum of grain disk areas) / void disk area"),
+        boolean("target", "calibrate_porosity", t, &T::calibrate_porosity,
+                "scale the void cells so that the porosity matches the request"),
+        choice("target", "tessellation", t, &T::tessellation,
+               {{"power", Tessellation::power}, {"voronoi", Tessellation::voronoi}},
+               "power (Laguerre) cells weighted by r^2, or Voronoi with the thesis's radius matching "
+               "(Eq. 4.4)"),
+        choice("target", "mesh", t, &T::mesh,
+               {{"quality", MeshKind::quality}, {"fan", MeshKind::fan}, {"none", MeshKind::none}},
+               "grain meshes: quality triangles at mesh_size, fan (centroid to vertices), or none"),
+        real("target", "mesh_size", t, &T::mesh_size, "m", 0, true, 1,
+             "triangle edge length; polygon vertices closer than this are merged"),
+        real("target", "min_angle", t, &T::min_angle, "deg", 5, false, 20.7,
+             "smallest triangle angle of the quality mesh"),
+        real("target", "density", t, &T::density, "kg/m^3", 0, true, 1e5,
+             "grain density, for target.data (quartz: 2648.5, Table 3.3)"),
+        boolean("projectile", "enabled", p, &P::enabled, "make and place the projectile"),
+        real("projectile", "length", p, &P::length, "m", 0, true, 1, "length L of the sharp ogive body"),
+        real("projectile", "length_over_diameter", p, &P::length_over_diameter, "", 1, false, 50,
+             "l/d (thesis: 3.85)"),
+        real("projectile", "crh", p, &P::crh, "", 0.5, false, 50,
+             "caliber radius head: ogive radius over diameter (thesis: 3.5)"),
+        real("projectile", "tip_half_angle", p, &P::tip_half_angle, "deg", 0, true, 89,
+             "half-angle of the tip facets to the axis (thesis: 60)"),
+        real("projectile", "tip_facet_length", p, &P::tip_facet_length, "m", 0, false, 1,
+             "length of each tip facet; 0 keeps the sharp tip"),
+        real("projectile", "mesh_size", p, &P::mesh_size, "m", 0, false, 1,
+             "triangle edge length; 0 takes target.mesh_size"),
+        real("projectile", "min_angle", p, &P::min_angle, "deg", 5, false, 20.7,
+             "smallest triangle angle"),
+    };
+  }();
+  return all;
+}
+
+const Key *findKey(const std::string &table, const std::string &name) {
+  for (const auto &k : keys())
+    if (k.table == table && k.name == name)
+      return &k;
+  return nullptr;
+}
+
+std::string knownIn(const std::string &table) {
+  std::string s;
+  for (const auto &k : keys())
+    if (k.table == table)
+      s += (s.empty() ? "" : ", ") + k.name;
+  return s;
+}
+
+// Checks that involve more than one key.
+void checkTogether(const Scene &s) {
+  const TargetSpec &t = s.target;
+  auto bad = [&](const std::string &what) { throw InputError(s.path + ": " + what); };
+  if (t.width < 4 * t.diameter_max || t.height < 4 * t.diameter_max)
+    bad("target.width and target.height must be at least 4 grain diameters (" +
+        show(4 * t.diameter_max) + " m); they are " + show(t.width) + " and " + show(t.height));
+  if (t.mesh_size > 0.5 * t.diameter_min)
+    bad("target.mesh_size = " + show(t.mesh_size) + " is more than half the smallest grain diameter (" +
+        show(0.5 * t.diameter_min) + " m)");
+  const double n = t.area() * (1 - t.porosity) / (M_PI * t.meanDiameter() * t.meanDiameter() / 4);
+  if (n > 2.0e7)
+    bad("the target would hold " + show(n) + " grains; at most 2e7 are allowed");
+  if (s.projectile.enabled) {
+    try {
+      projectileShape(s.projectile);
+    } catch (const std::invalid_argument &e) {
+      bad(std::string("[projectile]: ") + e.what());
+    }
+  }
+}
+
+} // namespace
+
+Scene readScene(const std::string &path) {
+  Scene scene;
+  scene.path = path;
+  toml::table root;
+  try {
+    root = toml::parse_file(path);
+  } catch (const toml::parse_error &e) {
+    const auto &b = e.source().begin;
+    throw InputError(path + ":" + std::to_string(b.line) + ":" + std::to_string(b.column) +
+                     ": not valid TOML: " + std::string(e.description()));
+  }
+  for (const auto &[tname, tnode] : root) {
+    const std::string table(tname.str());
+    if (knownIn(table).empty())
+      throw InputError(path + ": unknown table [" + table + "]; known tables: target, projectile");
+    const toml::table *tab = tnode.as_table();
+    if (!tab)
+      throw InputError(path + ": " + table + " must be a table ([" + table + "])");
+    for (const auto &[kname, knode] : *tab) {
+      const Key *k = findKey(table, std::string(kname.str()));
+      if (!k)
+        throw InputError(path + ": unknown key " + table + "." + std::string(kname.str()) +
+                         "; known keys in [" + table + "]: " + knownIn(table));
+      k->set(scene, knode, path);
+    }
+  }
+  checkTogether(scene);
+  return scene;
+}
+
+std::string sceneKeysMarkdown() {
+  const Scene defaults;
+  std::ostringstream out;
+  out << "| key | type | default | allowed | unit | meaning |\n|---|---|---|---|---|---|\n";
+  for (const auto &k : keys())
+    out << "| " << k.table << "." << k.name << " | " << k.type << " | " << k.get(defaults) << " | "
+        << allowed(k) << " | " << k.unit << " | " << k.doc << " |\n";
+  return out.str();
+}
+
+} // namespace mesopen

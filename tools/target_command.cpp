@@ -1,0 +1,190 @@
+// mesopen target SCENE -o DIR: the sand target, the projectile placed on it, and their files.
+#include "atomic_file.hpp"
+#include "commands.hpp"
+#include "generator.hpp"
+#include "projectile.hpp"
+#include "scene.hpp"
+#include "writers.hpp"
+
+#include <nlohmann/json.hpp>
+#include <omp.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sys/resource.h>
+#include <unistd.h>
+
+namespace mesopen {
+
+namespace fs = std::filesystem;
+
+std::string shareDirectory() {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? std::string("share/mesopen") : (exe.parent_path().parent_path() / "share" / "mesopen").string();
+}
+
+namespace {
+
+void writeJson(const std::string &path, const nlohmann::json &j) {
+  writeAtomically(path, [&](const std::string &temp) {
+    std::ofstream out(temp);
+    out << j.dump(2) << '\n';
+    if (!out.flush())
+      throw std::runtime_error("cannot write " + temp);
+  });
+}
+
+double peakMemoryBytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss * 1024.0; // Linux reports kilobytes
+}
+
+const char *name(Placement p) { return p == Placement::regular ? "regular" : "clustered"; }
+const char *name(Tessellation t) { return t == Tessellation::voronoi ? "voronoi" : "power"; }
+const char *name(MeshKind m) {
+  return m == MeshKind::quality ? "quality" : m == MeshKind::fan ? "fan" : "none";
+}
+
+// The grain-size histogram PNG, drawn by matplotlib from target.json; a missing python3 or
+// matplotlib is reported but does not fail the target.
+void plotHistogram(const std::string &dir) {
+  const std::string script = shareDirectory() + "/grain_sizes.py";
+  const std::string cmd = "/usr/bin/python3 '" + script + "' '" + dir + "/target.json' '" + dir +
+                          "/grain-sizes.png' > /dev/null 2>&1";
+  if (std::system(cmd.c_str()) != 0)
+    std::cerr << "mesopen target: warning: no grain-size plot (needs /usr/bin/python3 with matplotlib, "
+                 "and " << script << ")\n";
+}
+
+} // namespace
+
+int targetCommand(const TargetOptions &options) {
+  const auto start = std::chrono::steady_clock::now();
+  Scene scene;
+  try {
+    scene = readScene(options.scene);
+    if (options.seed)
+      scene.target.seed = *options.seed;
+    if (options.no_mesh)
+      scene.target.mesh = MeshKind::none;
+    if (options.threads)
+      scene.target.threads = *options.threads;
+    std::error_code ec;
+    fs::create_directories(options.out_dir, ec);
+    if (ec || !fs::is_directory(options.out_dir))
+      throw InputError(options.out_dir + ": cannot create the output directory (" + ec.message() + ")");
+  } catch (const InputError &e) {
+    std::cerr << "mesopen target: " << e.what() << '\n';
+    return 2;
+  }
+  if (scene.target.threads > 0)
+    omp_set_num_threads(scene.target.threads);
+
+  const bool terminal = isatty(STDERR_FILENO);
+  std::string phase = "generating the target";
+  try {
+    if (terminal)
+      std::cerr << "mesopen target: " << phase << " ...\n";
+    GeneratorReport report;
+    const Target target = generateTarget(scene.target, report);
+    const TargetMeasures m = measureTarget(target.grains, scene.target);
+
+    phase = "placing the projectile";
+    PlacedProjectile projectile;
+    if (scene.projectile.enabled)
+      projectile = placeProjectile(scene.projectile, scene.target.mesh_size, scene.target, target.grains);
+    const PlacedProjectile *pp = scene.projectile.enabled ? &projectile : nullptr;
+
+    phase = "writing the files";
+    const std::string dir = options.out_dir;
+    writeTargetH5(dir + "/target.h5", target, pp);
+    writeLiggghtsData(dir + "/target.data", target);
+    writeTargetVtu(dir + "/target.vtu", target, pp);
+    writeYadeSpheres(dir + "/target.spheres", target);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    const TargetSpec &t = scene.target;
+    nlohmann::json j;
+    j["grains"] = m.grains;
+    j["porosity"] = m.porosity;
+    j["mean_diameter"] = m.mean_diameter;
+    j["std_diameter"] = m.std_diameter;
+    j["min_diameter"] = m.min_diameter;
+    j["max_diameter"] = m.max_diameter;
+    j["clustering"] = {{"window", m.window}, {"local_porosity_std", m.local_porosity_std}};
+    j["seconds"] = seconds;
+    j["seconds_by_phase"] = {{"sites", report.seconds_sites},
+                             {"porosity_calibration", report.seconds_calibration},
+                             {"tessellation", report.seconds_tessellation},
+                             {"delaunay", report.tessellation.delaunay_seconds},
+                             {"mesh", report.seconds_mesh}};
+    j["peak_memory_bytes"] = peakMemoryBytes();
+    j["requested"] = {{"width", t.width},       {"height", t.height},
+                      {"diameter_min", t.diameter_min}, {"diameter_max", t.diameter_max},
+                      {"porosity", t.porosity}, {"void_ratio", t.void_ratio},
+                      {"placement", name(t.placement)}, {"tessellation", name(t.tessellation)},
+                      {"seed", t.seed},         {"mesh", name(t.mesh)},
+                      {"mesh_size", t.mesh_size}};
+    j["sites"] = {{"grains", report.grain_sites}, {"voids", report.void_sites}};
+    j["porosity_control"] = {{"void_factor", report.void_factor},
+                             {"trial_factors", report.trial_factor},
+                             {"trial_porosities", report.trial_porosity}};
+    j["placement"] = {{"iterations", report.placement.iterations},
+                      {"converged", report.placement.converged},
+                      {"energy", report.placement.energy}};
+    const TessellationReport &tr = report.tessellation;
+    j["tessellation"] = {{"passes", tr.passes},
+                         {"merged_grains", tr.merged_grains},
+                         {"removed_voids", tr.removed_voids},
+                         {"restored_points", tr.restored_points},
+                         {"lost_grains", tr.lost_grains},
+                         {"merged_vertices", tr.merged_vertices},
+                         {"kept_short_edges", tr.kept_short_edges}};
+    j["mesh"] = {{"nodes", target.mesh.nodes()}, {"triangles", target.mesh.triangles()}};
+    if (pp)
+      j["projectile"] = {{"diameter", projectile.shape.diameter},
+                         {"length", projectile.shape.length},
+                         {"nose_length", projectile.shape.nose_length},
+                         {"tip_y", projectile.offset_y + projectile.shape.tip_cut},
+                         {"nodes", projectile.mesh.x.size()},
+                         {"triangles", projectile.mesh.tri.size() / 3}};
+    j["histogram"] = {{"edges", m.histogram_edges}, {"counts", m.histogram_counts}};
+    writeJson(dir + "/target.json", j);
+
+    const bool plotted = !options.no_plot;
+    if (plotted)
+      plotHistogram(dir);
+
+    nlohmann::json summary;
+    summary["command"] = "target";
+    summary["scene"] = fs::absolute(options.scene).lexically_normal().string();
+    summary["seed"] = t.seed;
+    summary["figures"] = {{"grains", m.grains},
+                          {"porosity", m.porosity},
+                          {"mean_diameter", m.mean_diameter},
+                          {"std_diameter", m.std_diameter},
+                          {"local_porosity_std", m.local_porosity_std}};
+    summary["files"] = {"target.h5", "target.data", "target.vtu", "target.spheres", "target.json"};
+    if (plotted && fs::exists(dir + "/grain-sizes.png"))
+      summary["files"].push_back("grain-sizes.png");
+    summary["wall_seconds"] = seconds;
+    writeJson(dir + "/summary.json", summary);
+
+    std::cout << "mesopen target: " << m.grains << " grains, porosity " << 100 * m.porosity
+              << " %, mean diameter " << 1e6 * m.mean_diameter << " um, std " << 1e6 * m.std_diameter
+              << " um, " << target.mesh.triangles() << " triangles, " << seconds << " s\n"
+              << "  files in " << dir << ": target.h5 target.data target.vtu (ParaView) "
+              << "target.spheres target.json summary.json\n";
+    return 0;
+  } catch (const std::exception &e) {
+    std::cerr << "mesopen target: failed while " << phase << ": " << e.what() << '\n';
+    return 1;
+  }
+}
+
+} // namespace mesopen
