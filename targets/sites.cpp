@@ -127,9 +127,9 @@ void conflicts(const Sites &s, const TargetSpec &spec, const CellGrid &grains, c
   for (std::size_t i = 0; i < n; ++i) {
     double fx = 0.0, fy = 0.0, e = 0.0;
     const double xi = x[i], yi = y[i], ri = r[i];
+    // The site meets itself once, in the grid of its own kind: d = 0, G = 1, no direction;
+    // its energy share of 1/2 is taken off below.
     auto pair = [&](const CellGrid::Item &j) {
-      if (j.index == i)
-        return;
       const double ex = xi - j.x, ey = yi - j.y, reach = ri + j.r;
       const double d2 = ex * ex + ey * ey;
       if (d2 >= reach * reach)
@@ -160,11 +160,17 @@ void conflicts(const Sites &s, const TargetSpec &spec, const CellGrid &grains, c
     wall(h - yi, 0.0, -1.0);
     c.dx[i] = fx;
     c.dy[i] = fy;
-    c.energy[i] = e;
+    c.energy[i] = e - 0.5;
   }
 }
 
 } // namespace
+
+int maxIterations(const TargetSpec &spec) {
+  if (spec.max_iterations > 0)
+    return spec.max_iterations;
+  return spec.placement == Placement::regular ? 100 : 500;
+}
 
 PlacementReport relaxSites(Sites &s, const TargetSpec &spec) {
   const std::size_t n = s.size();
@@ -197,7 +203,7 @@ PlacementReport relaxSites(Sites &s, const TargetSpec &spec) {
       report.converged = true;
       break;
     }
-    if (it >= spec.max_iterations)
+    if (it >= maxIterations(spec))
       break;
     // Normalise by the largest move, scale to the step, move, stay inside the box.
     const double scale = step / std::sqrt(largest);

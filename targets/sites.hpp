@@ -36,6 +36,10 @@ Sites initialSites(const TargetSpec &spec, double void_scale);
 // less than 1e-4 of itself over 20 iterations) or after max_iterations.
 PlacementReport relaxSites(Sites &sites, const TargetSpec &spec);
 
+// max_iterations, or when it is 0: 100 for regular placement (its sites start spread out) and
+// 500 for clustered (random start), the counts after which the grain sizes stop improving.
+int maxIterations(const TargetSpec &spec);
+
 // Overlap energy of the sites (sum over overlapping pairs and wall images of Eq. 4.1).
 double overlapEnergy(const Sites &sites, const TargetSpec &spec);
 

@@ -24,7 +24,7 @@ struct TargetSpec {
   std::uint64_t seed = 1;
   double step_scale = 0.3;        // placement step / mean diameter (thesis Fig. 4.6)
   double step_decay = 0.7;        // step factor when the overlap energy rises (1: thesis)
-  int max_iterations = 400;       // placement iterations at most
+  int max_iterations = 0;         // placement iterations at most (0: by placement)
   double void_scale = 0.6;        // void-site count over the area rule (see initialSites)
   bool calibrate_porosity = true; // tune the void cells' size to the requested porosity
   Tessellation tessellation = Tessellation::power;

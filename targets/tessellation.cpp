@@ -9,12 +9,10 @@
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 
 #include <algorithm>
-#include <bit>
 #include <chrono>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
-#include <unordered_map>
 
 namespace mesopen {
 
@@ -355,8 +353,9 @@ struct Planar {
 template <class Tri>
 Planar collectGrains(const Cells<Tri> &c, const Sites &s, TessellationReport &report) {
   Planar out;
-  std::unordered_map<std::int32_t, std::uint32_t> vertex_of_vp;
-  std::unordered_map<std::uint64_t, std::uint32_t> vertex_at; // identical positions share a vertex
+  // Points of faces become shared vertices, numbered in the order the grains meet them. Points
+  // at one position (cocircular sites) stay apart here and meet in mergeShortEdges.
+  std::vector<std::uint32_t> vertex_of_vp(c.vpx.size(), UINT32_MAX);
   Ring<Tri> ring;
   for (std::uint32_t g = 0; g < s.grains; ++g) {
     if (!c.alive[g])
@@ -366,28 +365,15 @@ Planar collectGrains(const Cells<Tri> &c, const Sites &s, TessellationReport &re
       continue;
     }
     std::vector<std::uint32_t> poly;
+    poly.reserve(ring.face.size());
     for (auto f : ring.face) {
       const std::int32_t vp = f->info().vp;
-      auto it = vertex_of_vp.find(vp);
-      std::uint32_t id;
-      if (it != vertex_of_vp.end()) {
-        id = it->second;
-      } else {
-        const double x = c.vpx[vp], y = c.vpy[vp];
-        std::uint64_t key;
-        const std::uint64_t bx = std::bit_cast<std::uint64_t>(x), by = std::bit_cast<std::uint64_t>(y);
-        key = bx * 0x9E3779B97F4A7C15ull ^ (by + 0x632BE59BD9B4E019ull + (bx << 6) + (bx >> 2));
-        auto at = vertex_at.find(key);
-        if (at != vertex_at.end() && out.x[at->second] == x && out.y[at->second] == y) {
-          id = at->second;
-        } else {
-          id = static_cast<std::uint32_t>(out.x.size());
-          out.x.push_back(x);
-          out.y.push_back(y);
-          vertex_at.emplace(key, id);
-        }
-        vertex_of_vp.emplace(vp, id);
+      if (vertex_of_vp[vp] == UINT32_MAX) {
+        vertex_of_vp[vp] = static_cast<std::uint32_t>(out.x.size());
+        out.x.push_back(c.vpx[vp]);
+        out.y.push_back(c.vpy[vp]);
       }
+      const std::uint32_t id = vertex_of_vp[vp];
       if (poly.empty() || poly.back() != id)
         poly.push_back(id);
     }
@@ -478,8 +464,9 @@ void mergeShortEdges(Planar &p, double w, double h_box, double h, TessellationRe
       tx.clear(), ty.clear();
       for (std::uint32_t v : q)
         tx.push_back(v == a ? mx : p.x[v]), ty.push_back(v == a ? my : p.y[v]);
+      // An edge of round-off length always goes; otherwise the grains must stay convex.
       ok = q.size() >= 3 && signedArea(tx.data(), ty.data(), q.size()) > 0.0 &&
-           isConvex(tx.data(), ty.data(), q.size(), 1e-12);
+           (e.len < 1e-9 * h || isConvex(tx.data(), ty.data(), q.size(), 1e-12));
     }
     if (!ok) {
       ++report.kept_short_edges;
