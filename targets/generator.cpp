@@ -46,10 +46,12 @@ double calibrateVoidFactor(const Sites &placed, const TargetSpec &spec, Generato
     report.trial_porosity.push_back(p);
     return p - spec.porosity;
   };
-  // Porosity grows with the void factor. Bracket the request, then regula falsi (Illinois).
+  // Porosity grows with the void factor (with power cells always; with relaxed Voronoi cells
+  // until inverted cells make the repairs remove voids wholesale). Bracket the request, widening
+  // while the porosity comes closer, then regula falsi (Illinois).
   double a = 1.0, fa = porosity(a);
   double b = fa > 0 ? 0.7 : 1.4, fb = porosity(b);
-  for (int k = 0; k < 6 && fa * fb > 0; ++k) {
+  for (int k = 0; k < 5 && fa * fb > 0 && std::abs(fb) < std::abs(fa); ++k) {
     a = b, fa = fb;
     b = fa > 0 ? b * 0.7 : b * 1.4;
     fb = porosity(b);

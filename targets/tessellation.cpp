@@ -1,5 +1,6 @@
 #include "tessellation.hpp"
 
+#include "cell_grid.hpp"
 #include "polygon.hpp"
 
 #include <CGAL/Delaunay_triangulation_2.h>
@@ -313,6 +314,24 @@ std::size_t repair(Cells<Delaunay> &c, Sites &s, const TargetSpec &spec, int pas
     if (bad && pass >= 20) // last resort, never needed so far: the plain Voronoi cell
       restore.insert(restore.end(), ring.face.begin(), ring.face.end());
   }
+  // A void cell turned inside out lets the grains around it overlap: such a void goes too.
+  for (std::uint32_t v = static_cast<std::uint32_t>(s.grains); v < s.size(); ++v) {
+    if (!c.alive[v] || !ringOf(c, v, ring))
+      continue;
+    const std::size_t n = ring.face.size();
+    for (std::size_t k = 0; k < n; ++k) {
+      const int a = ring.face[k]->info().vp, b = ring.face[(k + 1) % n]->info().vp;
+      if (a < 0 || b < 0)
+        continue;
+      const std::uint32_t t = ring.across[k];
+      const double tx = c.images.x[t] - s.x[v], ty = c.images.y[t] - s.y[v];
+      const double ex = c.vpx[b] - c.vpx[a], ey = c.vpy[b] - c.vpy[a];
+      if (cross(tx, ty, ex, ey) < -1e-12 * std::hypot(tx, ty) * std::hypot(ex, ey)) {
+        remove_voids.push_back(v);
+        break;
+      }
+    }
+  }
   std::sort(remove_voids.begin(), remove_voids.end());
   remove_voids.erase(std::unique(remove_voids.begin(), remove_voids.end()), remove_voids.end());
 
@@ -341,6 +360,53 @@ std::size_t repair(Cells<Delaunay> &c, Sites &s, const TargetSpec &spec, int pas
     ++report.merged_grains, ++changes;
   }
   return changes;
+}
+
+// Depth by which convex polygon b reaches into convex polygon a across a's edges (negative: a
+// separating edge exists, so they do not overlap; separating axis theorem, one direction).
+double reach(const std::vector<Point> &a, const std::vector<Point> &b) {
+  double depth = HUGE_VAL;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const Point p = a[i], q = a[(i + 1) % a.size()];
+    const double ex = q.x - p.x, ey = q.y - p.y, len = std::hypot(ex, ey);
+    if (len == 0.0)
+      continue;
+    double deepest = -HUGE_VAL;
+    for (const Point &v : b)
+      deepest = std::max(deepest, cross(ex, ey, v.x - p.x, v.y - p.y) / len);
+    depth = std::min(depth, deepest);
+  }
+  return depth;
+}
+
+// Grains whose relaxed cells overlap a nearby grain's. The local repairs look at one cell and
+// its Delaunay neighbours; this catches what slips between them (cells across a void).
+std::vector<std::uint32_t> overlappingGrains(const Cells<Delaunay> &c, const Sites &s,
+                                             const TargetSpec &spec) {
+  std::vector<std::vector<Point>> poly(s.grains);
+  Ring<Delaunay> ring;
+  for (std::uint32_t g = 0; g < s.grains; ++g)
+    if (c.alive[g] && ringOf(c, g, ring))
+      for (auto f : ring.face)
+        poly[g].push_back({c.vpx[f->info().vp], c.vpy[f->info().vp]});
+  CellGrid grid(spec.width, spec.height, spec.diameter_max);
+  grid.fill(s.x.data(), s.y.data(), s.r.data(), 0, static_cast<std::uint32_t>(s.grains));
+  const double tolerance = 1e-9 * spec.meanDiameter();
+  std::vector<std::uint32_t> bad;
+  for (std::uint32_t g = 0; g < s.grains; ++g) {
+    if (poly[g].empty())
+      continue;
+    grid.forNear(s.x[g], s.y[g], 2.0 * spec.diameter_max, [&](const CellGrid::Item &item) {
+      const std::uint32_t h = item.index;
+      if (h <= g || poly[h].empty())
+        return;
+      if (std::min(reach(poly[g], poly[h]), reach(poly[h], poly[g])) > tolerance)
+        bad.push_back(g), bad.push_back(h);
+    });
+  }
+  std::sort(bad.begin(), bad.end());
+  bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
+  return bad;
 }
 
 // Vertex table shared by the grains, so that a merge of two points moves them for every grain.
@@ -540,8 +606,18 @@ Polygons tessellate(Sites &s, const TargetSpec &spec, double void_factor,
     for (int pass = 0;; ++pass) {
       computeVoronoiPoints(c, s, spec);
       report.passes = pass + 1;
-      if (repair(c, s, spec, pass, report) == 0)
+      if (repair(c, s, spec, pass, report) > 0)
+        continue;
+      // Overlaps the local repairs missed: both cells back to plain Voronoi, which never overlap.
+      const std::vector<std::uint32_t> bad = overlappingGrains(c, s, spec);
+      if (bad.empty())
         break;
+      Ring<Delaunay> ring;
+      for (std::uint32_t g : bad)
+        if (ringOf(c, g, ring))
+          for (auto f : ring.face)
+            if (!f->info().restored)
+              f->info().restored = true, ++report.restored_points;
       if (pass > 40)
         throw std::runtime_error("tessellation: grain cells still overlap or are concave after 40 passes");
     }

@@ -1,0 +1,60 @@
+// Helpers for tests that run the program: a fresh scratch directory and a command's exit code
+// and output.
+#pragma once
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace mesopen::test {
+
+// A directory of its own under the system's temporary directory, removed at the end.
+struct ScratchDir {
+  std::filesystem::path path;
+  explicit ScratchDir(const std::string &name) {
+    path = std::filesystem::temp_directory_path() /
+           ("mesopen-test-" + name + "-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  ~ScratchDir() { std::filesystem::remove_all(path); }
+  std::string operator/(const std::string &file) const { return (path / file).string(); }
+};
+
+struct Result {
+  int code;
+  std::string output; // stdout and stderr together
+};
+
+// Run `mesopen ARGS` and return its exit code and output.
+inline Result runMesopen(const std::string &args) {
+  const std::string cmd = std::string(MESOPEN_BINARY) + " " + args + " 2>&1";
+  Result r{-1, {}};
+  FILE *pipe = ::popen(cmd.c_str(), "r");
+  if (!pipe)
+    return r;
+  char buffer[4096];
+  std::size_t n;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0)
+    r.output.append(buffer, n);
+  const int status = ::pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+inline std::string readFile(const std::string &path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+inline void writeFile(const std::string &path, const std::string &text) {
+  std::ofstream(path) << text;
+}
+
+} // namespace mesopen::test

@@ -1,0 +1,107 @@
+// Scenes are strict: every bad input stops with a message that names the file, the key, the
+// value and what is allowed, and the program exits with code 2.
+#include "run.hpp"
+#include "scene.hpp"
+
+#include <gtest/gtest.h>
+
+using namespace mesopen;
+using mesopen::test::ScratchDir;
+
+namespace {
+
+// The message of the InputError that reading `text` as a scene raises ("" if none).
+std::string errorOf(const ScratchDir &dir, const std::string &text) {
+  const std::string path = dir / "scene.toml";
+  mesopen::test::writeFile(path, text);
+  try {
+    readScene(path);
+  } catch (const InputError &e) {
+    return e.what();
+  }
+  return "";
+}
+
+} // namespace
+
+TEST(Scene, ReadsTheBaselineExample) {
+  const Scene s = readScene(std::string(MESOPEN_SOURCE_DIR) + "/examples/targets/baseline.toml");
+  EXPECT_DOUBLE_EQ(s.target.width, 7.076e-3);
+  EXPECT_DOUBLE_EQ(s.target.diameter_min, 42e-6);
+  EXPECT_DOUBLE_EQ(s.target.diameter_max, 78e-6);
+  EXPECT_EQ(s.target.placement, Placement::regular);
+  EXPECT_EQ(s.target.mesh, MeshKind::quality);
+  EXPECT_DOUBLE_EQ(s.projectile.crh, 3.5);
+}
+
+TEST(Scene, OneDiameterMeansUniformSize) {
+  ScratchDir dir("scene-uniform");
+  mesopen::test::writeFile(dir / "s.toml", "[target]\ndiameter = 60e-6\n");
+  const Scene s = readScene(dir / "s.toml");
+  EXPECT_DOUBLE_EQ(s.target.diameter_min, 60e-6);
+  EXPECT_DOUBLE_EQ(s.target.diameter_max, 60e-6);
+}
+
+TEST(Scene, UnknownKeyNamesFileKeyAndKnownKeys) {
+  ScratchDir dir("scene-unknown");
+  const std::string e = errorOf(dir, "[target]\nporosty = 0.3\n");
+  EXPECT_NE(e.find("scene.toml"), std::string::npos) << e;
+  EXPECT_NE(e.find("target.porosty"), std::string::npos) << e;
+  EXPECT_NE(e.find("porosity"), std::string::npos) << e; // the known keys are listed
+}
+
+TEST(Scene, UnknownTableIsRejected) {
+  ScratchDir dir("scene-table");
+  EXPECT_NE(errorOf(dir, "[targets]\nwidth = 1e-3\n").find("unknown table [targets]"), std::string::npos);
+}
+
+TEST(Scene, OutOfRangeNamesValueAndRange) {
+  ScratchDir dir("scene-range");
+  const std::string e = errorOf(dir, "[target]\nporosity = 1.2\n");
+  EXPECT_NE(e.find("target.porosity = 1.2"), std::string::npos) << e;
+  EXPECT_NE(e.find("out of range"), std::string::npos) << e;
+  EXPECT_NE(e.find("0.05 <= porosity <= 0.6"), std::string::npos) << e;
+}
+
+TEST(Scene, WrongTypesAreRejected) {
+  ScratchDir dir("scene-type");
+  EXPECT_NE(errorOf(dir, "[target]\nseed = \"one\"\n").find("is not an integer"), std::string::npos);
+  EXPECT_NE(errorOf(dir, "[target]\nwidth = \"wide\"\n").find("is not a number"), std::string::npos);
+  EXPECT_NE(errorOf(dir, "[target]\nplacement = \"random\"\n").find("one of \"regular\", \"clustered\""),
+            std::string::npos);
+  EXPECT_NE(errorOf(dir, "[projectile]\nenabled = 1\n").find("true or false"), std::string::npos);
+  EXPECT_NE(errorOf(dir, "[target]\ndiameter = [80e-6, 40e-6]\n").find("min > max"), std::string::npos);
+}
+
+TEST(Scene, KeysThatMustAgreeAreChecked) {
+  ScratchDir dir("scene-together");
+  EXPECT_NE(errorOf(dir, "[target]\nwidth = 1e-4\n").find("at least 4 grain diameters"), std::string::npos);
+  EXPECT_NE(errorOf(dir, "[target]\nmesh_size = 40e-6\n").find("half the smallest grain"), std::string::npos);
+  EXPECT_NE(errorOf(dir, "[projectile]\ntip_half_angle = 20\n").find("[projectile]"), std::string::npos);
+}
+
+TEST(Scene, BadTomlSaysWhere) {
+  ScratchDir dir("scene-toml");
+  const std::string e = errorOf(dir, "[target]\nwidth = = 3\n");
+  EXPECT_NE(e.find("scene.toml:2:"), std::string::npos) << e;
+}
+
+TEST(Cli, BadInputExitsWithTwo) {
+  ScratchDir dir("cli-bad");
+  mesopen::test::writeFile(dir / "bad.toml", "[target]\nvoid_ratio = 7\n");
+  const auto r = mesopen::test::runMesopen("target " + (dir / "bad.toml") + " -o " + (dir / "out"));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("target.void_ratio = 7"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/target.h5"));
+  EXPECT_EQ(mesopen::test::runMesopen("target " + (dir / "missing.toml") + " -o " + (dir / "out")).code, 2);
+  EXPECT_EQ(mesopen::test::runMesopen("target").code, 2);
+  EXPECT_EQ(mesopen::test::runMesopen("--help").code, 0);
+}
+
+// docs/scene-keys.md holds the table `mesopen keys` prints (regenerate it with that command).
+TEST(Cli, SceneKeysDocumentIsCurrent) {
+  const std::string doc = mesopen::test::readFile(std::string(MESOPEN_SOURCE_DIR) + "/docs/scene-keys.md");
+  const std::string table = sceneKeysMarkdown();
+  EXPECT_NE(doc.find(table), std::string::npos)
+      << "docs/scene-keys.md is out of date: regenerate it with `build/bin/mesopen keys`";
+}
