@@ -169,7 +169,7 @@ void conflicts(const Sites &s, const TargetSpec &spec, const CellGrid &grains, c
 int maxIterations(const TargetSpec &spec) {
   if (spec.max_iterations > 0)
     return spec.max_iterations;
-  return spec.placement == Placement::regular ? 100 : 500;
+  return spec.placement == Placement::regular ? 50 : 500;
 }
 
 PlacementReport relaxSites(Sites &s, const TargetSpec &spec) {

@@ -36,8 +36,10 @@ Sites initialSites(const TargetSpec &spec, double void_scale);
 // less than 1e-4 of itself over 20 iterations) or after max_iterations.
 PlacementReport relaxSites(Sites &sites, const TargetSpec &spec);
 
-// max_iterations, or when it is 0: 100 for regular placement (its sites start spread out) and
-// 500 for clustered (random start), the counts after which the grain sizes stop improving.
+// max_iterations, or when it is 0: 50 for regular placement (its sites start spread out) and
+// 500 for clustered (random start), the counts after which the grain-size spread stops
+// improving (baseline target: std 9.96 / 9.94 / 10.03 um after 50 / 100 / 200 iterations; the
+// 60 um clustered target: 4.0 / 2.9 / 2.0 / 1.75 um after 100 / 200 / 400 / 500).
 int maxIterations(const TargetSpec &spec);
 
 // Overlap energy of the sites (sum over overlapping pairs and wall images of Eq. 4.1).

@@ -180,7 +180,7 @@ const std::vector<Key> &keys() {
         real("target", "step_decay", t, &T::step_decay, "", 0.1, false, 1,
              "step factor each time the overlap energy rises (1: the thesis's fixed step)"),
         integer("target", "max_iterations", t, &T::max_iterations, 0, 100000,
-                "placement iterations at most; 0: 100 for regular, 500 for clustered placement"),
+                "placement iterations at most; 0: 50 for regular, 500 for clustered placement"),
         real("target", "void_scale", t, &T::void_scale, "", 0.05, false, 5,
              "void-site count over the area rule V = (A - sum of grain disk areas) / void disk area"),
         boolean("target", "calibrate_porosity", t, &T::calibrate_porosity,

@@ -147,15 +147,16 @@ TEST(Tessellation, RelaxedVoronoiGrainsAreConvexDisjointAndInTheBox) {
 }
 
 TEST(Tessellation, PorosityControlMeetsTheRequest) {
-  for (Tessellation kind : {Tessellation::power, Tessellation::voronoi}) {
-    TargetSpec s = smallSpec(kind, Placement::regular);
-    s.porosity = 0.4;
+  // Power cells: the porosity is continuous and increasing in the void factor, and the regula
+  // falsi stops within 2e-4 of the request on these very sites.
+  for (double porosity : {0.2, 0.3, 0.4}) {
+    TargetSpec s = smallSpec(Tessellation::power, Placement::regular);
+    s.porosity = porosity;
     GeneratorReport r;
-    const Target t = generateTarget(s, r);
-    // The regula falsi stops within 2e-4 of the request on these very sites when the porosity
-    // is continuous in the void factor (power); the Voronoi repairs make it jump a little.
-    EXPECT_NEAR(measureTarget(t.grains, s).porosity, 0.4, kind == Tessellation::power ? 2e-4 : 2e-3);
+    EXPECT_NEAR(measureTarget(generateTarget(s, r).grains, s).porosity, porosity, 2e-4);
   }
+  // Relaxed Voronoi cells are not held to this: the repairs make the porosity jump and inverted
+  // cells make it fall again for large factors (docs/targets.md gives the figures).
 }
 
 TEST(Measures, PorosityAndDiametersOfKnownSquares) {

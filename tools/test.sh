@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Set up (Debian 12: installs missing packages), build in build/, and run every test except the
+# `bench` label. Extra arguments go to ctest, e.g. `tools/test.sh -L unit` or `tools/test.sh -R scene`.
+# Benchmarks: ctest --test-dir build -L bench
+set -euo pipefail
+
+# shellcheck source=tools/setup.sh
+source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
+
+mesopen_install
+mesopen_build
+
+cd "$MESOPEN_ROOT"
+# The default run must find tests: an empty run is a failure, not a pass.
+no_tests=()
+if [ "$#" -eq 0 ]; then
+  no_tests=(--no-tests=error)
+fi
+ctest --test-dir build --output-on-failure -j "$(nproc)" -LE bench "${no_tests[@]}" "$@"
