@@ -187,10 +187,10 @@ def main():
             lines.append(head + " failed: %s |||||||||||" % r["error"].replace("|", "/"))
             continue
         t = r["tessellation_report"]
-        lines.append(head + " %d | %.2f | %.2f | %.2f | %.4f | %.3f | %d | %d | %d | %d | %.1f |" % (
+        lines.append(head + (" %d | %.2f | %.2f | %.2f | %.4f | %.3f | %d | %d | %d | %d | %.1f |" % (
             r["grains"], 100 * r["porosity"], 1e6 * r["mean_diameter"], 1e6 * r["std_diameter"],
             r["local_porosity_std"], r["void_factor"], t["merged_grains"], t["removed_voids"],
-            t["restored_points"], t["lost_grains"], r["seconds"]))
+            t["restored_points"], t["lost_grains"], r["seconds"])))
     with open(os.path.join(args.out, "tessellations.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
 
