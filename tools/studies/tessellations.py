@@ -94,6 +94,10 @@ def main():
                                 "local_porosity_std": t["clustering"]["local_porosity_std"],
                                 "tessellation_report": t["tessellation"],
                                 "void_factor": t["porosity_control"]["void_factor"],
+                                "porosity_trials": [
+                                    [f, p] for f, p in zip(
+                                        t["porosity_control"]["trial_factors"],
+                                        t["porosity_control"]["trial_porosities"])],
                                 "placement_iterations": t["placement"]["iterations"],
                                 "seconds": t["seconds"],
                                 "seconds_by_phase": t["seconds_by_phase"],
@@ -139,7 +143,7 @@ def main():
     lines = [
         "# Tessellation study: power vs voronoi",
         "",
-        "Written by `tools/studies/tessellations.py`. Thesis validation scenes (5 x 5 mm, 30 % "
+        "Written by `tools/studies/tessellations.py`. Thesis validation scenes (5 x 5 mm, 30 %% "
         "porosity), seeds %s, no mesh. Means over the seeds (min-max in brackets for the "
         "porosity and the std); repairs are per target: merged grain pairs / removed voids / "
         "restored points / lost grains; vertices merged (short edges kept). Seconds: one thread, "
