@@ -22,7 +22,7 @@ struct TargetSpec {
   double void_ratio = 0.25;       // void-site diameter / mean grain diameter
   Placement placement = Placement::regular;
   std::uint64_t seed = 1;
-  double step_scale = 0.3;        // placement step / mean diameter (thesis Fig. 4.6)
+  double step_scale = 1.0;        // placement step / mean diameter (docs/targets.md, study 1)
   double step_decay = 0.7;        // step factor when the overlap energy rises (1: thesis)
   int max_iterations = 0;         // placement iterations at most (0: by placement)
   double void_scale = 0.6;        // void-site count over the area rule (see initialSites)
