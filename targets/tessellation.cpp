@@ -10,6 +10,7 @@
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <numeric>
@@ -410,10 +411,14 @@ std::vector<std::uint32_t> overlappingGrains(const Cells<Delaunay> &c, const Sit
 }
 
 // Vertex table shared by the grains, so that a merge of two points moves them for every grain.
+// Polygons are stored flat (grain g: ids[start[g] .. start[g] + size[g]), counter-clockwise);
+// merges only shorten them, in place.
 struct Planar {
   std::vector<double> x, y;
-  std::vector<std::vector<std::uint32_t>> poly; // per grain, counter-clockwise
-  std::vector<std::uint32_t> grain_site;
+  std::vector<std::uint64_t> start;
+  std::vector<std::uint32_t> size, ids, grain_site;
+  std::size_t grains() const { return size.size(); }
+  std::uint32_t *poly(std::size_t g) { return ids.data() + start[g]; }
 };
 
 template <class Tri>
@@ -430,8 +435,7 @@ Planar collectGrains(const Cells<Tri> &c, const Sites &s, TessellationReport &re
       ++report.lost_grains;
       continue;
     }
-    std::vector<std::uint32_t> poly;
-    poly.reserve(ring.face.size());
+    const std::size_t first = out.ids.size();
     for (auto f : ring.face) {
       const std::int32_t vp = f->info().vp;
       if (vertex_of_vp[vp] == UINT32_MAX) {
@@ -439,17 +443,18 @@ Planar collectGrains(const Cells<Tri> &c, const Sites &s, TessellationReport &re
         out.x.push_back(c.vpx[vp]);
         out.y.push_back(c.vpy[vp]);
       }
-      const std::uint32_t id = vertex_of_vp[vp];
-      if (poly.empty() || poly.back() != id)
-        poly.push_back(id);
+      if (out.ids.size() == first || out.ids.back() != vertex_of_vp[vp])
+        out.ids.push_back(vertex_of_vp[vp]);
     }
-    while (poly.size() > 1 && poly.front() == poly.back())
-      poly.pop_back();
-    if (poly.size() < 3) {
+    while (out.ids.size() > first + 1 && out.ids[first] == out.ids.back())
+      out.ids.pop_back();
+    if (out.ids.size() - first < 3) {
+      out.ids.resize(first);
       ++report.lost_grains;
       continue;
     }
-    out.poly.push_back(std::move(poly));
+    out.start.push_back(first);
+    out.size.push_back(static_cast<std::uint32_t>(out.ids.size() - first));
     out.grain_site.push_back(g);
   }
   return out;
@@ -459,10 +464,16 @@ Planar collectGrains(const Cells<Tri> &c, const Sites &s, TessellationReport &re
 // every grain at either end stays convex. Points on a wall stay on it.
 void mergeShortEdges(Planar &p, double w, double h_box, double h, TessellationReport &report) {
   const std::size_t nv = p.x.size();
-  std::vector<std::vector<std::uint32_t>> grains_at(nv);
-  for (std::uint32_t g = 0; g < p.poly.size(); ++g)
-    for (std::uint32_t v : p.poly[g])
-      grains_at[v].push_back(g);
+  // The grains at each vertex: three at most where cells meet, a few more after merges.
+  constexpr int most = 8;
+  std::vector<std::array<std::uint32_t, most>> grains_at(nv);
+  std::vector<std::uint8_t> count(nv, 0);
+  for (std::uint32_t g = 0; g < p.grains(); ++g)
+    for (std::uint32_t k = 0; k < p.size[g]; ++k) {
+      const std::uint32_t v = p.poly(g)[k];
+      if (count[v] < most)
+        grains_at[v][count[v]++] = g;
+    }
   auto walls = [&](std::uint32_t v) {
     return (p.x[v] == 0.0) | (p.x[v] == w) << 1 | (p.y[v] == 0.0) << 2 | (p.y[v] == h_box) << 3;
   };
@@ -471,9 +482,9 @@ void mergeShortEdges(Planar &p, double w, double h_box, double h, TessellationRe
     std::uint32_t a, b;
   };
   std::vector<Edge> edges;
-  for (const auto &poly : p.poly)
-    for (std::size_t i = 0; i < poly.size(); ++i) {
-      std::uint32_t a = poly[i], b = poly[(i + 1) % poly.size()];
+  for (std::uint32_t g = 0; g < p.grains(); ++g)
+    for (std::uint32_t k = 0; k < p.size[g]; ++k) {
+      const std::uint32_t a = p.poly(g)[k], b = p.poly(g)[(k + 1) % p.size[g]];
       const double len = std::hypot(p.x[a] - p.x[b], p.y[a] - p.y[b]);
       if (len < h)
         edges.push_back({len, std::min(a, b), std::max(a, b)});
@@ -491,7 +502,7 @@ void mergeShortEdges(Planar &p, double w, double h_box, double h, TessellationRe
       v = parent[v] = parent[parent[v]];
     return v;
   };
-  std::vector<std::vector<std::uint32_t>> trial;
+  std::vector<std::uint32_t> affected, trial, trial_start;
   std::vector<double> tx, ty;
   for (const Edge &e : edges) {
     const std::uint32_t a = find(e.a), b = find(e.b);
@@ -512,27 +523,30 @@ void mergeShortEdges(Planar &p, double w, double h_box, double h, TessellationRe
     if (wa != 0 && wa == wb)
       mx = 0.5 * (p.x[a] + p.x[b]), my = 0.5 * (p.y[a] + p.y[b]); // same wall: stays on it
     // Try the collapse on every grain at a or b.
-    std::vector<std::uint32_t> affected = grains_at[a];
-    affected.insert(affected.end(), grains_at[b].begin(), grains_at[b].end());
+    affected.assign(grains_at[a].begin(), grains_at[a].begin() + count[a]);
+    affected.insert(affected.end(), grains_at[b].begin(), grains_at[b].begin() + count[b]);
     std::sort(affected.begin(), affected.end());
     affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
-    trial.assign(affected.size(), {});
-    bool ok = true;
+    bool ok = affected.size() <= static_cast<std::size_t>(most);
+    trial.clear(), trial_start.clear();
     for (std::size_t i = 0; i < affected.size() && ok; ++i) {
-      auto &q = trial[i];
-      for (std::uint32_t v : p.poly[affected[i]]) {
-        const std::uint32_t u = v == b ? a : v;
-        if (q.empty() || q.back() != u)
-          q.push_back(u);
+      const std::uint32_t g = affected[i];
+      const std::size_t first = trial.size();
+      trial_start.push_back(static_cast<std::uint32_t>(first));
+      for (std::uint32_t k = 0; k < p.size[g]; ++k) {
+        const std::uint32_t v = p.poly(g)[k], u = v == b ? a : v;
+        if (trial.size() == first || trial.back() != u)
+          trial.push_back(u);
       }
-      while (q.size() > 1 && q.front() == q.back())
-        q.pop_back();
+      while (trial.size() > first + 1 && trial[first] == trial.back())
+        trial.pop_back();
+      const std::size_t n = trial.size() - first;
       tx.clear(), ty.clear();
-      for (std::uint32_t v : q)
-        tx.push_back(v == a ? mx : p.x[v]), ty.push_back(v == a ? my : p.y[v]);
+      for (std::size_t k = first; k < trial.size(); ++k)
+        tx.push_back(trial[k] == a ? mx : p.x[trial[k]]), ty.push_back(trial[k] == a ? my : p.y[trial[k]]);
       // An edge of round-off length always goes; otherwise the grains must stay convex.
-      ok = q.size() >= 3 && signedArea(tx.data(), ty.data(), q.size()) > 0.0 &&
-           (e.len < 1e-9 * h || isConvex(tx.data(), ty.data(), q.size(), 1e-12));
+      ok = n >= 3 && signedArea(tx.data(), ty.data(), n) > 0.0 &&
+           (e.len < 1e-9 * h || isConvex(tx.data(), ty.data(), n, 1e-12));
     }
     if (!ok) {
       ++report.kept_short_edges;
@@ -540,22 +554,28 @@ void mergeShortEdges(Planar &p, double w, double h_box, double h, TessellationRe
     }
     p.x[a] = mx, p.y[a] = my;
     parent[b] = a;
-    for (std::size_t i = 0; i < affected.size(); ++i)
-      p.poly[affected[i]] = std::move(trial[i]);
-    grains_at[a] = std::move(affected);
-    grains_at[b].clear();
+    trial_start.push_back(static_cast<std::uint32_t>(trial.size()));
+    for (std::size_t i = 0; i < affected.size(); ++i) {
+      const std::uint32_t g = affected[i];
+      p.size[g] = trial_start[i + 1] - trial_start[i];
+      std::copy(trial.begin() + trial_start[i], trial.begin() + trial_start[i + 1], p.poly(g));
+    }
+    std::copy(affected.begin(), affected.end(), grains_at[a].begin());
+    count[a] = static_cast<std::uint8_t>(affected.size());
+    count[b] = 0;
     ++report.merged_vertices;
   }
 }
 
-Polygons toPolygons(const Planar &p) {
+Polygons toPolygons(Planar &p) {
   Polygons out;
-  std::vector<double> x, y;
-  for (const auto &poly : p.poly) {
-    x.clear(), y.clear();
-    for (std::uint32_t v : poly)
-      x.push_back(p.x[v]), y.push_back(p.y[v]);
-    out.add(x, y);
+  out.offset.reserve(p.grains() + 1);
+  out.x.reserve(p.ids.size());
+  out.y.reserve(p.ids.size());
+  for (std::size_t g = 0; g < p.grains(); ++g) {
+    for (std::uint32_t k = 0; k < p.size[g]; ++k)
+      out.x.push_back(p.x[p.poly(g)[k]]), out.y.push_back(p.y[p.poly(g)[k]]);
+    out.offset.push_back(out.x.size());
   }
   return out;
 }
