@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 namespace mesopen {
 
@@ -78,24 +79,41 @@ double calibrateVoidFactor(const Sites &placed, const TargetSpec &spec, Generato
   return std::abs(fa) < std::abs(fb) ? a : b;
 }
 
-Target generateTarget(const TargetSpec &spec, GeneratorReport &report) {
+Target generateTarget(const TargetSpec &spec, GeneratorReport &report,
+                      const std::function<void(const std::string &)> &progress) {
+  auto say = [&](const std::string &what) {
+    if (progress)
+      progress(what);
+  };
   Target t;
   t.spec = spec;
   auto t0 = std::chrono::steady_clock::now();
   t.sites = initialSites(spec, spec.void_scale);
   report.grain_sites = t.sites.grains;
   report.void_sites = t.sites.size() - t.sites.grains;
-  report.placement = relaxSites(t.sites, spec);
+  report.placement = relaxSites(t.sites, spec, [&](int it, int most, double energy) {
+    if (!progress)
+      return;
+    const double elapsed = since(t0);
+    char line[160];
+    std::snprintf(line, sizeof line, "placing %zu sites: iteration %d/%d, overlap %.1e of start, ETA %.0f s",
+                  t.sites.size(), it, most, energy, elapsed / it * (most - it));
+    progress(line);
+  });
   report.seconds_sites = since(t0);
+  say("porosity control");
 
   t0 = std::chrono::steady_clock::now();
   report.void_factor = spec.calibrate_porosity ? calibrateVoidFactor(t.sites, spec, report) : 1.0;
   report.seconds_calibration = since(t0);
 
+  say("tessellation");
   t0 = std::chrono::steady_clock::now();
   t.grains = tessellate(t.sites, spec, report.void_factor, t.grain_site, report.tessellation);
   report.seconds_tessellation = since(t0);
 
+  if (spec.mesh != MeshKind::none)
+    say("meshing " + std::to_string(t.grains.size()) + " grains");
   t0 = std::chrono::steady_clock::now();
   t.mesh = meshGrains(t.grains, spec.mesh, spec.mesh_size, spec.min_angle);
   report.seconds_mesh = since(t0);

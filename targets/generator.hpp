@@ -6,6 +6,8 @@
 #include "target.hpp"
 #include "tessellation.hpp"
 
+#include <functional>
+#include <string>
 #include <vector>
 
 namespace mesopen {
@@ -28,6 +30,8 @@ double calibrateVoidFactor(const Sites &placed, const TargetSpec &spec, Generato
 
 // Make the target the spec asks for. Deterministic: the same spec gives the same target for any
 // number of threads.
-Target generateTarget(const TargetSpec &spec, GeneratorReport &report);
+// `progress`, when given, hears what the generator is doing (a phase, or a placement iteration).
+Target generateTarget(const TargetSpec &spec, GeneratorReport &report,
+                      const std::function<void(const std::string &)> &progress = {});
 
 } // namespace mesopen

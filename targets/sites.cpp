@@ -172,7 +172,8 @@ int maxIterations(const TargetSpec &spec) {
   return spec.placement == Placement::regular ? 50 : 500;
 }
 
-PlacementReport relaxSites(Sites &s, const TargetSpec &spec) {
+PlacementReport relaxSites(Sites &s, const TargetSpec &spec,
+                           const std::function<void(int, int, double)> &progress) {
   const std::size_t n = s.size();
   const double r_grain_max = 0.5 * spec.diameter_max;
   const double r_void = 0.5 * spec.void_ratio * spec.meanDiameter();
@@ -213,6 +214,8 @@ PlacementReport relaxSites(Sites &s, const TargetSpec &spec) {
       s.y[i] = std::clamp(s.y[i] + scale * c.dy[i], 0.0, spec.height);
     }
     report.iterations = it + 1;
+    if (progress)
+      progress(it + 1, maxIterations(spec), energy / report.energy.front());
   }
   return report;
 }

@@ -5,6 +5,7 @@
 #include "random.hpp"
 #include "target.hpp"
 
+#include <functional>
 #include <vector>
 
 namespace mesopen {
@@ -34,7 +35,10 @@ Sites initialSites(const TargetSpec &spec, double void_scale);
 // true descent. When the energy rises the step shrinks by step_decay (1 keeps the thesis's fixed
 // step). It stops at a local minimum (the step below 1 % of its start, or the energy changing by
 // less than 1e-4 of itself over 20 iterations) or after max_iterations.
-PlacementReport relaxSites(Sites &sites, const TargetSpec &spec);
+// `progress`, when given, is called after each iteration with (iteration, max_iterations,
+// energy / initial energy).
+PlacementReport relaxSites(Sites &sites, const TargetSpec &spec,
+                           const std::function<void(int, int, double)> &progress = {});
 
 // max_iterations, or when it is 0: 50 for regular placement (its sites start spread out) and
 // 500 for clustered (random start), the counts after which the grain-size spread stops

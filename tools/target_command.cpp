@@ -88,10 +88,15 @@ int targetCommand(const TargetOptions &options) {
   const bool terminal = isatty(STDERR_FILENO);
   std::string phase = "generating the target";
   try {
-    if (terminal)
-      std::cerr << "mesopen target: " << phase << " ...\n";
+    // Progress on a terminal only, one line rewritten in place; nothing in logs.
+    auto progress = [&](const std::string &what) {
+      std::cerr << "\r\033[Kmesopen target: " << what << std::flush;
+    };
     GeneratorReport report;
-    const Target target = generateTarget(scene.target, report);
+    const Target target = terminal ? generateTarget(scene.target, report, progress)
+                                   : generateTarget(scene.target, report);
+    if (terminal)
+      std::cerr << "\r\033[K";
     const TargetMeasures m = measureTarget(target.grains, scene.target);
 
     phase = "placing the projectile";
