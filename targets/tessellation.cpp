@@ -210,13 +210,21 @@ void computeVoronoiPoints(Cells<Delaunay> &c, const Sites &s, const TargetSpec &
 }
 
 void computePowerPoints(Cells<Regular> &c, const TargetSpec &spec) {
-  for (auto f = c.tri.finite_faces_begin(); f != c.tri.finite_faces_end(); ++f) {
-    const auto p = c.tri.weighted_circumcenter(f);
+  std::vector<Regular::Face_handle> faces;
+  faces.reserve(c.tri.number_of_faces());
+  for (auto f = c.tri.finite_faces_begin(); f != c.tri.finite_faces_end(); ++f)
+    faces.push_back(f);
+  const std::size_t n = faces.size();
+  c.vpx.resize(n);
+  c.vpy.resize(n);
+#pragma omp parallel for schedule(static)
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto p = c.tri.weighted_circumcenter(faces[k]);
     double x = p.x(), y = p.y();
     clampToBox(x, y, spec.width, spec.height);
-    f->info().vp = static_cast<std::int32_t>(c.vpx.size());
-    c.vpx.push_back(x);
-    c.vpy.push_back(y);
+    faces[k]->info().vp = static_cast<std::int32_t>(k);
+    c.vpx[k] = x;
+    c.vpy[k] = y;
   }
 }
 

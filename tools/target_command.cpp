@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <iostream>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -107,10 +108,14 @@ int targetCommand(const TargetOptions &options) {
 
     phase = "writing the files";
     const std::string dir = options.out_dir;
-    writeTargetH5(dir + "/target.h5", target, pp);
-    writeLiggghtsData(dir + "/target.data", target);
-    writeTargetVtu(dir + "/target.vtu", target, pp);
+    // The four files are independent: written side by side (HDF5 is used by one thread only).
+    std::vector<std::future<void>> writes;
+    writes.push_back(std::async(std::launch::async, [&] { writeTargetH5(dir + "/target.h5", target, pp); }));
+    writes.push_back(std::async(std::launch::async, [&] { writeTargetVtu(dir + "/target.vtu", target, pp); }));
+    writes.push_back(std::async(std::launch::async, [&] { writeLiggghtsData(dir + "/target.data", target); }));
     writeYadeSpheres(dir + "/target.spheres", target);
+    for (auto &w : writes)
+      w.get(); // passes on the first failure
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
     const TargetSpec &t = scene.target;
