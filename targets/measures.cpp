@@ -7,18 +7,35 @@
 
 namespace mesopen {
 
+GrainFigures grainFigures(const Polygons &grains) {
+  const std::size_t n = grains.size();
+  GrainFigures f;
+  f.area.resize(n);
+  f.diameter.resize(n);
+  f.centroid_x.resize(n);
+  f.centroid_y.resize(n);
+  for (std::size_t g = 0; g < n; ++g) {
+    const double *x = grains.x.data() + grains.offset[g];
+    const double *y = grains.y.data() + grains.offset[g];
+    const std::size_t corners = grains.corners(g);
+    f.area[g] = std::abs(signedArea(x, y, corners));
+    f.diameter[g] = equivalentDiameter(f.area[g]);
+    const Point c = centroid(x, y, corners);
+    f.centroid_x[g] = c.x;
+    f.centroid_y[g] = c.y;
+  }
+  return f;
+}
+
 TargetMeasures measureTarget(const Polygons &grains, const TargetSpec &spec) {
   TargetMeasures m;
   const std::size_t n = grains.size();
   m.grains = n;
-  std::vector<double> d(n);
+  const GrainFigures figures = grainFigures(grains);
+  const std::vector<double> &d = figures.diameter;
   double area = 0.0;
-  for (std::size_t g = 0; g < n; ++g) {
-    const double a = signedArea(grains.x.data() + grains.offset[g], grains.y.data() + grains.offset[g],
-                                grains.corners(g));
+  for (double a : figures.area)
     area += a;
-    d[g] = equivalentDiameter(a);
-  }
   m.porosity = (spec.area() - area) / spec.area();
   if (n > 0) {
     double sum = 0.0;

@@ -24,4 +24,10 @@ struct TargetMeasures {
 
 TargetMeasures measureTarget(const Polygons &grains, const TargetSpec &spec);
 
+// Area, equivalent diameter D = sqrt(4A/pi) and centroid of every grain polygon.
+struct GrainFigures {
+  std::vector<double> area, diameter, centroid_x, centroid_y;
+};
+GrainFigures grainFigures(const Polygons &grains);
+
 } // namespace mesopen

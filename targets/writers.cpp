@@ -2,6 +2,7 @@
 
 #include "atomic_file.hpp"
 #include "h5file.hpp"
+#include "measures.hpp"
 #include "polygon.hpp"
 
 #include <vtkCellData.h>
@@ -26,31 +27,6 @@ namespace mesopen {
 namespace {
 
 constexpr int target_format_version = 1;
-
-// Area, equivalent diameter and centroid of every grain polygon.
-struct GrainFigures {
-  std::vector<double> area, diameter, centroid_x, centroid_y;
-};
-
-GrainFigures grainFigures(const Polygons &grains) {
-  const std::size_t n = grains.size();
-  GrainFigures f;
-  f.area.resize(n);
-  f.diameter.resize(n);
-  f.centroid_x.resize(n);
-  f.centroid_y.resize(n);
-  for (std::size_t g = 0; g < n; ++g) {
-    const double *x = grains.x.data() + grains.offset[g];
-    const double *y = grains.y.data() + grains.offset[g];
-    const std::size_t corners = grains.corners(g);
-    f.area[g] = std::abs(signedArea(x, y, corners));
-    f.diameter[g] = equivalentDiameter(f.area[g]);
-    const Point c = centroid(x, y, corners);
-    f.centroid_x[g] = c.x;
-    f.centroid_y[g] = c.y;
-  }
-  return f;
-}
 
 // Shortest text that reads back to the same double; independent of the locale.
 void appendNumber(std::string &out, double value) {
