@@ -24,7 +24,9 @@ public:
 
   int column(double x) const { return std::clamp(static_cast<int>(std::floor(x * sx_)), 0, nx_ - 1); }
   int row(double y) const { return std::clamp(static_cast<int>(std::floor(y * sy_)), 0, ny_ - 1); }
-  int bucket(double x, double y) const { return row(y) * nx_ + column(x); }
+  std::size_t bucket(double x, double y) const {
+    return static_cast<std::size_t>(row(y)) * nx_ + column(x);
+  }
 
   // Sort the points [first, last) of x, y, r into buckets.
   void fill(const double *x, const double *y, const double *r, std::uint32_t first, std::uint32_t last) {
@@ -45,7 +47,8 @@ public:
     const int c0 = column(x - reach), c1 = column(x + reach);
     const int r0 = row(y - reach), r1 = row(y + reach);
     for (int r = r0; r <= r1; ++r) {
-      const Item *it = items_.data() + start_[r * nx_ + c0], *end = items_.data() + start_[r * nx_ + c1 + 1];
+      const std::size_t row_start = static_cast<std::size_t>(r) * nx_;
+      const Item *it = items_.data() + start_[row_start + c0], *end = items_.data() + start_[row_start + c1 + 1];
       for (; it != end; ++it)
         f(*it);
     }
@@ -58,7 +61,7 @@ private:
   int nx_, ny_;
   double sx_, sy_;
   std::vector<std::uint32_t> start_, fill_;
-  std::vector<int> bucket_of_;
+  std::vector<std::size_t> bucket_of_;
   std::vector<Item> items_;
 };
 

@@ -9,8 +9,11 @@
 #include <CGAL/Delaunay_mesher_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
+#include <stdexcept>
 
 namespace mesopen {
 
@@ -47,7 +50,8 @@ TriangleMesh qualityMesh(const double *x, const double *y, std::size_t n, double
   while (keep.size() > 1 && std::hypot(x[keep.back()] - x[keep[0]], y[keep.back()] - y[keep[0]]) <= 1e-6 * edge)
     keep.pop_back();
   CDT cdt;
-  // Split each boundary edge evenly so that neighbouring bodies see the same boundary points.
+  // Split each boundary edge evenly (neighbouring grains get nearly the same boundary points; the
+  // refinement may split an edge further where a triangle would encroach on it).
   std::vector<CDT::Vertex_handle> boundary;
   const std::size_t corners = keep.size();
   for (std::size_t k = 0; k < corners; ++k) {
@@ -98,6 +102,8 @@ TriangleMesh qualityMesh(const double *x, const double *y, std::size_t n, double
 }
 
 void appendBody(Meshes &meshes, const TriangleMesh &body) {
+  if (meshes.x.size() + body.x.size() > UINT32_MAX)
+    throw std::length_error("mesh: more than 2^32 nodes; use a coarser mesh_size or a smaller target");
   const auto base = static_cast<std::uint32_t>(meshes.x.size());
   meshes.x.insert(meshes.x.end(), body.x.begin(), body.x.end());
   meshes.y.insert(meshes.y.end(), body.y.begin(), body.y.end());

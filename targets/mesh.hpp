@@ -19,7 +19,7 @@ struct TriangleMesh {
 TriangleMesh fanMesh(const double *x, const double *y, std::size_t n);
 
 // Quality mesh of a simple polygon (counter-clockwise): boundary edges are first split evenly
-// into pieces no longer than `edge`, then interior points are added until every triangle has
+// into pieces no longer than `edge` (refinement may split them further where needed), then interior points are added until every triangle has
 // edges about `edge` long or shorter and no angle below `min_angle_deg`. Refinement is proven to
 // end for bounds up to 20.7 degrees (Shewchuk; CGAL Mesh_2 handles small input angles by
 // clusters); the scene allows no more, since a grain corner sharper than a larger bound makes it

@@ -121,7 +121,6 @@ void conflicts(const Sites &s, const TargetSpec &spec, const CellGrid &grains, c
                double r_grain_max, double r_void, Conflicts &c) {
   const std::size_t n = s.size();
   const double *x = s.x.data(), *y = s.y.data(), *r = s.r.data();
-  (void)r;
   const double w = spec.width, h = spec.height;
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < n; ++i) {

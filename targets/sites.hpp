@@ -25,7 +25,7 @@ std::vector<double> grainDiameters(const TargetSpec &spec, Random &random);
 
 // Sites with their radii at their initial random positions (thesis 4.2.1, 4.2.5). Void sites
 // have diameter void_ratio * dbar; their number sets the porosity:
-// V = void_scale * (A - sum A_grain) / A_void, void_scale calibrated by the generator.
+// V = void_scale * (A - sum A_grain) / A_void (the generator then tunes the void cells' size).
 Sites initialSites(const TargetSpec &spec, double void_scale);
 
 // Steepest descent of the Gaussian overlap (Eq. 4.1) with cell lists: each site moves along its

@@ -240,11 +240,29 @@ void checkTogether(const Scene &s) {
     bad("target.width and target.height must be at least 4 grain diameters (" +
         show(4 * t.diameter_max) + " m); they are " + show(t.width) + " and " + show(t.height));
   if (t.mesh_size > 0.5 * t.diameter_min)
-    bad("target.mesh_size = " + show(t.mesh_size) + " is more than half the smallest grain diameter (" +
-        show(0.5 * t.diameter_min) + " m)");
-  const double n = t.area() * (1 - t.porosity) / (M_PI * t.meanDiameter() * t.meanDiameter() / 4);
-  if (n > 2.0e7)
-    bad("the target would hold " + show(n) + " grains; at most 2e7 are allowed");
+    bad("target.mesh_size = " + show(t.mesh_size) + " is more than half the smallest grain diameter; " +
+        "allowed: mesh_size <= " + show(0.5 * t.diameter_min) + " [m]");
+  // What the target will hold, against what fits in this machine's memory (about 350 bytes a site
+  // and 200 a triangle, measured).
+  const double grains = t.area() * (1 - t.porosity) / (M_PI * t.meanDiameter() * t.meanDiameter() / 4);
+  const double void_d = t.void_ratio * t.meanDiameter();
+  const double sites = grains + t.void_scale * t.area() * t.porosity / (M_PI * void_d * void_d / 4);
+  if (sites > 5.0e7)
+    bad("target.width x target.height, target.diameter, target.porosity, target.void_ratio and "
+        "target.void_scale give about " + show(sites) + " grain and void sites; allowed: at most 5e7");
+  if (t.mesh != MeshKind::none) {
+    const double triangles = t.area() * (1 - t.porosity) / (0.43 * t.mesh_size * t.mesh_size);
+    if (triangles > 5.0e7)
+      bad("target.mesh_size = " + show(t.mesh_size) + " gives about " + show(triangles) +
+          " triangles; allowed: at most 5e7 (a larger mesh_size, or mesh = \"none\")");
+  }
+  if (s.projectile.enabled && s.projectile.mesh_size > 0) {
+    const double d = s.projectile.length / s.projectile.length_over_diameter;
+    const double triangles = s.projectile.length * d / (0.43 * s.projectile.mesh_size * s.projectile.mesh_size);
+    if (triangles > 5.0e7)
+      bad("projectile.mesh_size = " + show(s.projectile.mesh_size) + " gives about " + show(triangles) +
+          " triangles; allowed: at most 5e7");
+  }
   if (s.projectile.enabled) {
     try {
       projectileShape(s.projectile);

@@ -15,8 +15,13 @@
 #include <fstream>
 #include <future>
 #include <iostream>
+#include <fcntl.h>
+#include <spawn.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+extern char **environ;
 
 namespace mesopen {
 
@@ -52,14 +57,27 @@ const char *name(MeshKind m) {
 }
 
 // The grain-size histogram PNG, drawn by matplotlib from target.json; a missing python3 or
-// matplotlib is reported but does not fail the target.
-void plotHistogram(const std::string &dir) {
+// matplotlib is reported but does not fail the target. Run without a shell (paths stay paths).
+bool plotHistogram(const std::string &dir) {
   const std::string script = shareDirectory() + "/grain_sizes.py";
-  const std::string cmd = "/usr/bin/python3 '" + script + "' '" + dir + "/target.json' '" + dir +
-                          "/grain-sizes.png' > /dev/null 2>&1";
-  if (std::system(cmd.c_str()) != 0)
-    std::cerr << "mesopen target: warning: no grain-size plot (needs /usr/bin/python3 with matplotlib, "
-                 "and " << script << ")\n";
+  const std::string json = dir + "/target.json", png = dir + "/grain-sizes.png";
+  std::vector<char *> argv{const_cast<char *>("/usr/bin/python3"), const_cast<char *>(script.c_str()),
+                           const_cast<char *>(json.c_str()), const_cast<char *>(png.c_str()), nullptr};
+  posix_spawn_file_actions_t quiet;
+  posix_spawn_file_actions_init(&quiet);
+  posix_spawn_file_actions_addopen(&quiet, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&quiet, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+  pid_t pid;
+  int status = -1;
+  const bool started = posix_spawn(&pid, argv[0], &quiet, nullptr, argv.data(), environ) == 0;
+  posix_spawn_file_actions_destroy(&quiet);
+  if (started)
+    waitpid(pid, &status, 0);
+  if (started && WIFEXITED(status) && WEXITSTATUS(status) == 0)
+    return true;
+  std::cerr << "mesopen target: warning: no grain-size plot (needs /usr/bin/python3 with matplotlib, "
+               "and " << script << ")\n";
+  return false;
 }
 
 } // namespace
@@ -79,6 +97,9 @@ int targetCommand(const TargetOptions &options) {
     fs::create_directories(options.out_dir, ec);
     if (ec || !fs::is_directory(options.out_dir))
       throw InputError(options.out_dir + ": cannot create the output directory (" + ec.message() + ")");
+    // The figures of an earlier run must not sit beside this run's data.
+    for (const char *old : {"target.json", "summary.json", "grain-sizes.png"})
+      fs::remove(fs::path(options.out_dir) / old, ec);
   } catch (const InputError &e) {
     std::cerr << "mesopen target: " << e.what() << '\n';
     return 2;
@@ -119,7 +140,19 @@ int targetCommand(const TargetOptions &options) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
     const TargetSpec &t = scene.target;
+    // What the run could not meet is said, on the terminal and in the files.
+    std::vector<std::string> warnings;
+    if (std::abs(m.porosity - t.porosity) > 0.005)
+      warnings.push_back("porosity " + std::to_string(m.porosity) + " misses the requested " +
+                         std::to_string(t.porosity) + " by more than 0.005");
+    const double lost = static_cast<double>(report.grain_sites) - static_cast<double>(m.grains);
+    if (lost > 0.01 * report.grain_sites)
+      warnings.push_back(std::to_string(static_cast<long>(lost)) + " of " + std::to_string(report.grain_sites) +
+                         " grain sites lost (merged or without a cell)");
+    for (const auto &w : warnings)
+      std::cerr << "mesopen target: warning: " << w << '\n';
     nlohmann::json j;
+    j["warnings"] = warnings;
     j["grains"] = m.grains;
     j["porosity"] = m.porosity;
     j["mean_diameter"] = m.mean_diameter;
@@ -166,9 +199,7 @@ int targetCommand(const TargetOptions &options) {
     j["histogram"] = {{"edges", m.histogram_edges}, {"counts", m.histogram_counts}};
     writeJson(dir + "/target.json", j);
 
-    const bool plotted = !options.no_plot;
-    if (plotted)
-      plotHistogram(dir);
+    const bool plotted = !options.no_plot && plotHistogram(dir);
 
     nlohmann::json summary;
     summary["command"] = "target";
@@ -180,8 +211,9 @@ int targetCommand(const TargetOptions &options) {
                           {"std_diameter", m.std_diameter},
                           {"local_porosity_std", m.local_porosity_std}};
     summary["files"] = {"target.h5", "target.data", "target.vtu", "target.spheres", "target.json"};
-    if (plotted && fs::exists(dir + "/grain-sizes.png"))
+    if (plotted)
       summary["files"].push_back("grain-sizes.png");
+    summary["warnings"] = warnings;
     summary["wall_seconds"] = seconds;
     writeJson(dir + "/summary.json", summary);
 

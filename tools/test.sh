@@ -16,4 +16,4 @@ no_tests=()
 if [ "$#" -eq 0 ]; then
   no_tests=(--no-tests=error)
 fi
-ctest --test-dir build --output-on-failure -j "$(nproc)" -LE bench "${no_tests[@]}" "$@"
+ctest --test-dir build --output-on-failure --timeout 900 -j "$(nproc)" -LE bench "${no_tests[@]}" "$@"

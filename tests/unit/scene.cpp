@@ -105,3 +105,25 @@ TEST(Cli, SceneKeysDocumentIsCurrent) {
   EXPECT_NE(doc.find(table), std::string::npos)
       << "docs/scene-keys.md is out of date: regenerate it with `build/bin/mesopen keys`";
 }
+
+// A target that cannot meet its request still gets made, and says so (stderr, summary.json).
+TEST(Cli, MissedRequestIsAWarning) {
+  ScratchDir dir("cli-warn");
+  // 60 % porosity with very many, very small voids: the void cells cannot shrink far enough
+  // (measured: 68 %).
+  mesopen::test::writeFile(dir / "miss.toml", "[target]\nwidth = 1e-3\nheight = 1e-3\nporosity = 0.6\n"
+                                              "void_ratio = 0.1\nvoid_scale = 5\nmesh = \"none\"\n"
+                                              "[projectile]\nenabled = false\n");
+  const auto r = mesopen::test::runMesopen("target " + (dir / "miss.toml") + " -o " + (dir / "out") + " --no-plot");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("warning: porosity"), std::string::npos) << r.output;
+  EXPECT_NE(mesopen::test::readFile(dir / "out/summary.json").find("misses the requested"), std::string::npos);
+}
+
+TEST(Cli, TooLargeTargetsAreRefusedBeforeTheyStart) {
+  ScratchDir dir("cli-big");
+  mesopen::test::writeFile(dir / "big.toml", "[target]\nwidth = 0.3\nheight = 0.3\ndiameter = 60e-6\n");
+  const auto r = mesopen::test::runMesopen("target " + (dir / "big.toml") + " -o " + (dir / "out"));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("allowed: at most 5e7"), std::string::npos) << r.output;
+}
