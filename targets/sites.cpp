@@ -76,15 +76,23 @@ Sites initialSites(const TargetSpec &spec, double void_scale) {
   const double w = spec.width, h = spec.height;
   std::size_t placed_grains = 0, placed_voids = 0;
   if (spec.placement == Placement::regular) {
-    // Thesis 4.2.5: N sub-boxes, one grain site and V/N void sites in each; the rest at random.
-    const int nx = std::max(1, static_cast<int>(std::floor(std::sqrt(n * w / h))));
-    const int ny = std::max(1, static_cast<int>(n / nx));
-    const std::size_t per_box = v / (static_cast<std::size_t>(nx) * ny);
+    // Thesis 4.2.5: about N sub-boxes, one grain site and V/N void sites in each; the rest at
+    // random. The grid has nx * ny >= N boxes of the box's aspect; N of them, drawn at random,
+    // get a grain, so that no grain is left to chance in long, thin boxes.
+    const int nx = std::max(1, static_cast<int>(std::lround(std::sqrt(n * w / h))));
+    const int ny = std::max(1, static_cast<int>(std::ceil(static_cast<double>(n) / nx)));
+    const std::size_t boxes = static_cast<std::size_t>(nx) * ny;
+    std::vector<std::uint8_t> has_grain(boxes, 0);
+    std::fill(has_grain.begin(), has_grain.begin() + std::min(n, boxes), 1);
+    random.shuffle(has_grain);
+    const std::size_t per_box = v / boxes;
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
         const double x0 = w * i / nx, x1 = w * (i + 1) / nx, y0 = h * j / ny, y1 = h * (j + 1) / ny;
-        s.x[placed_grains] = random.uniform(x0, x1);
-        s.y[placed_grains++] = random.uniform(y0, y1);
+        if (has_grain[static_cast<std::size_t>(j) * nx + i]) {
+          s.x[placed_grains] = random.uniform(x0, x1);
+          s.y[placed_grains++] = random.uniform(y0, y1);
+        }
         for (std::size_t k = 0; k < per_box; ++k, ++placed_voids) {
           s.x[n + placed_voids] = void_random.uniform(x0, x1);
           s.y[n + placed_voids] = void_random.uniform(y0, y1);
