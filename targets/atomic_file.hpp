@@ -2,7 +2,11 @@
 // rename onto the destination (atomic within one file system).
 #pragma once
 
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <stdexcept>
 #include <string>
 #include <system_error>
 #include <utility>
@@ -21,6 +25,19 @@ template <class Write> void writeAtomically(const std::string &path, Write &&wri
     std::filesystem::remove(temp, ignored);
     throw;
   }
+}
+
+// The whole of `text` as the file `path`, written atomically.
+inline void writeText(const std::string &path, const std::string &text) {
+  writeAtomically(path, [&](const std::string &temp) {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    if (!out)
+      throw std::runtime_error("cannot create '" + temp + "': " + std::strerror(errno));
+    out.write(text.data(), static_cast<std::streamsize>(text.size()));
+    out.close();
+    if (!out)
+      throw std::runtime_error("cannot write '" + temp + "'");
+  });
 }
 
 } // namespace mesopen

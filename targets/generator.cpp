@@ -42,7 +42,10 @@ double calibrateVoidFactor(const Sites &placed, const TargetSpec &spec, Generato
     Sites copy = sites;
     std::vector<std::uint32_t> grain_site;
     TessellationReport ignored;
-    const double p = measureTarget(tessellate(copy, trial, factor, grain_site, ignored), trial).porosity;
+    double solid = 0.0;
+    for (double a : grainFigures(tessellate(copy, trial, factor, grain_site, ignored)).area)
+      solid += a;
+    const double p = 1.0 - solid / trial.area();
     report.trial_factor.push_back(factor);
     report.trial_porosity.push_back(p);
     return p - spec.porosity;

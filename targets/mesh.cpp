@@ -27,6 +27,10 @@ using Criteria = CGAL::Delaunay_mesh_size_criteria_2<CDT>;
 using Mesher = CGAL::Delaunay_mesher_2<CDT, Criteria>;
 } // namespace
 
+int edgePieces(double length, double edge) {
+  return length > 0.0 ? std::max(1, static_cast<int>(std::ceil(length / edge - 1e-9))) : 0;
+}
+
 TriangleMesh fanMesh(const double *x, const double *y, std::size_t n) {
   TriangleMesh m;
   const Point c = centroid(x, y, n);
@@ -57,7 +61,7 @@ TriangleMesh qualityMesh(const double *x, const double *y, std::size_t n, double
   for (std::size_t k = 0; k < corners; ++k) {
     const std::size_t i = keep[k], j = keep[(k + 1) % corners];
     const double len = std::hypot(x[j] - x[i], y[j] - y[i]);
-    const int pieces = std::max(1, static_cast<int>(std::ceil(len / edge - 1e-9)));
+    const int pieces = std::max(1, edgePieces(len, edge));
     for (int k = 0; k < pieces; ++k) {
       const double t = static_cast<double>(k) / pieces;
       boundary.push_back(cdt.insert(K::Point_2(x[i] + t * (x[j] - x[i]), y[i] + t * (y[j] - y[i]))));

@@ -15,6 +15,10 @@ struct TriangleMesh {
   std::vector<std::uint32_t> tri; // 3 node indices per triangle, counter-clockwise
 };
 
+// Pieces no longer than `edge` that a boundary edge of length `length` is split into (at least
+// one; zero for a zero length). Outlines made with it are not split again by qualityMesh.
+int edgePieces(double length, double edge);
+
 // Fan mesh: one node at the centroid, one triangle per polygon edge.
 TriangleMesh fanMesh(const double *x, const double *y, std::size_t n);
 

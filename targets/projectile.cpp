@@ -22,12 +22,6 @@ std::string num(double v) {
   return b;
 }
 
-// Pieces of at most `edge` for a length `len` (the same rounding as qualityMesh, so that it
-// does not split the outline's edges again).
-int pieces(double len, double edge) {
-  return len > 0.0 ? std::max(1, static_cast<int>(std::ceil(len / edge - 1e-9))) : 0;
-}
-
 // Angle of the facet end on the right ogive arc, seen from the arc's centre (d/2 - rho, L_n):
 // the arc runs from phi_f < 0 at the facet end to 0 at the shoulder.
 double facetEndAngle(const ProjectileShape &s) {
@@ -113,7 +107,7 @@ void projectileOutline(const ProjectileShape &shape, double edge, std::vector<do
   std::vector<double> rx, ry;
   // Facet: the straight line (0, s_t) -> (y_f, s_f), split evenly; none for a sharp tip
   // (s_f = 0, where y(0) is zero only to round-off).
-  const int nf = s_f > 0.0 ? pieces(std::hypot(y_f, s_f - s_t), edge) : 0;
+  const int nf = s_f > 0.0 ? edgePieces(std::hypot(y_f, s_f - s_t), edge) : 0;
   for (int k = 1; k < nf; ++k) {
     const double t = static_cast<double>(k) / nf;
     rx.push_back(t * y_f);
@@ -126,7 +120,7 @@ void projectileOutline(const ProjectileShape &shape, double edge, std::vector<do
   // Ogive arc about (d/2 - rho, L_n), equal angles phi_f (1 - k/q); each arc piece rho dphi is
   // at most `edge`, so each chord is too. x = d/2 - rho (1 - cos phi) = d/2 - 2 rho sin^2(phi/2).
   const double phi_f = facetEndAngle(shape);
-  const int na = pieces(-phi_f * rho, edge);
+  const int na = edgePieces(-phi_f * rho, edge);
   for (int k = 1; k < na; ++k) {
     const double phi = phi_f * (1.0 - static_cast<double>(k) / na);
     const double h = std::sin(0.5 * phi);
@@ -139,7 +133,7 @@ void projectileOutline(const ProjectileShape &shape, double edge, std::vector<do
   }
   // Shank: x = d/2 from L_n to L.
   const double shank = shape.length - shape.nose_length;
-  const int ns = pieces(shank, edge);
+  const int ns = edgePieces(shank, edge);
   for (int k = 1; k < ns; ++k) {
     rx.push_back(half);
     ry.push_back(shape.nose_length + shank * k / ns);
@@ -151,7 +145,7 @@ void projectileOutline(const ProjectileShape &shape, double edge, std::vector<do
 
   // Apex, right side, base, mirrored left side: point i and point N - i are exact mirrors.
   const std::size_t m = rx.size();
-  const int nb = pieces(shape.diameter, edge);
+  const int nb = edgePieces(shape.diameter, edge);
   x.assign(1, 0.0);
   y.assign(1, s_t);
   x.insert(x.end(), rx.begin(), rx.end());

@@ -35,18 +35,6 @@ void appendNumber(std::string &out, double value) {
   out.append(buffer, end);
 }
 
-void writeText(const std::string &path, const std::string &text) {
-  writeAtomically(path, [&](const std::string &temp) {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    if (!out)
-      throw std::runtime_error("cannot create '" + temp + "': " + std::strerror(errno));
-    out.write(text.data(), static_cast<std::streamsize>(text.size()));
-    out.close();
-    if (!out)
-      throw std::runtime_error("cannot write '" + temp + "'");
-  });
-}
-
 } // namespace
 
 void writeTargetH5(const std::string &path, const Target &target,

@@ -35,14 +35,7 @@ std::string shareDirectory() {
 
 namespace {
 
-void writeJson(const std::string &path, const nlohmann::json &j) {
-  writeAtomically(path, [&](const std::string &temp) {
-    std::ofstream out(temp);
-    out << j.dump(2) << '\n';
-    if (!out.flush())
-      throw std::runtime_error("cannot write " + temp);
-  });
-}
+void writeJson(const std::string &path, const nlohmann::json &j) { writeText(path, j.dump(2) + "\n"); }
 
 double peakMemoryBytes() {
   rusage usage{};
