@@ -12,6 +12,25 @@ enum class Placement { regular, clustered };      // thesis section 4.2.5
 enum class Tessellation { voronoi, power };       // thesis Voronoi + Eq. 4.4, or Laguerre
 enum class MeshKind { none, fan, quality };       // thesis section 4.2.3
 
+// The names of the choices, as scenes and output files spell them.
+template <class Enum> struct Named {
+  const char *name;
+  Enum value;
+};
+inline constexpr Named<Placement> placement_names[] = {{"regular", Placement::regular},
+                                                       {"clustered", Placement::clustered}};
+inline constexpr Named<Tessellation> tessellation_names[] = {{"power", Tessellation::power},
+                                                             {"voronoi", Tessellation::voronoi}};
+inline constexpr Named<MeshKind> mesh_names[] = {
+    {"quality", MeshKind::quality}, {"fan", MeshKind::fan}, {"none", MeshKind::none}};
+
+template <class Enum, std::size_t N> const char *nameOf(Enum value, const Named<Enum> (&names)[N]) {
+  for (const auto &n : names)
+    if (n.value == value)
+      return n.name;
+  return "?";
+}
+
 // What the generator is asked for. Defaults are the scene's defaults (tools/scene.cpp lists them).
 struct TargetSpec {
   double width = 7.076e-3;   // box W [m]

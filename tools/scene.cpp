@@ -94,9 +94,12 @@ Key integer(std::string table, std::string name, Spec Scene::*part, Int Spec::*f
   return k;
 }
 
-template <class Spec, class Enum>
+template <class Spec, class Enum, std::size_t N>
 Key choice(std::string table, std::string name, Spec Scene::*part, Enum Spec::*field,
-           std::vector<std::pair<std::string, Enum>> options, std::string doc) {
+           const Named<Enum> (&named)[N], std::string doc) {
+  std::vector<std::pair<std::string, Enum>> options;
+  for (const auto &n : named)
+    options.emplace_back(n.name, n.value);
   Key k{table, name, "string", "", doc, -HUGE_VAL, HUGE_VAL, false, {}, nullptr, nullptr};
   for (const auto &o : options)
     k.choices.push_back(o.first);
@@ -172,7 +175,7 @@ const std::vector<Key> &keys() {
         real("target", "void_ratio", t, &T::void_ratio, "", 0.1, false, 0.5,
              "void-site diameter over the mean grain diameter (thesis: 1/4)"),
         choice("target", "placement", t, &T::placement,
-               {{"regular", Placement::regular}, {"clustered", Placement::clustered}},
+               placement_names,
                "initial sites: one grain per sub-box (regular) or all random (clustered), thesis 4.2.5"),
         integer("target", "seed", t, &T::seed, 0, 9.0e15, "random seed"),
         real("target", "step_scale", t, &T::step_scale, "", 0, true, 3,
@@ -186,11 +189,11 @@ const std::vector<Key> &keys() {
         boolean("target", "calibrate_porosity", t, &T::calibrate_porosity,
                 "scale the void cells so that the porosity matches the request"),
         choice("target", "tessellation", t, &T::tessellation,
-               {{"power", Tessellation::power}, {"voronoi", Tessellation::voronoi}},
+               tessellation_names,
                "power (Laguerre) cells weighted by r^2, or Voronoi with the thesis's radius matching "
                "(Eq. 4.4)"),
         choice("target", "mesh", t, &T::mesh,
-               {{"quality", MeshKind::quality}, {"fan", MeshKind::fan}, {"none", MeshKind::none}},
+               mesh_names,
                "grain meshes: quality triangles at mesh_size, fan (centroid to vertices), or none"),
         real("target", "mesh_size", t, &T::mesh_size, "m", 0, true, 1,
              "triangle edge length; polygon vertices closer than this are merged"),

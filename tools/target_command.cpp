@@ -43,12 +43,6 @@ double peakMemoryBytes() {
   return usage.ru_maxrss * 1024.0; // Linux reports kilobytes
 }
 
-const char *name(Placement p) { return p == Placement::regular ? "regular" : "clustered"; }
-const char *name(Tessellation t) { return t == Tessellation::voronoi ? "voronoi" : "power"; }
-const char *name(MeshKind m) {
-  return m == MeshKind::quality ? "quality" : m == MeshKind::fan ? "fan" : "none";
-}
-
 // The grain-size histogram PNG, drawn by matplotlib from target.json; a missing python3 or
 // matplotlib is reported but does not fail the target. Run without a shell (paths stay paths).
 bool plotHistogram(const std::string &dir) {
@@ -163,8 +157,9 @@ int targetCommand(const TargetOptions &options) {
     j["requested"] = {{"width", t.width},       {"height", t.height},
                       {"diameter_min", t.diameter_min}, {"diameter_max", t.diameter_max},
                       {"porosity", t.porosity}, {"void_ratio", t.void_ratio},
-                      {"placement", name(t.placement)}, {"tessellation", name(t.tessellation)},
-                      {"seed", t.seed},         {"mesh", name(t.mesh)},
+                      {"placement", nameOf(t.placement, placement_names)},
+                      {"tessellation", nameOf(t.tessellation, tessellation_names)},
+                      {"seed", t.seed},         {"mesh", nameOf(t.mesh, mesh_names)},
                       {"mesh_size", t.mesh_size}};
     j["sites"] = {{"grains", report.grain_sites}, {"voids", report.void_sites}};
     j["porosity_control"] = {{"void_factor", report.void_factor},
