@@ -51,7 +51,6 @@ struct TargetSpec {
   double mesh_size = 10e-6;       // target triangle edge and shortest polygon edge [m]
   double min_angle = 20.7;        // smallest triangle angle of the quality mesh [deg]
   double density = 2648.5;        // grain density for target.data [kg/m^3] (quartz, Table 3.3)
-  int threads = 0;                // 0: all cores
 
   double meanDiameter() const { return 0.5 * (diameter_min + diameter_max); }
   double area() const { return width * height; }

@@ -78,8 +78,6 @@ int targetCommand(const TargetOptions &options) {
       scene.target.seed = *options.seed;
     if (options.no_mesh)
       scene.target.mesh = MeshKind::none;
-    if (options.threads)
-      scene.target.threads = *options.threads;
     std::error_code ec;
     fs::create_directories(options.out_dir, ec);
     if (ec || !fs::is_directory(options.out_dir))
@@ -91,8 +89,8 @@ int targetCommand(const TargetOptions &options) {
     std::cerr << "mesopen target: " << e.what() << '\n';
     return 2;
   }
-  if (scene.target.threads > 0)
-    omp_set_num_threads(scene.target.threads);
+  if (options.threads)
+    omp_set_num_threads(*options.threads);
 
   const bool terminal = isatty(STDERR_FILENO);
   std::string phase = "generating the target";
