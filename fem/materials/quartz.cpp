@@ -1,0 +1,107 @@
+// "quartz": the thesis's quartz grains (section 3.3.2, Table 3.3).
+// Pressure: Mie-Grueneisen. Shear modulus from the cold pressure P-bar = K mu + K1 mu^2 + K2 mu^3
+// (Eq. 3.10-3.11): G = G0 + G1 P + G2 P^2 with P = max(P-bar, 0) (the fit is for compression).
+// Strength: overstress (viscoplastic) relaxation toward the equilibrium surface (Eq. 3.12):
+//   S = S* [1 - (1 - |Se| / |S*|) min(dt / T_R, 1)]   when |S*| > |Se|,
+//   |Se| = sqrt(2/3) Y(p),  Y(p) = min(B + M p, Y1)   (bilinear; MODELS.md reads Y1 as the cap).
+// With dt >= T_R the update is a radial return. `strength = false`: elastic grains, no yield code.
+#include "../material.hpp"
+#include "hypoelastic.hpp"
+#include "mie_gruneisen.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace mesopen::fem {
+
+namespace {
+
+class Quartz final : public Material {
+public:
+  explicit Quartz(const Parameters &p)
+      : rho0_(p.at("density")),
+        eos_{p.at("bulk_modulus"), p.at("k1"), p.at("k2"), p.at("gruneisen"), p.at("pressure_cutoff")},
+        G0_(p.at("g0")), G1_(p.at("g1")), G2_(p.at("g2")), B_(p.at("cohesion")),
+        M_(p.at("friction_slope")), Y1_(p.at("yield_cap")), T_(p.at("relaxation_time")),
+        strength_(p.at("strength") != 0.0) {}
+  const std::string &type() const override {
+    static const std::string name = "quartz";
+    return name;
+  }
+  double density() const override { return rho0_; }
+  bool plastic() const override { return strength_; }
+
+  void update(const StrainBatch &in, StressState &s, MaterialOutput &out) const override {
+    if (strength_)
+      run<true>(in, s, out);
+    else
+      run<false>(in, s, out);
+  }
+
+private:
+  template <bool Strength> void run(const StrainBatch &in, StressState &s, MaterialOutput &out) const {
+    const double dt = in.dt, sqrt23 = std::sqrt(2.0 / 3.0), p_min = -eos_.cutoff;
+    const double relax = std::min(dt / T_, 1.0);
+    double plastic_work = 0.0;
+    for (std::size_t i = 0; i < in.n; ++i) {
+      const double mu = 1.0 / in.jacobian[i] - 1.0;
+      const double cold = eos_.cold(mu), a = eos_.energyFree(mu, cold), b = eos_.gamma / in.volume0[i];
+      const double P = std::max(cold, 0.0);
+      const double G = G0_ + (G2_ * P + G1_) * P;
+      double sxx = s.sxx[i], syy = s.syy[i], sxy = s.sxy[i];
+      rotateDeviator(sxx, syy, sxy, in.spin[i] * dt);
+      const double power_old = stressPower(sxx, syy, sxy, in.dxx[i], in.dyy[i], in.dxy[i]);
+      addDeviatoricIncrement(sxx, syy, sxy, 2.0 * G * dt, in.dxx[i], in.dyy[i], in.dxy[i]);
+      if constexpr (Strength) {
+        // Yield at the new volume with the old energy (the energy follows the new stress).
+        const double p_yield = std::max(a + b * s.energy[i], p_min);
+        const double Se = sqrt23 * std::min(B_ + M_ * p_yield, Y1_);
+        const double norm = deviatorNorm(sxx, syy, sxy);
+        if (norm > Se) {
+          const double scale = 1.0 - (1.0 - Se / norm) * relax;
+          sxx *= scale, syy *= scale, sxy *= scale;
+          const double dev_plastic = (1.0 - scale) * norm / (2.0 * G); // |S* - S| / 2G
+          s.plastic_strain[i] += sqrt23 * dev_plastic;
+          plastic_work += in.volume_mid[i] * scale * norm * dev_plastic;
+        }
+      }
+      const double power_new = stressPower(sxx, syy, sxy, in.dxx[i], in.dyy[i], in.dxy[i]);
+      s.sxx[i] = sxx, s.syy[i] = syy, s.sxy[i] = sxy;
+      const double w_dev = 0.5 * (power_old + power_new) * in.volume_mid[i] * dt;
+      energyEquation(a, b, p_min, in.volume_change[i], w_dev, s.energy[i], s.pressure[i]);
+      const double bulk = eos_.bulkModulus(mu, s.pressure[i]);
+      out.sound_speed[i] = std::sqrt((bulk + 4.0 / 3.0 * G) * in.jacobian[i] / rho0_);
+    }
+    out.plastic_work = plastic_work;
+  }
+
+  double rho0_;
+  MieGruneisen eos_;
+  double G0_, G1_, G2_, B_, M_, Y1_, T_;
+  bool strength_;
+};
+
+} // namespace
+
+MaterialType quartzMaterialType() {
+  return {"quartz",
+          "Mie-Grueneisen pressure, pressure-dependent shear modulus, overstress strength toward a "
+          "bilinear equilibrium yield surface; defaults: the quartz of thesis Table 3.3",
+          {{"density", "kg/m^3", "initial density rho0", 1.0, 1e5, 2648.5},
+           {"bulk_modulus", "Pa", "Mie-Grueneisen K", 1.0, 1e13, 43.19e9},
+           {"k1", "Pa", "Mie-Grueneisen K1 (mu^2 term)", 0.0, 1e14, 156.2e9},
+           {"k2", "Pa", "Mie-Grueneisen K2 (mu^3 term)", 0.0, 1e15, 48.6e9},
+           {"gruneisen", "", "Grueneisen Gamma", 0.0, 10.0, 0.675},
+           {"pressure_cutoff", "Pa", "K_c: the pressure stays >= -K_c", 0.0, 1e12, 0.0},
+           {"g0", "Pa", "shear modulus at zero pressure G0", 0.0, 1e13, 46.92e9},
+           {"g1", "", "dG/dP, G1", -100.0, 100.0, 1.873},
+           {"g2", "1/Pa", "G2, the P^2 term of G", -1e-6, 1e-6, 3.459e-10},
+           {"cohesion", "Pa", "B: equilibrium yield at zero pressure", 0.0, 1e12, 2.353e9},
+           {"friction_slope", "", "M: slope of the equilibrium yield in p", 0.0, 100.0, 0.667},
+           {"yield_cap", "Pa", "Y1: the equilibrium yield's upper bound", 0.0, 1e12, 4.4e9},
+           {"relaxation_time", "s", "T_R of the overstress relaxation", 1e-15, 1.0, 3.5e-9},
+           {"strength", "", "strength (overstress flow) on; false: elastic grains", 0.0, 1.0, 1.0, true}},
+          [](const Parameters &p) -> std::unique_ptr<Material> { return std::make_unique<Quartz>(p); }};
+}
+
+} // namespace mesopen::fem

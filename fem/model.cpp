@@ -1,0 +1,118 @@
+#include "model.hpp"
+
+#include <algorithm>
+#include <map>
+#include <stdexcept>
+#include <utility>
+
+namespace mesopen::fem {
+
+Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> materials,
+                 const std::vector<int> &body_material, const std::vector<std::string> &body_names) {
+  const std::size_t n_bodies = mesh.node_offset.size() - 1;
+  if (body_material.size() != n_bodies || mesh.tri_offset.size() != n_bodies + 1)
+    throw std::invalid_argument("buildModel: " + std::to_string(n_bodies) + " bodies but " +
+                                std::to_string(body_material.size()) + " materials");
+  for (int m : body_material)
+    if (m < 0 || static_cast<std::size_t>(m) >= materials.size())
+      throw std::invalid_argument("buildModel: material index " + std::to_string(m) + " unknown");
+  Model model;
+  model.materials = std::move(materials);
+  const std::size_t n_nodes = mesh.x.size(), n_elements = mesh.tri.size() / 3;
+  Nodes &nd = model.nodes;
+  nd.x = mesh.x, nd.y = mesh.y, nd.x0 = mesh.x, nd.y0 = mesh.y;
+  for (auto *v : {&nd.vx, &nd.vy, &nd.fx, &nd.fy, &nd.fx_ext, &nd.fy_ext, &nd.mass, &nd.area0})
+    v->assign(n_nodes, 0.0);
+  nd.body.assign(n_nodes, 0);
+
+  Elements &el = model.elements;
+  el.node = mesh.tri;
+  for (auto *v : {&el.area0, &el.mass, &el.area, &el.sxx, &el.syy, &el.sxy, &el.pressure, &el.energy,
+                  &el.plastic_strain, &el.viscosity})
+    v->assign(n_elements, 0.0);
+  el.force_x.assign(3 * n_elements, 0.0);
+  el.force_y.assign(3 * n_elements, 0.0);
+  el.body.assign(n_elements, 0);
+
+  model.bodies.resize(n_bodies);
+  for (std::size_t b = 0; b < n_bodies; ++b) {
+    Body &body = model.bodies[b];
+    body.name = b < body_names.size() ? body_names[b] : "body-" + std::to_string(b);
+    body.node_begin = mesh.node_offset[b], body.node_end = mesh.node_offset[b + 1];
+    body.element_begin = mesh.tri_offset[b], body.element_end = mesh.tri_offset[b + 1];
+    body.material = body_material[b];
+    body.at_rest = true;
+    const double rho = model.materials[body.material]->density();
+    std::fill(nd.body.begin() + body.node_begin, nd.body.begin() + body.node_end, b);
+    // Lumped mass: a third of each element's mass at each of its nodes.
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges; // edge -> uses (+1 ab, -1 ba)
+    for (std::size_t e = body.element_begin; e < body.element_end; ++e) {
+      const std::uint32_t *n = &el.node[3 * e];
+      for (int k = 0; k < 3; ++k)
+        if (n[k] < body.node_begin || n[k] >= body.node_end)
+          throw std::invalid_argument("buildModel: element " + std::to_string(e) + " of " + body.name +
+                                      " uses node " + std::to_string(n[k]) + " of another body");
+      const double area = 0.5 * ((nd.x[n[1]] - nd.x[n[0]]) * (nd.y[n[2]] - nd.y[n[0]]) -
+                                 (nd.x[n[2]] - nd.x[n[0]]) * (nd.y[n[1]] - nd.y[n[0]]));
+      if (!(area > 0.0))
+        throw std::invalid_argument("buildModel: element " + std::to_string(e) + " of " + body.name +
+                                    " is not counter-clockwise (area " + std::to_string(area) + " m^2)");
+      el.area0[e] = el.area[e] = area;
+      el.mass[e] = rho * area;
+      el.body[e] = static_cast<std::uint32_t>(b);
+      for (int k = 0; k < 3; ++k) {
+        nd.mass[n[k]] += el.mass[e] / 3.0;
+        nd.area0[n[k]] += area / 3.0;
+        const std::uint32_t a = n[k], c = n[(k + 1) % 3];
+        edges[{std::min(a, c), std::max(a, c)}] += a < c ? 1 : -1;
+      }
+    }
+    // Boundary edges: used by one element only, kept in that element's (counter-clockwise) order.
+    for (const auto &[edge, use] : edges)
+      if (use == 1)
+        body.boundary.insert(body.boundary.end(), {edge.first, edge.second});
+      else if (use == -1)
+        body.boundary.insert(body.boundary.end(), {edge.second, edge.first});
+  }
+
+  // Node -> element corners, in element order (the force gather is then deterministic).
+  model.node_corner_offset.assign(n_nodes + 1, 0);
+  for (std::uint32_t a : el.node)
+    ++model.node_corner_offset[a + 1];
+  for (std::size_t a = 0; a < n_nodes; ++a)
+    model.node_corner_offset[a + 1] += model.node_corner_offset[a];
+  model.node_corner.resize(el.node.size());
+  std::vector<std::uint32_t> fill(model.node_corner_offset.begin(), model.node_corner_offset.end() - 1);
+  for (std::size_t c = 0; c < el.node.size(); ++c)
+    model.node_corner[fill[el.node[c]]++] = static_cast<std::uint32_t>(c);
+  return model;
+}
+
+void setBodyVelocity(Model &model, std::size_t body, double vx, double vy, double spin) {
+  const BodyMotion m = bodyMotion(model, body);
+  Nodes &nd = model.nodes;
+  for (std::size_t a = model.bodies[body].node_begin; a < model.bodies[body].node_end; ++a) {
+    nd.vx[a] = vx - spin * (nd.y[a] - m.com_y);
+    nd.vy[a] = vy + spin * (nd.x[a] - m.com_x);
+  }
+  model.wake(body);
+}
+
+BodyMotion bodyMotion(const Model &model, std::size_t body) {
+  const Nodes &nd = model.nodes;
+  const Body &b = model.bodies[body];
+  BodyMotion m{0, 0, 0, 0, 0, 0};
+  for (std::size_t a = b.node_begin; a < b.node_end; ++a) {
+    m.mass += nd.mass[a];
+    m.com_x += nd.mass[a] * nd.x[a];
+    m.com_y += nd.mass[a] * nd.y[a];
+    m.px += nd.mass[a] * nd.vx[a];
+    m.py += nd.mass[a] * nd.vy[a];
+  }
+  m.com_x /= m.mass, m.com_y /= m.mass;
+  for (std::size_t a = b.node_begin; a < b.node_end; ++a) // H = sum r x m v (thesis Eq. 3.13)
+    m.angular_momentum += nd.mass[a] * ((nd.x[a] - m.com_x) * nd.vy[a] - (nd.y[a] - m.com_y) * nd.vx[a]);
+  return m;
+}
+
+} // namespace mesopen::fem

@@ -1,0 +1,92 @@
+// The finite-element model: nodes and 3-node triangles in struct-of-arrays form, grouped in
+// bodies (the projectile, every meshed grain). 2D plane strain, 1 m thick: areas are volumes per
+// metre, masses kg/m, forces N/m, energies J/m (MODELS.md, "plane-strain convention").
+#pragma once
+
+#include "material.hpp"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mesopen::fem {
+
+struct Nodes {
+  std::vector<double> x, y;       // current position [m]
+  std::vector<double> x0, y0;     // initial position [m]
+  std::vector<double> vx, vy;     // velocity [m/s]
+  std::vector<double> fx, fy;     // total force of this step: internal + external [N/m]
+  std::vector<double> fx_ext, fy_ext; // external forces (contact, coupling), set each step [N/m]
+  std::vector<double> mass;       // lumped mass [kg/m]
+  std::vector<double> area0;      // a third of the initial area of each element at the node [m^2]
+  std::vector<std::uint32_t> body;
+  std::size_t size() const { return x.size(); }
+};
+
+// Element state: deviatoric stress S (S_zz = -S_xx - S_yy), pressure p (compression positive),
+// internal energy E = m e per element [J/m], equivalent plastic strain.
+struct Elements {
+  std::vector<std::uint32_t> node;   // 3 per element, counter-clockwise
+  std::vector<double> area0, mass;   // initial area [m^2], mass rho0 A0 [kg/m]
+  std::vector<double> area;          // current area [m^2]
+  std::vector<double> sxx, syy, sxy, pressure, energy, plastic_strain;
+  std::vector<double> viscosity;     // artificial viscous pressure q of the last step [Pa]
+  std::vector<double> force_x, force_y; // nodal forces of each element, 3 per element [N/m]
+  std::vector<std::uint32_t> body;
+  std::size_t size() const { return area0.size(); }
+};
+
+struct Body {
+  std::string name;
+  std::size_t node_begin = 0, node_end = 0, element_begin = 0, element_end = 0;
+  int material = 0;           // index into Model::materials
+  bool at_rest = false;       // not updated while at rest and unloaded (see Model::wake)
+  std::vector<std::uint32_t> boundary; // boundary edges (node pairs, counter-clockwise)
+};
+
+// A velocity imposed on a node set: fixed nodes are the case v = 0.
+struct VelocityConstraint {
+  std::string name;
+  std::vector<std::uint32_t> nodes;
+  bool constrain_x = true, constrain_y = true;
+  double vx = 0.0, vy = 0.0;
+};
+
+struct Model {
+  Nodes nodes;
+  Elements elements;
+  std::vector<Body> bodies;
+  std::vector<std::unique_ptr<Material>> materials;
+  std::vector<VelocityConstraint> constraints;
+  // Elements at each node: node a has the element corners [node_corner_offset[a],
+  // node_corner_offset[a+1]) of node_corner, each 3 * element + corner.
+  std::vector<std::uint32_t> node_corner_offset, node_corner;
+
+  // A body that was at rest takes part in the time loop again (contact calls this).
+  void wake(std::size_t body) { bodies[body].at_rest = false; }
+};
+
+// A model from triangle meshes of many bodies (node and triangle offsets per body, as
+// mesopen::Meshes stores them) and one material per body. Lumped masses, element areas, the
+// node-to-element map and each body's boundary edges are computed here; every body starts at
+// rest. Throws std::invalid_argument for a triangle that is not counter-clockwise.
+struct MeshView {
+  const std::vector<std::uint64_t> &node_offset, &tri_offset;
+  const std::vector<double> &x, &y;
+  const std::vector<std::uint32_t> &tri;
+};
+Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> materials,
+                 const std::vector<int> &body_material, const std::vector<std::string> &body_names);
+
+// Initial velocity of a body: translation (vx, vy) plus rotation `spin` [rad/s] about its centre
+// of mass. Marks the body as moving.
+void setBodyVelocity(Model &model, std::size_t body, double vx, double vy, double spin = 0.0);
+
+// Centre of mass, linear momentum and angular momentum about the centre of mass of a body.
+struct BodyMotion {
+  double mass, com_x, com_y, px, py, angular_momentum;
+};
+BodyMotion bodyMotion(const Model &model, std::size_t body);
+
+} // namespace mesopen::fem
