@@ -15,7 +15,7 @@
 namespace mesopen::fem {
 
 struct SolverSettings {
-  double safety = 0.5;              // dt = safety * stable step of the smallest element
+  double safety = 0.9;              // dt = safety * the smallest element's stable step
   double viscosity_linear = 0.5;    // C_L (thesis Table 3.1)
   double viscosity_quadratic = 4.0; // C_Q (thesis Table 3.1)
   bool anti_locking = true;         // averaged nodal volume in bodies with plastic flow

@@ -54,15 +54,6 @@ std::vector<std::pair<double, double>> punch(bool anti_locking, double depth, in
   return curve;
 }
 
-// Mean load over the last fifth of the indentation (smooths the small dynamic ripple).
-double finalLoad(const std::vector<std::pair<double, double>> &curve) {
-  double sum = 0.0;
-  const std::size_t from = curve.size() * 4 / 5;
-  for (std::size_t i = from; i < curve.size(); ++i)
-    sum += curve[i].second;
-  return sum / static_cast<double>(curve.size() - from);
-}
-
 } // namespace
 
 // Prandtl's load is the rigid-plastic limit; the elastic-plastic elements approach it from above

@@ -1,0 +1,156 @@
+// The finite-element model and solver pieces: model building, the stable step against the exact
+// critical step of an element, the material registry, and skipping bodies at rest.
+#include "meshes.hpp"
+#include "solver.hpp"
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <omp.h>
+#include <random>
+
+using namespace mesopen;
+using test::TestMesh;
+
+TEST(Model, LumpedMassesAreasAndBoundaries) {
+  TestMesh mesh;
+  mesh.addRectangle(0, 0, 2e-3, 1e-3, 4, 2, 0.2);
+  mesh.addRectangle(3e-3, 0, 1e-3, 1e-3, 3, 3, 0.2);
+  fem::Model model = mesh.model(test::oneMaterial("quartz"));
+  ASSERT_EQ(model.bodies.size(), 2u);
+  double mass = 0.0, area = 0.0;
+  for (std::size_t a = 0; a < model.nodes.size(); ++a)
+    mass += model.nodes.mass[a], area += model.nodes.area0[a];
+  EXPECT_NEAR(area, 3e-6, 1e-18);
+  EXPECT_NEAR(mass, 2648.5 * 3e-6, 1e-15);
+  // Boundary edges: the outline of each rectangle, counter-clockwise.
+  EXPECT_EQ(model.bodies[0].boundary.size(), 2u * (2 * (4 + 2)));
+  EXPECT_EQ(model.bodies[1].boundary.size(), 2u * (2 * (3 + 3)));
+  double signed_area = 0.0; // shoelace over the boundary edges: positive when counter-clockwise
+  const auto &b = model.bodies[1].boundary;
+  for (std::size_t k = 0; k < b.size(); k += 2)
+    signed_area += 0.5 * (model.nodes.x[b[k]] * model.nodes.y[b[k + 1]] -
+                          model.nodes.x[b[k + 1]] * model.nodes.y[b[k]]);
+  EXPECT_NEAR(signed_area, 1e-6, 1e-18);
+  // Every node's element corners point back at it.
+  for (std::size_t a = 0; a < model.nodes.size(); ++a)
+    for (std::uint32_t k = model.node_corner_offset[a]; k < model.node_corner_offset[a + 1]; ++k)
+      EXPECT_EQ(model.elements.node[model.node_corner[k]], a);
+}
+
+TEST(Model, RejectsClockwiseTriangles) {
+  TestMesh mesh;
+  mesh.addRectangle(0, 0, 1e-3, 1e-3, 1, 1);
+  std::swap(mesh.tri[1], mesh.tri[2]);
+  EXPECT_THROW(mesh.model(test::oneMaterial("steel")), std::invalid_argument);
+}
+
+// The stable step of one element (safety 1, no viscosity) must not exceed its exact critical
+// step 2 / omega_max, omega_max^2 the largest eigenvalue of M^-1 K (lumped mass, plane strain),
+// for any shape and for materials from nearly incompressible to nearly fluid; and it should not
+// be needlessly small (within a factor 1.6 of the critical step for the equilateral triangle).
+TEST(StableStep, BoundsTheElementCriticalStep) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1e-5);
+  for (auto [K, G] : {std::pair{163.9e9, 77.5e9}, {43.19e9, 46.92e9}, {100e9, 1e9}, {1e9, 1e5}}) {
+    for (int trial = 0; trial < 300; ++trial) {
+      TestMesh mesh;
+      mesh.node_offset = {0, 3}, mesh.tri_offset = {0, 1}, mesh.tri = {0, 1, 2};
+      if (trial == 0)
+        mesh.x = {0, 1e-5, 0.5e-5}, mesh.y = {0, 0, 0.5e-5 * std::sqrt(3.0)};
+      else
+        mesh.x = {u(rng), u(rng), u(rng)}, mesh.y = {u(rng), u(rng), u(rng)};
+      const double area = 0.5 * ((mesh.x[1] - mesh.x[0]) * (mesh.y[2] - mesh.y[0]) -
+                                 (mesh.x[2] - mesh.x[0]) * (mesh.y[1] - mesh.y[0]));
+      if (std::abs(area) < 2e-12)
+        continue; // slivers
+      if (area < 0) {
+        std::swap(mesh.x[1], mesh.x[2]);
+        std::swap(mesh.y[1], mesh.y[2]);
+      }
+      const double rho = 3000.0;
+      fem::Model model = mesh.model(test::oneMaterial(
+          "elastic", {{"density", rho}, {"bulk_modulus", K}, {"shear_modulus", G}}));
+      model.nodes.vx[0] = 1e-9; // take part in the time loop
+      fem::Solver solver(model, {.safety = 1.0, .viscosity_linear = 0.0, .viscosity_quadratic = 0.0});
+      // Exact: K_e = A B^T C B, M = rho A / 3 I.
+      const double lam = K - 2.0 * G / 3.0, A = std::abs(area);
+      Eigen::Matrix3d C;
+      C << lam + 2 * G, lam, 0, lam, lam + 2 * G, 0, 0, 0, G;
+      Eigen::Matrix<double, 3, 6> B = Eigen::Matrix<double, 3, 6>::Zero();
+      const auto &x = model.nodes.x, &y = model.nodes.y;
+      for (int i = 0; i < 3; ++i) {
+        const int j = (i + 1) % 3, k = (i + 2) % 3;
+        B(0, 2 * i) = B(2, 2 * i + 1) = (y[j] - y[k]) / (2 * A);
+        B(1, 2 * i + 1) = B(2, 2 * i) = (x[k] - x[j]) / (2 * A);
+      }
+      const Eigen::Matrix<double, 6, 6> Ke = A * B.transpose() * C * B / (rho * A / 3.0);
+      const double omega = std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(Ke)
+                                         .eigenvalues()
+                                         .maxCoeff());
+      const double critical = 2.0 / omega;
+      ASSERT_LE(solver.dt(), critical * (1 + 1e-12)) << "K " << K << " G " << G << " trial " << trial;
+      if (trial == 0)
+        EXPECT_GT(solver.dt(), critical / 1.6);
+    }
+  }
+}
+
+TEST(Materials, RegistryAndPresets) {
+  for (const auto &preset : fem::materialPresets())
+    EXPECT_NO_THROW(fem::makeMaterial(preset.name)) << preset.name;
+  EXPECT_TRUE(fem::makeMaterial("steel")->plastic());
+  EXPECT_FALSE(fem::makeMaterial("steel-elastic")->plastic());
+  EXPECT_FALSE(fem::makeMaterial("quartz-elastic")->plastic());
+  EXPECT_DOUBLE_EQ(fem::makeMaterial("quartz")->density(), 2648.5);
+  EXPECT_DOUBLE_EQ(fem::makeMaterial("steel")->density(), 7823.0);
+  EXPECT_DOUBLE_EQ(fem::makeMaterial("steel", {{"density", 2 * 7823.0}})->density(), 2 * 7823.0);
+  EXPECT_THROW(fem::makeMaterial("granite"), std::invalid_argument);
+  try {
+    fem::makeMaterial("quartz", {{"relaxation_time", -1.0}});
+    FAIL();
+  } catch (const std::invalid_argument &e) {
+    EXPECT_NE(std::string(e.what()).find("relaxation_time"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(fem::makeMaterial("steel", {{"yield", 1e9}}), std::invalid_argument);
+}
+
+// Bodies at rest and unloaded are not updated; a body that moves is.
+TEST(Solver, SkipsBodiesAtRest) {
+  TestMesh mesh;
+  mesh.addRectangle(0, 0, 1e-3, 1e-3, 4, 4);
+  mesh.addRectangle(2e-3, 0, 1e-3, 1e-3, 8, 8);
+  fem::Model model = mesh.model(test::oneMaterial("quartz"));
+  fem::setBodyVelocity(model, 0, 10.0, 0.0);
+  fem::Solver solver(model, {});
+  for (int i = 0; i < 10; ++i)
+    solver.step();
+  EXPECT_EQ(solver.activeElements(), 32u);
+  EXPECT_EQ(model.nodes.x[model.bodies[1].node_begin], 2e-3); // untouched
+  model.wake(1);
+  solver.step();
+  EXPECT_EQ(solver.activeElements(), 32u + 128u);
+  EXPECT_NEAR(model.nodes.vx[0], 10.0, 1e-12);
+}
+
+// Two threads give the same numbers as one: element forces are gathered per node in a fixed order.
+TEST(Solver, SameResultWithAnyThreadCount) {
+  auto run = [](int threads) {
+    omp_set_num_threads(threads);
+    TestMesh mesh;
+    mesh.addRectangle(0, 0, 1e-3, 1e-3, 30, 30, 0.3);
+    fem::Model model = mesh.model(test::oneMaterial("quartz"));
+    fem::setBodyVelocity(model, 0, 0.0, -200.0, 1e5);
+    model.constraints.push_back(
+        {"base", test::nodesWhere(model, [](double, double y) { return y < 1e-9; }), true, true, 0, 0});
+    fem::Solver solver(model, {.chunk = 64});
+    for (int i = 0; i < 100; ++i)
+      solver.step();
+    return std::pair{model.nodes.x, solver.energy().internal};
+  };
+  const auto one = run(1), two = run(2);
+  omp_set_num_threads(omp_get_num_procs());
+  EXPECT_EQ(one.first, two.first);
+  EXPECT_EQ(one.second, two.second);
+}
