@@ -30,8 +30,6 @@ Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> ma
   for (auto *v : {&el.area0, &el.mass, &el.area, &el.sxx, &el.syy, &el.sxy, &el.pressure, &el.energy,
                   &el.plastic_strain, &el.viscosity})
     v->assign(n_elements, 0.0);
-  el.force_x.assign(3 * n_elements, 0.0);
-  el.force_y.assign(3 * n_elements, 0.0);
   el.body.assign(n_elements, 0);
 
   model.bodies.resize(n_bodies);
@@ -75,16 +73,6 @@ Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> ma
         body.boundary.insert(body.boundary.end(), {edge.second, edge.first});
   }
 
-  // Node -> element corners, in element order (the force gather is then deterministic).
-  model.node_corner_offset.assign(n_nodes + 1, 0);
-  for (std::uint32_t a : el.node)
-    ++model.node_corner_offset[a + 1];
-  for (std::size_t a = 0; a < n_nodes; ++a)
-    model.node_corner_offset[a + 1] += model.node_corner_offset[a];
-  model.node_corner.resize(el.node.size());
-  std::vector<std::uint32_t> fill(model.node_corner_offset.begin(), model.node_corner_offset.end() - 1);
-  for (std::size_t c = 0; c < el.node.size(); ++c)
-    model.node_corner[fill[el.node[c]]++] = static_cast<std::uint32_t>(c);
   return model;
 }
 

@@ -32,7 +32,6 @@ struct Elements {
   std::vector<double> area;          // current area [m^2]
   std::vector<double> sxx, syy, sxy, pressure, energy, plastic_strain;
   std::vector<double> viscosity;     // artificial viscous pressure q of the last step [Pa]
-  std::vector<double> force_x, force_y; // nodal forces of each element, 3 per element [N/m]
   std::vector<std::uint32_t> body;
   std::size_t size() const { return area0.size(); }
 };
@@ -59,17 +58,14 @@ struct Model {
   std::vector<Body> bodies;
   std::vector<std::unique_ptr<Material>> materials;
   std::vector<VelocityConstraint> constraints;
-  // Elements at each node: node a has the element corners [node_corner_offset[a],
-  // node_corner_offset[a+1]) of node_corner, each 3 * element + corner.
-  std::vector<std::uint32_t> node_corner_offset, node_corner;
 
   // A body that was at rest takes part in the time loop again (contact calls this).
   void wake(std::size_t body) { bodies[body].at_rest = false; }
 };
 
 // A model from triangle meshes of many bodies (node and triangle offsets per body, as
-// mesopen::Meshes stores them) and one material per body. Lumped masses, element areas, the
-// node-to-element map and each body's boundary edges are computed here; every body starts at
+// mesopen::Meshes stores them) and one material per body. Lumped masses, element areas and each
+// body's boundary edges are computed here; every body starts at
 // rest. Throws std::invalid_argument for a triangle that is not counter-clockwise.
 struct MeshView {
   const std::vector<std::uint64_t> &node_offset, &tri_offset;

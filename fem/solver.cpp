@@ -9,6 +9,7 @@ namespace mesopen::fem {
 namespace {
 constexpr std::size_t max_chunk = 256;   // elements per material batch (scratch on the stack)
 constexpr std::size_t node_block = 4096; // nodes per block of the node loops
+constexpr std::size_t unit_target = 4096; // elements per work unit of the element pass
 } // namespace
 
 Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) {
@@ -67,7 +68,9 @@ void Solver::updateActivity() {
     return;
   body_active_seen_.resize(n_bodies);
   chunks_.clear();
+  units_.clear();
   node_ranges_.clear();
+  std::size_t unit_elements = 0;
   active_elements_ = active_nodes_ = 0;
   any_averaged_ = false;
   for (std::size_t b = 0; b < n_bodies; ++b) {
@@ -78,8 +81,16 @@ void Solver::updateActivity() {
     const Material *material = m_.materials[body.material].get();
     const bool averaged = s_.anti_locking && material->plastic();
     any_averaged_ = any_averaged_ || averaged;
+    // A work unit holds whole bodies (no node is shared between units, so each unit adds its
+    // elements' forces into the nodes without races, in element order).
+    const bool new_unit = units_.empty() || unit_elements >= unit_target;
+    if (new_unit) {
+      units_.emplace_back(chunks_.size(), chunks_.size());
+      unit_elements = 0;
+    }
+    unit_elements += body.element_end - body.element_begin;
     for (std::size_t e = body.element_begin; e < body.element_end;) {
-      Chunk *last = chunks_.empty() ? nullptr : &chunks_.back();
+      Chunk *last = chunks_.size() > units_.back().first ? &chunks_.back() : nullptr;
       if (last && last->end == e && last->material == material && last->averaged_volume == averaged &&
           last->end - last->begin < s_.chunk) {
         const std::size_t take = std::min(s_.chunk - (last->end - last->begin), body.element_end - e);
@@ -105,13 +116,12 @@ void Solver::updateActivity() {
     }
     active_elements_ += body.element_end - body.element_begin;
     active_nodes_ += body.node_end - body.node_begin;
+    units_.back().second = chunks_.size();
   }
   sums_.resize(chunks_.size());
   node_sums_.resize(node_ranges_.size());
-  if (any_averaged_) {
+  if (any_averaged_)
     node_jacobian_.resize(m_.nodes.size(), 1.0);
-    area_next_.resize(m_.elements.size());
-  }
 }
 
 void Solver::kick(double half_dt) {
@@ -169,12 +179,21 @@ void Solver::drift(double dt) {
 }
 
 void Solver::internalForces(double dt) {
+  // The external forces first; the elements add theirs.
+  Nodes &nd = m_.nodes;
+  const long blocks = static_cast<long>(node_ranges_.size());
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < blocks; ++i)
+    for (std::size_t a = node_ranges_[i].first; a < node_ranges_[i].second; ++a)
+      nd.fx[a] = nd.fx_ext[a], nd.fy[a] = nd.fy_ext[a];
   if (any_averaged_)
     nodalVolumes();
+  const long units = static_cast<long>(units_.size());
+#pragma omp parallel for schedule(dynamic)
+  for (long u = 0; u < units; ++u)
+    for (std::size_t i = units_[u].first; i < units_[u].second; ++i)
+      elementPass(chunks_[i], dt, sums_[i]);
   const long n = static_cast<long>(chunks_.size());
-#pragma omp parallel for schedule(static)
-  for (long i = 0; i < n; ++i)
-    elementPass(chunks_[i], dt, sums_[i]);
   double dt_min = std::numeric_limits<double>::infinity();
   for (long i = 0; i < n; ++i) {
     if (sums_[i].inverted >= 0) {
@@ -190,7 +209,6 @@ void Solver::internalForces(double dt) {
     dt_min = std::min(dt_min, sums_[i].dt_min);
   }
   next_dt_ = s_.safety * dt_min;
-  gatherForces();
 }
 
 // Averaged nodal volume (Bonet & Burton 1998): J at a node is the area of its elements over their
@@ -199,27 +217,28 @@ void Solver::internalForces(double dt) {
 void Solver::nodalVolumes() {
   const Nodes &nd = m_.nodes;
   const Elements &el = m_.elements;
-  const long n = static_cast<long>(chunks_.size());
-#pragma omp parallel for schedule(static)
-  for (long i = 0; i < n; ++i) {
-    if (!chunks_[i].averaged_volume)
-      continue;
-    for (std::size_t e = chunks_[i].begin; e < chunks_[i].end; ++e) {
-      const std::uint32_t a = el.node[3 * e], b = el.node[3 * e + 1], c = el.node[3 * e + 2];
-      area_next_[e] = 0.5 * ((nd.x[b] - nd.x[a]) * (nd.y[c] - nd.y[a]) - (nd.x[c] - nd.x[a]) * (nd.y[b] - nd.y[a]));
-    }
-  }
   const long blocks = static_cast<long>(node_ranges_.size());
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < blocks; ++i)
-    for (std::size_t a = node_ranges_[i].first; a < node_ranges_[i].second; ++a) {
-      if (!m_.materials[m_.bodies[nd.body[a]].material]->plastic())
+    for (std::size_t a = node_ranges_[i].first; a < node_ranges_[i].second; ++a)
+      node_jacobian_[a] = 0.0;
+  const long units = static_cast<long>(units_.size());
+#pragma omp parallel for schedule(dynamic)
+  for (long u = 0; u < units; ++u)
+    for (std::size_t i = units_[u].first; i < units_[u].second; ++i) {
+      if (!chunks_[i].averaged_volume)
         continue;
-      double area = 0.0;
-      for (std::uint32_t k = m_.node_corner_offset[a]; k < m_.node_corner_offset[a + 1]; ++k)
-        area += area_next_[m_.node_corner[k] / 3];
-      node_jacobian_[a] = area / (3.0 * nd.area0[a]);
+      for (std::size_t e = chunks_[i].begin; e < chunks_[i].end; ++e) {
+        const std::uint32_t a = el.node[3 * e], b = el.node[3 * e + 1], c = el.node[3 * e + 2];
+        const double third = (1.0 / 6.0) * ((nd.x[b] - nd.x[a]) * (nd.y[c] - nd.y[a]) -
+                                            (nd.x[c] - nd.x[a]) * (nd.y[b] - nd.y[a]));
+        node_jacobian_[a] += third, node_jacobian_[b] += third, node_jacobian_[c] += third;
+      }
     }
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < blocks; ++i)
+    for (std::size_t a = node_ranges_[i].first; a < node_ranges_[i].second; ++a)
+      node_jacobian_[a] /= nd.area0[a];
 }
 
 // Kinematics, material update, artificial viscosity and nodal forces of one batch of elements.
@@ -238,6 +257,7 @@ void Solver::elementPass(const Chunk &chunk, double dt, ChunkSums &sums) {
 
   // Kinematics: D and w on the mid-step configuration x(n+1/2) = x(n+1) - dt/2 v(n+1/2) (a rigid
   // rotation then gives D = 0 exactly), the area at n+1, and the element's shortest altitude.
+#pragma omp simd reduction(min : min_ratio)
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t a = conn[3 * i], b = conn[3 * i + 1], c = conn[3 * i + 2];
     const double xa = x[a], xb = x[b], xc = x[c], ya = y[a], yb = y[b], yc = y[c];
@@ -290,11 +310,13 @@ void Solver::elementPass(const Chunk &chunk, double dt, ChunkSums &sums) {
   // and material, so that `safety` is a true margin (tests/unit/fem.cpp checks it).
   const double cl = s_.viscosity_linear, cq = s_.viscosity_quadratic;
   double internal = 0.0, viscous = 0.0, dt_min = HUGE_VAL;
-  double *fx = el.force_x.data() + 3 * e0, *fy = el.force_y.data() + 3 * e0;
+  alignas(64) double fx[3][max_chunk], fy[3][max_chunk];
+  const double rho0 = chunk.material->density();
+#pragma omp simd reduction(+ : internal, viscous) reduction(min : dt_min)
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t e = e0 + i;
     const double comp = std::max(-(dxx[i] + dyy[i]), 0.0);
-    const double rho = el.mass[e] / el.area[e];
+    const double rho = rho0 * el.area0[e] / el.area[e];
     const double q = rho * len[i] * comp * (cq * len[i] * comp + cl * cs[i]);
     el.viscosity[e] = q;
     el.energy[e] -= q * dvol[i];
@@ -304,37 +326,26 @@ void Solver::elementPass(const Chunk &chunk, double dt, ChunkSums &sums) {
     const double sxx = el.sxx[e] - pq, syy = el.syy[e] - pq, sxy = el.sxy[e];
     const std::uint32_t a = conn[3 * i], b = conn[3 * i + 1], c = conn[3 * i + 2];
     const double xa = x[a], xb = x[b], xc = x[c], ya = y[a], yb = y[b], yc = y[c];
-    fx[3 * i] = -0.5 * (sxx * (yb - yc) + sxy * (xc - xb));
-    fy[3 * i] = -0.5 * (sxy * (yb - yc) + syy * (xc - xb));
-    fx[3 * i + 1] = -0.5 * (sxx * (yc - ya) + sxy * (xa - xc));
-    fy[3 * i + 1] = -0.5 * (sxy * (yc - ya) + syy * (xa - xc));
-    fx[3 * i + 2] = -0.5 * (sxx * (ya - yb) + sxy * (xb - xa));
-    fy[3 * i + 2] = -0.5 * (sxy * (ya - yb) + syy * (xb - xa));
+    fx[0][i] = -0.5 * (sxx * (yb - yc) + sxy * (xc - xb));
+    fy[0][i] = -0.5 * (sxy * (yb - yc) + syy * (xc - xb));
+    fx[1][i] = -0.5 * (sxx * (yc - ya) + sxy * (xa - xc));
+    fy[1][i] = -0.5 * (sxy * (yc - ya) + syy * (xa - xc));
+    fx[2][i] = -0.5 * (sxx * (ya - yb) + sxy * (xb - xa));
+    fy[2][i] = -0.5 * (sxy * (ya - yb) + syy * (xb - xa));
     const double ls = (2.0 / 3.0) * len[i], Q = cl * cs[i] + cq * ls * comp;
     dt_min = std::min(dt_min, ls / (Q + std::sqrt(Q * Q + cs[i] * cs[i])));
   }
+  // Into the nodes, in element order (this unit owns the nodes of its bodies).
+  double *node_fx = m_.nodes.fx.data(), *node_fy = m_.nodes.fy.data();
+  for (std::size_t i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) {
+      node_fx[conn[3 * i + k]] += fx[k][i];
+      node_fy[conn[3 * i + k]] += fy[k][i];
+    }
   sums.internal = internal;
   sums.plastic = out.plastic_work;
   sums.viscous = viscous;
   sums.dt_min = dt_min;
-}
-
-// f = internal (gathered from the elements, in element order) + external.
-void Solver::gatherForces() {
-  Nodes &nd = m_.nodes;
-  const Elements &el = m_.elements;
-  const std::uint32_t *offset = m_.node_corner_offset.data(), *corner = m_.node_corner.data();
-  const long blocks = static_cast<long>(node_ranges_.size());
-#pragma omp parallel for schedule(static)
-  for (long i = 0; i < blocks; ++i)
-    for (std::size_t a = node_ranges_[i].first; a < node_ranges_[i].second; ++a) {
-      double fx = nd.fx_ext[a], fy = nd.fy_ext[a];
-      for (std::uint32_t k = offset[a]; k < offset[a + 1]; ++k) {
-        fx += el.force_x[corner[k]];
-        fy += el.force_y[corner[k]];
-      }
-      nd.fx[a] = fx, nd.fy[a] = fy;
-    }
 }
 
 void Solver::accountEnergy() {

@@ -81,7 +81,6 @@ private:
   void drift(double dt);
   void nodalVolumes();
   void elementPass(const Chunk &chunk, double dt, ChunkSums &sums);
-  void gatherForces();
   void applyConstraints(double half_dt);
   void accountEnergy();
 
@@ -89,10 +88,11 @@ private:
   SolverSettings s_;
   std::vector<ForceProvider *> providers_;
   std::vector<Chunk> chunks_;
+  std::vector<std::pair<std::size_t, std::size_t>> units_;     // chunk ranges holding whole bodies
   std::vector<std::pair<std::size_t, std::size_t>> node_ranges_; // active nodes
   std::vector<ChunkSums> sums_;
   std::vector<double> node_sums_;
-  std::vector<double> inv_mass_, node_jacobian_, area_next_;
+  std::vector<double> inv_mass_, node_jacobian_;
   std::vector<double> kick_dvx_, kick_dvy_; // velocity change of the last half-kick
   std::vector<char> body_active_seen_;
   bool any_averaged_ = false;

@@ -23,6 +23,7 @@ public:
 
   void update(const StrainBatch &in, StressState &s, MaterialOutput &out) const override {
     const double dt = in.dt, two_g_dt = 2.0 * G_ * dt, c2 = (K_ + 4.0 / 3.0 * G_) / rho0_;
+#pragma omp simd
     for (std::size_t i = 0; i < in.n; ++i) {
       double sxx = s.sxx[i], syy = s.syy[i], sxy = s.sxy[i];
       rotateDeviator(sxx, syy, sxy, in.spin[i] * dt);

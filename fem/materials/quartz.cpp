@@ -43,6 +43,7 @@ private:
     const double dt = in.dt, sqrt23 = std::sqrt(2.0 / 3.0), p_min = -eos_.cutoff;
     const double relax = std::min(dt / T_, 1.0);
     double plastic_work = 0.0;
+#pragma omp simd reduction(+ : plastic_work)
     for (std::size_t i = 0; i < in.n; ++i) {
       const double mu = 1.0 / in.jacobian[i] - 1.0;
       const double cold = eos_.cold(mu), a = eos_.energyFree(mu, cold), b = eos_.gamma / in.volume0[i];

@@ -39,6 +39,7 @@ private:
     const double dt = in.dt, two_g_dt = 2.0 * G_ * dt, sqrt23 = std::sqrt(2.0 / 3.0);
     const double p_min = -eos_.cutoff;
     double plastic_work = 0.0;
+#pragma omp simd reduction(+ : plastic_work)
     for (std::size_t i = 0; i < in.n; ++i) {
       const double mu = 1.0 / in.jacobian[i] - 1.0;
       // Deviator: rotate, add the elastic trial increment, return to the yield surface.
