@@ -19,6 +19,16 @@ struct TargetOptions {
 
 int targetCommand(const TargetOptions &options);
 
+struct RunOptions {
+  std::string scene;
+  std::string out_dir;
+  std::optional<std::uint64_t> seed;   // overrides target.seed
+  std::optional<int> threads;
+  bool quiet = false;                  // no progress line
+};
+
+int runCommand(const RunOptions &options);
+
 // Where the program's data files are (build/share/mesopen beside build/bin/mesopen).
 std::string shareDirectory();
 

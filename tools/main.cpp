@@ -19,6 +19,14 @@ int main(int argc, char **argv) {
   cmd->add_flag("--no-mesh", target.no_mesh, "grains as polygons only, no triangles");
   cmd->add_flag("--no-plot", target.no_plot, "no grain-size histogram PNG");
 
+  mesopen::RunOptions run;
+  auto *run_cmd = app.add_subcommand("run", "run a scene: the projectile and the grains as finite elements");
+  run_cmd->add_option("scene", run.scene, "scene file (TOML)")->required();
+  run_cmd->add_option("-o,--output", run.out_dir, "output directory")->required();
+  run_cmd->add_option("--seed", run.seed, "random seed of the target (overrides target.seed)");
+  run_cmd->add_option("--threads", run.threads, "threads (default: all cores)")->check(CLI::Range(1, 1024));
+  run_cmd->add_flag("--quiet", run.quiet, "no progress line");
+
   auto *keys = app.add_subcommand("keys", "print every scene key with its default and allowed range");
 
   try {
@@ -31,5 +39,7 @@ int main(int argc, char **argv) {
     std::cout << mesopen::sceneKeysMarkdown();
     return 0;
   }
+  if (*run_cmd)
+    return mesopen::runCommand(run);
   return mesopen::targetCommand(target);
 }

@@ -1,5 +1,7 @@
 #include "scene.hpp"
 
+#include "material.hpp"
+
 #include <toml++/toml.h>
 
 #include <cmath>
@@ -164,8 +166,10 @@ const std::vector<Key> &keys() {
   static const std::vector<Key> all = [] {
     using T = TargetSpec;
     using P = ProjectileSpec;
+    using R = RunSpec;
     auto t = &Scene::target;
     auto p = &Scene::projectile;
+    auto r = &Scene::run;
     return std::vector<Key>{
         real("target", "width", t, &T::width, "m", 0, true, 10, "box width W"),
         real("target", "height", t, &T::height, "m", 0, true, 10, "box height H"),
@@ -215,6 +219,27 @@ const std::vector<Key> &keys() {
              "triangle edge length; 0 takes target.mesh_size"),
         real("projectile", "min_angle", p, &P::min_angle, "deg", 5, false, 20.7,
              "smallest triangle angle"),
+        real("run", "end_time", r, &R::end_time, "s", 0, true, 1, "simulated time"),
+        real("run", "velocity", r, &R::velocity, "m/s", 0, false, 1e4,
+             "projectile's initial speed, downward (thesis: 500-1500)"),
+        real("run", "spin", r, &R::spin, "rad/s", -1e9, false, 1e9,
+             "projectile's initial spin about its centre of mass (counter-clockwise positive)"),
+        boolean("run", "grains", r, &R::grains, "include the grains; false: the projectile alone"),
+        boolean("run", "fix_edges", r, &R::fix_edges,
+                "fix the grain nodes on the box's left, right and bottom edges"),
+        real("run", "safety", r, &R::safety, "", 0, true, 1, "time step over the stable step"),
+        real("run", "viscosity_linear", r, &R::viscosity_linear, "", 0, false, 10,
+             "artificial viscosity, linear coefficient C_L (thesis Table 3.1: 0.5)"),
+        real("run", "viscosity_quadratic", r, &R::viscosity_quadratic, "", 0, false, 100,
+             "artificial viscosity, quadratic coefficient C_Q (thesis Table 3.1: 4.0)"),
+        boolean("run", "anti_locking", r, &R::anti_locking,
+                "averaged nodal volume in bodies with plastic flow (against volumetric locking)"),
+        integer("run", "series_interval", r, &R::series_interval, 1, 1e9,
+                "steps between samples of the series in run.h5"),
+        real("run", "frame_interval", r, &R::frame_interval, "s", 0, false, 1,
+             "simulated time between frames (fields) in run.h5; 0: first and last only"),
+        boolean("run", "vtk", r, &R::vtk, "write the frames also as VTK files (vtk/run.pvd)"),
+        integer("run", "max_steps", r, &R::max_steps, 1, 1e12, "time steps at most"),
     };
   }();
   return all;
@@ -275,6 +300,82 @@ void checkTogether(const Scene &s) {
   }
 }
 
+// [materials.projectile] and [materials.grains]: `preset` or `type`, then parameters by name.
+void readMaterials(Scene &scene, const toml::node &node) {
+  const std::string &path = scene.path;
+  const toml::table *groups = node.as_table();
+  if (!groups)
+    throw InputError(path + ": materials must be a table ([materials.projectile], [materials.grains])");
+  for (const auto &[gname, gnode] : *groups) {
+    const std::string group(gname.str());
+    MaterialChoice *choice = group == "projectile" ? &scene.projectile_material
+                             : group == "grains"   ? &scene.grain_material
+                                                   : nullptr;
+    const toml::table *tab = gnode.as_table();
+    if (!choice || !tab)
+      throw InputError(path + ": unknown material table [materials." + group +
+                       "]; known: [materials.projectile], [materials.grains]");
+    const std::string where = path + ": materials." + group;
+    auto names = [](const auto &list) {
+      std::string s;
+      for (const auto &item : list)
+        s += (s.empty() ? "\"" : ", \"") + item.name + "\"";
+      return s;
+    };
+    choice->parameters.clear();
+    if (tab->contains("preset") && tab->contains("type"))
+      throw InputError(where + ": give preset or type, not both");
+    for (const char *key : {"preset", "type"})
+      if (auto v = (*tab)[key]) {
+        const auto *str = v.as_string();
+        const bool known = str && (std::string(key) == "preset" ? fem::findMaterialPreset(str->get()) != nullptr
+                                                                : fem::findMaterialType(str->get()) != nullptr);
+        if (!known)
+          throw InputError(where + "." + key + " = " + quoted(*v.node()) + " is not known; allowed: one of " +
+                           (std::string(key) == "preset" ? names(fem::materialPresets())
+                                                         : names(fem::materialTypes())));
+        choice->name = str->get();
+      }
+    const fem::MaterialPreset *preset = fem::findMaterialPreset(choice->name);
+    const fem::MaterialType *type = fem::findMaterialType(preset ? preset->type : choice->name);
+    for (const auto &[kname, knode] : *tab) {
+      const std::string key(kname.str());
+      if (key == "preset" || key == "type")
+        continue;
+      const fem::ParameterInfo *info = nullptr;
+      for (const auto &p : type->parameters)
+        if (p.name == key)
+          info = &p;
+      if (!info) {
+        std::string known;
+        for (const auto &p : type->parameters)
+          known += (known.empty() ? "" : ", ") + p.name;
+        throw InputError(where + "." + key + ": unknown parameter of material type \"" + type->name +
+                         "\"; known: preset, type, " + known);
+      }
+      double value;
+      if (info->boolean) {
+        const auto *b = knode.as_boolean();
+        if (!b)
+          throw InputError(where + "." + key + " = " + quoted(knode) + " is not true or false");
+        value = b->get() ? 1.0 : 0.0;
+      } else if (const auto *f = knode.as_floating_point()) {
+        value = f->get();
+      } else if (const auto *i = knode.as_integer()) {
+        value = static_cast<double>(i->get());
+      } else {
+        throw InputError(where + "." + key + " = " + quoted(knode) + " is not a number");
+      }
+      choice->parameters[key] = value;
+    }
+    try {
+      fem::completeParameters(*type, preset, choice->parameters);
+    } catch (const std::invalid_argument &e) {
+      throw InputError(where + ": " + e.what());
+    }
+  }
+}
+
 } // namespace
 
 Scene readScene(const std::string &path) {
@@ -290,8 +391,13 @@ Scene readScene(const std::string &path) {
   }
   for (const auto &[tname, tnode] : root) {
     const std::string table(tname.str());
+    if (table == "materials") {
+      readMaterials(scene, tnode);
+      continue;
+    }
     if (knownIn(table).empty())
-      throw InputError(path + ": unknown table [" + table + "]; known tables: target, projectile");
+      throw InputError(path + ": unknown table [" + table +
+                       "]; known tables: target, projectile, run, materials");
     const toml::table *tab = tnode.as_table();
     if (!tab)
       throw InputError(path + ": " + table + " must be a table ([" + table + "])");
@@ -314,6 +420,20 @@ std::string sceneKeysMarkdown() {
   for (const auto &k : keys())
     out << "| " << k.table << "." << k.name << " | " << k.type << " | " << k.get(defaults) << " | "
         << allowed(k) << " | " << k.unit << " | " << k.doc << " |\n";
+  out << "\n## Materials\n\n[materials.projectile] (default preset \"steel\") and [materials.grains] "
+         "(default preset \"quartz\") take `preset = NAME` or `type = NAME`, then any parameter of "
+         "that type by name.\n\n| preset | type | meaning |\n|---|---|---|\n";
+  for (const auto &p : fem::materialPresets())
+    out << "| " << p.name << " | " << p.type << " | " << p.doc << " |\n";
+  for (const auto &t : fem::materialTypes()) {
+    out << "\n### type \"" << t.name << "\"\n\n" << t.doc
+        << "\n\n| parameter | type | default | allowed | unit | meaning |\n|---|---|---|---|---|---|\n";
+    for (const auto &p : t.parameters)
+      out << "| " << p.name << " | " << (p.boolean ? "bool" : "real") << " | "
+          << (p.boolean ? (p.value != 0 ? "true" : "false") : show(p.value)) << " | "
+          << (p.boolean ? std::string("true or false") : show(p.lo) + " <= " + p.name + " <= " + show(p.hi))
+          << " | " << p.unit << " | " << p.doc << " |\n";
+  }
   return out.str();
 }
 

@@ -6,15 +6,43 @@
 #include "projectile.hpp"
 #include "target.hpp"
 
+#include <cstdint>
+#include <map>
 #include <stdexcept>
 #include <string>
 
 namespace mesopen {
 
+// What `mesopen run` does with the target and the projectile (table [run]).
+struct RunSpec {
+  double end_time = 1e-6;          // simulated time [s]
+  double velocity = 1000.0;        // projectile's initial speed, downward [m/s]
+  double spin = 0.0;               // projectile's initial spin about its centre of mass [rad/s]
+  bool grains = true;              // false: the projectile alone, in free flight
+  bool fix_edges = true;           // grain nodes on the box's left, right and bottom edges fixed
+  double safety = 0.9;             // time step over the stable step
+  double viscosity_linear = 0.5;   // artificial viscosity C_L (thesis Table 3.1)
+  double viscosity_quadratic = 4.0;
+  bool anti_locking = true;        // averaged nodal volume where plastic flow is on
+  std::int64_t series_interval = 1;  // steps between series samples
+  double frame_interval = 1e-7;    // simulated time between frames [s]; 0: no frames
+  bool vtk = true;                 // frames also as VTK files for ParaView
+  std::int64_t max_steps = 100000000;
+};
+
+// A body group's material (tables [materials.projectile], [materials.grains]): a preset or a
+// type, and parameters by name.
+struct MaterialChoice {
+  std::string name;                // preset or type
+  std::map<std::string, double> parameters;
+};
+
 struct Scene {
   std::string path;
   TargetSpec target;
   ProjectileSpec projectile;
+  RunSpec run;
+  MaterialChoice projectile_material{"steel", {}}, grain_material{"quartz", {}};
 };
 
 // Bad input: the message names the file, the key, the value and what is allowed. Exit code 2.
