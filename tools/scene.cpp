@@ -157,7 +157,11 @@ Key diameter() {
     }
   };
   k.get = [](const Scene &s) {
-    return "[" + show(s.target.diameter_min) + ", " + show(s.target.diameter_max) + "]";
+    std::string text = "[";
+    text += show(s.target.diameter_min);
+    text += ", ";
+    text += show(s.target.diameter_max);
+    return text + "]";
   };
   return k;
 }
@@ -318,8 +322,11 @@ void readMaterials(Scene &scene, const toml::node &node) {
     const std::string where = path + ": materials." + group;
     auto names = [](const auto &list) {
       std::string s;
-      for (const auto &item : list)
-        s += (s.empty() ? "\"" : ", \"") + item.name + "\"";
+      for (const auto &item : list) {
+        s += s.empty() ? "\"" : ", \"";
+        s += item.name;
+        s += '"';
+      }
       return s;
     };
     choice->parameters.clear();
