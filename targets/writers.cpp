@@ -199,6 +199,10 @@ void writeTargetVtu(const std::string &path, const Target &target,
   grid->GetCellData()->AddArray(body);
   grid->GetCellData()->AddArray(diameter);
 
+  writeVtu(path, grid);
+}
+
+void writeVtu(const std::string &path, vtkUnstructuredGrid *grid) {
   writeAtomically(path, [&](const std::string &temp) {
     // Open the file once here so that a bad path gives our error, not VTK's printed one.
     if (!std::ofstream(temp, std::ios::binary | std::ios::trunc))

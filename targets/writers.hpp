@@ -9,6 +9,8 @@
 
 #include <string>
 
+class vtkUnstructuredGrid;
+
 namespace mesopen {
 
 // target.h5 layout (all float64 in metres unless said):
@@ -32,5 +34,8 @@ void writeTargetVtu(const std::string &path, const Target &target, const PlacedP
 
 // YADE sphere list: one line "x y z r" per grain (equivalent radius, z = 0).
 void writeYadeSpheres(const std::string &path, const Target &target);
+
+// An unstructured grid as a binary appended .vtu file (uncompressed), written atomically.
+void writeVtu(const std::string &path, vtkUnstructuredGrid *grid);
 
 } // namespace mesopen

@@ -1,5 +1,7 @@
 #include "run_output.hpp"
 
+#include "writers.hpp"
+
 #include "atomic_file.hpp"
 
 #include <vtkCellData.h>
@@ -21,9 +23,39 @@ namespace mesopen {
 
 namespace {
 
-const char *projectile_columns[] = {"com_x",         "com_y",       "vx",   "vy", "rotational_momentum",
-                                    "lateral_force", "axial_force", "tilt", "depth"};
-const char *energy_columns[] = {"kinetic", "internal", "plastic", "viscous", "external", "balance_error"};
+// The series' columns, in the order Series::sample fills them.
+const Series::Column series_columns[] = {
+    {"projectile/com_x", "m", "centre of mass, x", {}},
+    {"projectile/com_y", "m", "centre of mass, y", {}},
+    {"projectile/vx", "m/s", "velocity of the centre of mass, x", {}},
+    {"projectile/vy", "m/s", "velocity of the centre of mass, y (negative: down)", {}},
+    {"projectile/rotational_momentum",
+     "kg m^2/s per m",
+     "H = sum r_i x m_i v_i about the centre of mass (counter-clockwise positive)",
+     {}},
+    {"projectile/lateral_force",
+     "N/m",
+     "sum of the external nodal forces, x (zero without contact)",
+     {}},
+    {"projectile/axial_force",
+     "N/m",
+     "sum of the external nodal forces, y (zero without contact)",
+     {}},
+    {"projectile/tilt",
+     "rad",
+     "least-squares rigid rotation from the initial shape, counter-clockwise positive",
+     {}},
+    {"projectile/depth", "m", "initial lowest point minus the current lowest point", {}},
+    {"energy/kinetic", "J/m", "kinetic energy of every body", {}},
+    {"energy/internal", "J/m", "internal energy (includes the plastic and viscous work)", {}},
+    {"energy/plastic", "J/m", "plastic work", {}},
+    {"energy/viscous", "J/m", "work of the artificial viscosity", {}},
+    {"energy/external", "J/m", "work of the imposed velocities and external forces", {}},
+    {"energy/balance_error",
+     "",
+     "(kinetic + internal - initial - external) / max(total, initial, external)",
+     {}},
+};
 
 std::string frameName(std::size_t i) {
   char name[32];
@@ -31,9 +63,76 @@ std::string frameName(std::size_t i) {
   return name;
 }
 
+// Element stresses of a frame: the total stress sigma = S - p I (plane strain, S_zz = -S_xx -
+// S_yy) and the von Mises stress sqrt(3/2 S:S).
+struct FrameStress {
+  std::vector<double> sxx, syy, sxy, szz, effective;
+};
+
+FrameStress frameStress(const fem::Elements &el) {
+  const std::size_t n = el.size();
+  FrameStress s{std::vector<double>(n), std::vector<double>(n), std::vector<double>(n),
+                std::vector<double>(n), std::vector<double>(n)};
+  for (std::size_t e = 0; e < n; ++e) {
+    const double xx = el.sxx[e], yy = el.syy[e], xy = el.sxy[e], zz = -xx - yy, p = el.pressure[e];
+    s.sxx[e] = xx - p, s.syy[e] = yy - p, s.sxy[e] = xy, s.szz[e] = zz - p;
+    s.effective[e] = std::sqrt(1.5 * (xx * xx + yy * yy + zz * zz + 2.0 * xy * xy));
+  }
+  return s;
+}
+
+vtkNew<vtkDoubleArray> vtkArray(const char *name, const std::vector<double> &values) {
+  vtkNew<vtkDoubleArray> a;
+  a->SetName(name);
+  a->SetNumberOfTuples(static_cast<vtkIdType>(values.size()));
+  for (std::size_t i = 0; i < values.size(); ++i)
+    a->SetValue(static_cast<vtkIdType>(i), values[i]);
+  return a;
+}
+
+// One frame as a VTK unstructured grid (binary, appended), written whole or not at all.
+void writeFrameVtu(const std::string &path, const fem::Model &model, const FrameStress &s) {
+  const fem::Nodes &nd = model.nodes;
+  const fem::Elements &el = model.elements;
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(static_cast<vtkIdType>(nd.size()));
+  vtkNew<vtkDoubleArray> velocity;
+  velocity->SetName("velocity");
+  velocity->SetNumberOfComponents(3);
+  velocity->SetNumberOfTuples(static_cast<vtkIdType>(nd.size()));
+  for (std::size_t a = 0; a < nd.size(); ++a) {
+    points->SetPoint(static_cast<vtkIdType>(a), nd.x[a], nd.y[a], 0.0);
+    velocity->SetTuple3(static_cast<vtkIdType>(a), nd.vx[a], nd.vy[a], 0.0);
+  }
+  vtkNew<vtkUnstructuredGrid> grid;
+  grid->SetPoints(points);
+  grid->AllocateExact(static_cast<vtkIdType>(el.size()), 3);
+  vtkNew<vtkIntArray> body;
+  body->SetName("body");
+  body->SetNumberOfTuples(static_cast<vtkIdType>(el.size()));
+  for (std::size_t e = 0; e < el.size(); ++e) {
+    const vtkIdType ids[3] = {el.node[3 * e], el.node[3 * e + 1], el.node[3 * e + 2]};
+    grid->InsertNextCell(VTK_TRIANGLE, 3, ids);
+    body->SetValue(static_cast<vtkIdType>(e), static_cast<int>(el.body[e]));
+  }
+  grid->GetPointData()->AddArray(velocity);
+  vtkCellData *cells = grid->GetCellData();
+  cells->AddArray(vtkArray("stress_xx", s.sxx));
+  cells->AddArray(vtkArray("stress_yy", s.syy));
+  cells->AddArray(vtkArray("stress_xy", s.sxy));
+  cells->AddArray(vtkArray("stress_zz", s.szz));
+  cells->AddArray(vtkArray("pressure", el.pressure));
+  cells->AddArray(vtkArray("effective_stress", s.effective));
+  cells->AddArray(vtkArray("plastic_strain", el.plastic_strain));
+  cells->AddArray(body);
+  writeVtu(path, grid);
+}
+
 } // namespace
 
-Series::Series(const fem::Model &model) {
+Series::Series(const fem::Model &model)
+    : columns_(std::begin(series_columns), std::end(series_columns)) {
   const fem::Body &p = model.bodies[0];
   const fem::BodyMotion m = fem::bodyMotion(model, 0);
   lowest0_ = HUGE_VAL;
@@ -42,23 +141,12 @@ Series::Series(const fem::Model &model) {
     y0_.push_back(model.nodes.y[a] - m.com_y);
     lowest0_ = std::min(lowest0_, model.nodes.y[a]);
   }
-  for (const char *c : projectile_columns)
-    columns_.push_back({std::string("projectile/") + c, {}});
-  for (const char *c : energy_columns)
-    columns_.push_back({std::string("energy/") + c, {}});
-}
-
-std::vector<double> &Series::column(const std::string &name) {
-  for (auto &c : columns_)
-    if (c.first == name)
-      return c.second;
-  throw std::logic_error("no series " + name);
 }
 
 double Series::last(const std::string &name) const {
   for (const auto &c : columns_)
-    if (c.first == name && !c.second.empty())
-      return c.second.back();
+    if (c.name == name && !c.values.empty())
+      return c.values.back();
   return NAN;
 }
 
@@ -70,135 +158,113 @@ void Series::sample(const fem::Model &model, const fem::Solver &solver) {
   double fx = 0.0, fy = 0.0, cross = 0.0, dot = 0.0, lowest = HUGE_VAL;
   for (std::size_t a = p.node_begin, i = 0; a < p.node_end; ++a, ++i) {
     fx += nd.fx_ext[a], fy += nd.fy_ext[a];
-    // Least-squares rigid rotation from the initial shape: tan(theta) = sum m X' x x' / sum m X'.x'.
+    // Least-squares rigid rotation from the initial shape: tilt = atan2(sum m X' x x', sum m X'.x')
+    // with X' and x' the initial and current positions relative to the centre of mass.
     const double x = nd.x[a] - m.com_x, y = nd.y[a] - m.com_y;
     cross += nd.mass[a] * (x0_[i] * y - y0_[i] * x);
     dot += nd.mass[a] * (x0_[i] * x + y0_[i] * y);
     lowest = std::min(lowest, nd.y[a]);
   }
   time_.push_back(solver.time());
-  step_.push_back(static_cast<double>(solver.steps()));
+  step_.push_back(solver.steps());
   dt_.push_back(solver.dt());
   const fem::Energy &e = solver.energy();
-  const double values[] = {m.com_x, m.com_y,  m.px / m.mass, m.py / m.mass, m.angular_momentum,
-                           fx,      fy,       std::atan2(cross, dot), lowest0_ - lowest,
-                           e.kinetic, e.internal, e.plastic, e.viscous, e.external, e.balance_error};
+  const double values[] = {m.com_x,
+                           m.com_y,
+                           m.px / m.mass,
+                           m.py / m.mass,
+                           m.angular_momentum,
+                           fx,
+                           fy,
+                           std::atan2(cross, dot),
+                           lowest0_ - lowest,
+                           e.kinetic,
+                           e.internal,
+                           e.plastic,
+                           e.viscous,
+                           e.external,
+                           e.balance_error};
+  static_assert(std::size(values) == std::size(series_columns));
   for (std::size_t c = 0; c < columns_.size(); ++c)
-    columns_[c].second.push_back(values[c]);
+    columns_[c].values.push_back(values[c]);
 }
 
 void Series::write(H5File &h5) const {
-  h5.createGroup("/series");
-  h5.createGroup("/series/projectile");
-  h5.createGroup("/series/energy");
+  for (const char *group : {"/series", "/series/projectile", "/series/energy"})
+    h5.createGroup(group);
   h5.write("/series/time", time_);
   h5.write("/series/step", step_);
   h5.write("/series/dt", dt_);
-  for (const auto &[name, values] : columns_)
-    h5.write("/series/" + name, values);
-  h5.attribute("/series/projectile/depth", "meaning",
-               std::string("initial lowest point of the projectile minus its current lowest point [m]"));
-  h5.attribute("/series/projectile/tilt", "meaning",
-               std::string("rigid rotation from the initial shape, counter-clockwise [rad]"));
+  h5.attribute("/series/time", "unit", std::string("s"));
+  h5.attribute("/series/dt", "meaning", std::string("the step the solver takes next [s]"));
+  for (const auto &c : columns_) {
+    const std::string name = "/series/" + c.name;
+    h5.write(name, c.values);
+    h5.attribute(name, "unit", c.unit);
+    h5.attribute(name, "meaning", c.meaning);
+  }
 }
 
-Frames::Frames(H5File &h5, const fem::Model &model, const std::string &vtk_dir)
-    : h5_(h5), vtk_dir_(vtk_dir) {
+Frames::Frames(H5File &h5, const fem::Model &model, double interval, std::string vtk_dir)
+    : h5_(h5), interval_(interval), vtk_dir_(interval > 0 ? std::move(vtk_dir) : std::string()) {
   const fem::Elements &el = model.elements;
-  std::vector<std::uint32_t> node_body(model.nodes.body.begin(), model.nodes.body.end());
+  const std::vector<std::uint32_t> node_body(model.nodes.body.begin(), model.nodes.body.end());
   h5_.createGroup("/mesh");
+  h5_.write("/mesh/x", model.nodes.x0);
+  h5_.write("/mesh/y", model.nodes.y0);
   h5_.write("/mesh/triangles", el.node, el.size(), 3);
   h5_.write("/mesh/element_body", el.body);
   h5_.write("/mesh/node_body", node_body);
-  h5_.createGroup("/frames");
+  h5_.attribute(
+      "/mesh", "body_names",
+      std::string("body 0: projectile; body b >= 1: grain-(b-1), the target's grain b - 1"));
+  if (interval_ > 0)
+    h5_.createGroup("/frames");
 }
 
-void Frames::take(const fem::Model &model, double time) {
+void Frames::offer(const fem::Model &model, const fem::Solver &solver, bool force) {
+  if (interval_ <= 0 || (!force && solver.time() < next_))
+    return;
+  take(model, solver);
+  // The next multiple of the interval after now: one frame per interval even when a step is longer.
+  next_ = interval_ * (std::floor(solver.time() / interval_) + 1.0);
+}
+
+void Frames::take(const fem::Model &model, const fem::Solver &solver) {
   const fem::Nodes &nd = model.nodes;
   const fem::Elements &el = model.elements;
-  const std::size_t n = el.size();
-  std::vector<double> sxx(n), syy(n), sxy(n), szz(n), effective(n);
-  for (std::size_t e = 0; e < n; ++e) {
-    const double zz = -el.sxx[e] - el.syy[e]; // deviator, plane strain
-    sxx[e] = el.sxx[e] - el.pressure[e], syy[e] = el.syy[e] - el.pressure[e];
-    sxy[e] = el.sxy[e], szz[e] = zz - el.pressure[e];
-    effective[e] = std::sqrt(1.5 * (el.sxx[e] * el.sxx[e] + el.syy[e] * el.syy[e] + zz * zz +
-                                    2.0 * el.sxy[e] * el.sxy[e]));
-  }
+  const FrameStress s = frameStress(el);
+  if (!vtk_dir_.empty())
+    writeFrameVtu(vtk_dir_ + "/frame_" + frameName(times_.size()) + ".vtu", model, s);
   const std::string g = "/frames/" + frameName(times_.size());
   h5_.createGroup(g);
-  h5_.attribute(g, "time", time);
-  h5_.attribute(g, "stress", std::string("total stress sigma = S - p I [Pa]"));
+  h5_.attribute(g, "time", solver.time());
+  h5_.attribute(g, "step", static_cast<std::uint64_t>(solver.steps()));
+  h5_.attribute(g, "stress",
+                std::string("total stress sigma = S - p I [Pa]; effective_stress: "
+                            "von Mises sqrt(3/2 S:S) [Pa]; pressure compression positive"));
   for (auto [name, v] : {std::pair{"x", &nd.x}, {"y", &nd.y}, {"vx", &nd.vx}, {"vy", &nd.vy}})
     h5_.write(g + "/" + name, *v);
-  h5_.write(g + "/sxx", sxx);
-  h5_.write(g + "/syy", syy);
-  h5_.write(g + "/sxy", sxy);
-  h5_.write(g + "/szz", szz);
-  h5_.write(g + "/pressure", el.pressure);
-  h5_.write(g + "/effective_stress", effective);
-  h5_.write(g + "/plastic_strain", el.plastic_strain);
-
-  if (!vtk_dir_.empty()) {
-    vtkNew<vtkPoints> points;
-    points->SetDataTypeToDouble();
-    points->SetNumberOfPoints(static_cast<vtkIdType>(nd.size()));
-    vtkNew<vtkDoubleArray> velocity;
-    velocity->SetName("velocity");
-    velocity->SetNumberOfComponents(3);
-    velocity->SetNumberOfTuples(static_cast<vtkIdType>(nd.size()));
-    for (std::size_t a = 0; a < nd.size(); ++a) {
-      points->SetPoint(static_cast<vtkIdType>(a), nd.x[a], nd.y[a], 0.0);
-      velocity->SetTuple3(static_cast<vtkIdType>(a), nd.vx[a], nd.vy[a], 0.0);
-    }
-    vtkNew<vtkUnstructuredGrid> grid;
-    grid->SetPoints(points);
-    grid->AllocateExact(static_cast<vtkIdType>(n), 3);
-    for (std::size_t e = 0; e < n; ++e) {
-      const vtkIdType ids[3] = {el.node[3 * e], el.node[3 * e + 1], el.node[3 * e + 2]};
-      grid->InsertNextCell(VTK_TRIANGLE, 3, ids);
-    }
-    grid->GetPointData()->AddArray(velocity);
-    auto cellArray = [&](const char *name, const std::vector<double> &v) {
-      vtkNew<vtkDoubleArray> a;
-      a->SetName(name);
-      a->SetNumberOfTuples(static_cast<vtkIdType>(n));
-      for (std::size_t e = 0; e < n; ++e)
-        a->SetValue(static_cast<vtkIdType>(e), v[e]);
-      grid->GetCellData()->AddArray(a);
-    };
-    cellArray("stress_xx", sxx), cellArray("stress_yy", syy), cellArray("stress_xy", sxy);
-    cellArray("stress_zz", szz), cellArray("pressure", el.pressure);
-    cellArray("effective_stress", effective), cellArray("plastic_strain", el.plastic_strain);
-    vtkNew<vtkIntArray> body;
-    body->SetName("body");
-    body->SetNumberOfTuples(static_cast<vtkIdType>(n));
-    for (std::size_t e = 0; e < n; ++e)
-      body->SetValue(static_cast<vtkIdType>(e), static_cast<int>(el.body[e]));
-    grid->GetCellData()->AddArray(body);
-    const std::string path = vtk_dir_ + "/frame_" + frameName(times_.size()) + ".vtu";
-    writeAtomically(path, [&](const std::string &temp) {
-      vtkNew<vtkXMLUnstructuredGridWriter> writer;
-      writer->SetFileName(temp.c_str());
-      writer->SetInputData(grid);
-      writer->SetDataModeToAppended();
-      writer->EncodeAppendedDataOff();
-      writer->SetCompressorTypeToNone();
-      writer->SetHeaderTypeToUInt64();
-      if (writer->Write() != 1)
-        throw std::runtime_error("cannot write VTU file '" + temp + "'");
-    });
-  }
-  times_.push_back(time);
+  for (auto [name, v] : {std::pair{"sxx", &s.sxx},
+                         {"syy", &s.syy},
+                         {"sxy", &s.sxy},
+                         {"szz", &s.szz},
+                         {"pressure", &el.pressure},
+                         {"effective_stress", &s.effective},
+                         {"plastic_strain", &el.plastic_strain}})
+    h5_.write(g + "/" + name, *v);
+  times_.push_back(solver.time());
 }
 
 void Frames::writeCollection() const {
-  if (vtk_dir_.empty())
+  if (!vtk())
     return;
-  std::string text = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
+  std::string text = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n"
+                     "  <Collection>\n";
   for (std::size_t i = 0; i < times_.size(); ++i) {
     char line[160];
-    std::snprintf(line, sizeof line, "    <DataSet timestep=\"%.17g\" file=\"frame_%06zu.vtu\"/>\n", times_[i], i);
+    std::snprintf(line, sizeof line, "    <DataSet timestep=\"%.17g\" file=\"frame_%06zu.vtu\"/>\n",
+                  times_[i], i);
     text += line;
   }
   text += "  </Collection>\n</VTKFile>\n";

@@ -1,12 +1,16 @@
 // What `mesopen run` writes: the series and frames of run.h5, the VTK frames with their ParaView
 // collection (vtk/run.pvd). Layout of run.h5 (SI units, per metre of depth):
-//   /series/{time, step, dt}
+//   attributes of /: format = "mesopen-run", version, status ("completed" or "failed"), seed,
+//                    velocity, spin, end_time
+//   /series/{time, step, dt}                                   one value per sample
 //   /series/projectile/{com_x, com_y, vx, vy, rotational_momentum, lateral_force, axial_force,
-//                       tilt, depth}
+//                       tilt, depth}                           attributes unit, meaning
 //   /series/energy/{kinetic, internal, plastic, viscous, external, balance_error}
-//   /mesh/{triangles (n x 3), element_body, node_body}
+//   /mesh/{x, y (initial node positions), triangles (n x 3, uint32), element_body, node_body}
+//                                                              attribute body_names
 //   /frames/NNNNNN/{x, y, vx, vy (nodes); sxx, syy, sxy, szz (total stress sigma = S - p I),
-//                   pressure, effective_stress, plastic_strain (elements)}, attribute time.
+//                   pressure, effective_stress, plastic_strain (elements)}, attributes time, step
+// Body 0 is the projectile, body b >= 1 the grain b - 1 of the target.
 #pragma once
 
 #include "h5file.hpp"
@@ -18,34 +22,48 @@
 
 namespace mesopen {
 
-// The projectile's figures of instability (thesis section 3.4) and the energies, sampled.
+// The projectile's figures of instability (thesis section 3.4) and the energies, sampled in memory
+// and written at the end (H5File writes whole datasets).
 class Series {
 public:
-  explicit Series(const fem::Model &model); // body 0 is the projectile
+  explicit Series(const fem::Model &model); // body 0 is the projectile, at its initial state
   void sample(const fem::Model &model, const fem::Solver &solver);
   void write(H5File &h5) const;
   std::size_t size() const { return time_.size(); }
+  // The last sample of "projectile/NAME" or "energy/NAME"; NaN before the first.
   double last(const std::string &name) const;
 
+  struct Column {
+    std::string name, unit, meaning;
+    std::vector<double> values;
+  };
+
 private:
-  std::vector<double> x0_, y0_; // projectile nodes relative to the initial centre of mass
-  double lowest0_ = 0.0;        // initial lowest point of the projectile
-  std::vector<double> time_, step_, dt_;
-  std::vector<std::pair<std::string, std::vector<double>>> columns_;
-  std::vector<double> &column(const std::string &name);
+  std::vector<double> x0_, y0_; // projectile nodes relative to the initial centre of mass [m]
+  double lowest0_ = 0.0;        // initial lowest point of the projectile [m]
+  std::vector<double> time_, dt_;
+  std::vector<std::uint64_t> step_;
+  std::vector<Column> columns_;
 };
 
-// Frames: written into run.h5 as they are taken, and as VTK files when asked.
+// Fields every `interval` of simulated time, written into run.h5 as they are taken and as VTK
+// files when a directory is given.
 class Frames {
 public:
-  Frames(H5File &h5, const fem::Model &model, const std::string &vtk_dir);
-  void take(const fem::Model &model, double time);
-  // vtk/run.pvd listing the frames written so far.
+  // interval 0: no frames. vtk_dir empty: no VTK files. Writes /mesh at once.
+  Frames(H5File &h5, const fem::Model &model, double interval, std::string vtk_dir);
+  // A frame when the solver's time has reached the next multiple of the interval, or when `force`.
+  void offer(const fem::Model &model, const fem::Solver &solver, bool force = false);
+  // vtk/run.pvd listing the VTK frames written so far (nothing without VTK frames).
   void writeCollection() const;
   std::size_t size() const { return times_.size(); }
+  bool vtk() const { return !vtk_dir_.empty() && !times_.empty(); }
 
 private:
+  void take(const fem::Model &model, const fem::Solver &solver);
+
   H5File &h5_;
+  double interval_, next_ = 0.0;
   std::string vtk_dir_;
   std::vector<double> times_;
 };

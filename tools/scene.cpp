@@ -241,7 +241,8 @@ const std::vector<Key> &keys() {
         integer("run", "series_interval", r, &R::series_interval, 1, 1e9,
                 "steps between samples of the series in run.h5"),
         real("run", "frame_interval", r, &R::frame_interval, "s", 0, false, 1,
-             "simulated time between frames (fields) in run.h5; 0: first and last only"),
+             "simulated time between frames (fields) in run.h5, also taken at the start and the "
+             "end; 0: no frames"),
         boolean("run", "vtk", r, &R::vtk, "write the frames also as VTK files (vtk/run.pvd)"),
         integer("run", "max_steps", r, &R::max_steps, 1, 1e12, "time steps at most"),
     };
@@ -304,12 +305,93 @@ void checkTogether(const Scene &s) {
   }
 }
 
+// "a", "b", "c": the names of the material presets or types.
+template <class List> std::string quotedNames(const List &list) {
+  std::string s;
+  for (const auto &item : list) {
+    s += s.empty() ? "\"" : ", \"";
+    s += item.name;
+    s += '"';
+  }
+  return s;
+}
+
+// What a parameter allows: its closed range, or true/false for a switch.
+std::string parameterRange(const fem::ParameterInfo &p) {
+  if (p.boolean)
+    return "true or false";
+  return show(p.lo) + " <= " + p.name + " <= " + show(p.hi);
+}
+
+// What a parameter allows, with its unit, for messages.
+std::string parameterAllowed(const fem::ParameterInfo &p) {
+  return parameterRange(p) + (p.unit.empty() ? "" : " [" + p.unit + "]");
+}
+
+// `preset = NAME` or `type = NAME` of a material table; the current choice when neither is given.
+std::string materialName(const std::string &where, const toml::table &tab,
+                         const std::string &current) {
+  if (tab.contains("preset") && tab.contains("type"))
+    throw InputError(where + ": give preset or type, not both");
+  for (const std::string key : {"preset", "type"}) {
+    const toml::node *node = tab.get(key);
+    if (!node)
+      continue;
+    const auto *str = node->as_string();
+    const bool preset = key == "preset";
+    if (!str || !(preset ? fem::findMaterialPreset(str->get()) != nullptr
+                         : fem::findMaterialType(str->get()) != nullptr))
+      throw InputError(
+          where + "." + key + " = " + quoted(*node) + " is not known; allowed: one of " +
+          (preset ? quotedNames(fem::materialPresets()) : quotedNames(fem::materialTypes())));
+    return str->get();
+  }
+  return current;
+}
+
+// A parameter's value as a scene writes it.
+std::string parameterText(const fem::ParameterInfo &p, double value) {
+  return p.boolean ? (value != 0 ? "true" : "false") : show(value);
+}
+
+// One parameter of a material type: a number in its range, or true/false for a switch.
+double parameterValue(const std::string &where, const fem::MaterialType &type,
+                      const std::string &key, const toml::node &node) {
+  const fem::ParameterInfo *info = nullptr;
+  std::string known;
+  for (const auto &p : type.parameters) {
+    known += ", ";
+    known += p.name;
+    if (p.name == key)
+      info = &p;
+  }
+  if (!info)
+    throw InputError(where + "." + key + " = " + quoted(node) + ": material type \"" + type.name +
+                     "\" has no such parameter; known: preset, type" + known);
+  double value = NAN;
+  if (const auto *b = node.as_boolean(); b && info->boolean)
+    value = b->get() ? 1.0 : 0.0;
+  else if (const auto *f = node.as_floating_point(); f && !info->boolean)
+    value = f->get();
+  else if (const auto *i = node.as_integer(); i && !info->boolean)
+    value = static_cast<double>(i->get());
+  else
+    throw InputError(where + "." + key + " = " + quoted(node) + " is not " +
+                     (info->boolean ? "true or false" : "a number") +
+                     "; allowed: " + parameterAllowed(*info));
+  if (!(value >= info->lo && value <= info->hi))
+    throw InputError(where + "." + key + " = " + quoted(node) +
+                     " is out of range; allowed: " + parameterAllowed(*info));
+  return value;
+}
+
 // [materials.projectile] and [materials.grains]: `preset` or `type`, then parameters by name.
 void readMaterials(Scene &scene, const toml::node &node) {
   const std::string &path = scene.path;
   const toml::table *groups = node.as_table();
   if (!groups)
-    throw InputError(path + ": materials must be a table ([materials.projectile], [materials.grains])");
+    throw InputError(path +
+                     ": materials must be a table ([materials.projectile], [materials.grains])");
   for (const auto &[gname, gnode] : *groups) {
     const std::string group(gname.str());
     MaterialChoice *choice = group == "projectile" ? &scene.projectile_material
@@ -320,63 +402,17 @@ void readMaterials(Scene &scene, const toml::node &node) {
       throw InputError(path + ": unknown material table [materials." + group +
                        "]; known: [materials.projectile], [materials.grains]");
     const std::string where = path + ": materials." + group;
-    auto names = [](const auto &list) {
-      std::string s;
-      for (const auto &item : list) {
-        s += s.empty() ? "\"" : ", \"";
-        s += item.name;
-        s += '"';
-      }
-      return s;
-    };
+    choice->name = materialName(where, *tab, choice->name);
     choice->parameters.clear();
-    if (tab->contains("preset") && tab->contains("type"))
-      throw InputError(where + ": give preset or type, not both");
-    for (const char *key : {"preset", "type"})
-      if (auto v = (*tab)[key]) {
-        const auto *str = v.as_string();
-        const bool known = str && (std::string(key) == "preset" ? fem::findMaterialPreset(str->get()) != nullptr
-                                                                : fem::findMaterialType(str->get()) != nullptr);
-        if (!known)
-          throw InputError(where + "." + key + " = " + quoted(*v.node()) + " is not known; allowed: one of " +
-                           (std::string(key) == "preset" ? names(fem::materialPresets())
-                                                         : names(fem::materialTypes())));
-        choice->name = str->get();
-      }
     const fem::MaterialPreset *preset = fem::findMaterialPreset(choice->name);
-    const fem::MaterialType *type = fem::findMaterialType(preset ? preset->type : choice->name);
+    const fem::MaterialType &type = *fem::findMaterialType(preset ? preset->type : choice->name);
     for (const auto &[kname, knode] : *tab) {
       const std::string key(kname.str());
-      if (key == "preset" || key == "type")
-        continue;
-      const fem::ParameterInfo *info = nullptr;
-      for (const auto &p : type->parameters)
-        if (p.name == key)
-          info = &p;
-      if (!info) {
-        std::string known;
-        for (const auto &p : type->parameters)
-          known += (known.empty() ? "" : ", ") + p.name;
-        throw InputError(where + "." + key + ": unknown parameter of material type \"" + type->name +
-                         "\"; known: preset, type, " + known);
-      }
-      double value;
-      if (info->boolean) {
-        const auto *b = knode.as_boolean();
-        if (!b)
-          throw InputError(where + "." + key + " = " + quoted(knode) + " is not true or false");
-        value = b->get() ? 1.0 : 0.0;
-      } else if (const auto *f = knode.as_floating_point()) {
-        value = f->get();
-      } else if (const auto *i = knode.as_integer()) {
-        value = static_cast<double>(i->get());
-      } else {
-        throw InputError(where + "." + key + " = " + quoted(knode) + " is not a number");
-      }
-      choice->parameters[key] = value;
+      if (key != "preset" && key != "type")
+        choice->parameters[key] = parameterValue(where, type, key, knode);
     }
     try {
-      fem::completeParameters(*type, preset, choice->parameters);
+      fem::completeParameters(type, preset, choice->parameters);
     } catch (const std::invalid_argument &e) {
       throw InputError(where + ": " + e.what());
     }
@@ -427,19 +463,28 @@ std::string sceneKeysMarkdown() {
   for (const auto &k : keys())
     out << "| " << k.table << "." << k.name << " | " << k.type << " | " << k.get(defaults) << " | "
         << allowed(k) << " | " << k.unit << " | " << k.doc << " |\n";
-  out << "\n## Materials\n\n[materials.projectile] (default preset \"steel\") and [materials.grains] "
+  out << "\n## Materials\n\n"
+         "[materials.projectile] (default preset \"steel\") and [materials.grains] "
          "(default preset \"quartz\") take `preset = NAME` or `type = NAME`, then any parameter of "
-         "that type by name.\n\n| preset | type | meaning |\n|---|---|---|\n";
-  for (const auto &p : fem::materialPresets())
-    out << "| " << p.name << " | " << p.type << " | " << p.doc << " |\n";
+         "that type by name.\n\n"
+         "| preset | type | values (beside the type's defaults) | meaning |\n|---|---|---|---|\n";
+  for (const auto &p : fem::materialPresets()) {
+    const fem::MaterialType &type = *fem::findMaterialType(p.type);
+    std::string values;
+    for (const auto &info : type.parameters)
+      if (auto v = p.values.find(info.name); v != p.values.end()) {
+        values += values.empty() ? "" : ", ";
+        values += info.name + " = " + parameterText(info, v->second);
+      }
+    out << "| " << p.name << " | " << p.type << " | " << values << " | " << p.doc << " |\n";
+  }
   for (const auto &t : fem::materialTypes()) {
-    out << "\n### type \"" << t.name << "\"\n\n" << t.doc
-        << "\n\n| parameter | type | default | allowed | unit | meaning |\n|---|---|---|---|---|---|\n";
+    out << "\n### type \"" << t.name << "\"\n\n" << t.doc << "\n\n"
+        << "| parameter | type | default | allowed | unit | meaning |\n|---|---|---|---|---|---|\n";
     for (const auto &p : t.parameters)
       out << "| " << p.name << " | " << (p.boolean ? "bool" : "real") << " | "
-          << (p.boolean ? (p.value != 0 ? "true" : "false") : show(p.value)) << " | "
-          << (p.boolean ? std::string("true or false") : show(p.lo) + " <= " + p.name + " <= " + show(p.hi))
-          << " | " << p.unit << " | " << p.doc << " |\n";
+          << parameterText(p, p.value) << " | " << parameterRange(p) << " | " << p.unit << " | "
+          << p.doc << " |\n";
   }
   return out.str();
 }

@@ -2,6 +2,7 @@
 #include "atomic_file.hpp"
 #include "commands.hpp"
 #include "generator.hpp"
+#include "output.hpp"
 #include "projectile.hpp"
 #include "scene.hpp"
 #include "writers.hpp"
@@ -34,8 +35,6 @@ std::string shareDirectory() {
 }
 
 namespace {
-
-void writeJson(const std::string &path, const nlohmann::json &j) { writeText(path, j.dump(2) + "\n"); }
 
 double peakMemoryBytes() {
   rusage usage{};
@@ -78,13 +77,7 @@ int targetCommand(const TargetOptions &options) {
       scene.target.seed = *options.seed;
     if (options.no_mesh)
       scene.target.mesh = MeshKind::none;
-    std::error_code ec;
-    fs::create_directories(options.out_dir, ec);
-    if (ec || !fs::is_directory(options.out_dir))
-      throw InputError(options.out_dir + ": cannot create the output directory (" + ec.message() + ")");
-    // The figures of an earlier run must not sit beside this run's data.
-    for (const char *old : {"target.json", "summary.json", "grain-sizes.png"})
-      fs::remove(fs::path(options.out_dir) / old, ec);
+    prepareOutputDirectory(options.out_dir, {"target.json", "summary.json", "grain-sizes.png"});
   } catch (const InputError &e) {
     std::cerr << "mesopen target: " << e.what() << '\n';
     return 2;
