@@ -26,10 +26,6 @@ TargetSpec smallSpec(Tessellation t, Placement p) {
   return s;
 }
 
-double areaOf(const Polygons &p, std::size_t g) {
-  return signedArea(p.x.data() + p.offset[g], p.y.data() + p.offset[g], p.corners(g));
-}
-
 // Two convex polygons overlap when no edge of either separates them (separating axis theorem);
 // returns the depth of the shallowest separating test (negative: a gap).
 double overlapDepth(const Polygons &p, std::size_t a, std::size_t b) {
