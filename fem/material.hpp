@@ -40,13 +40,22 @@ struct MaterialOutput {
   double plastic_work = 0.0;        // plastic work of this batch over the step [J/m]
 };
 
+class Material;
+std::unique_ptr<Material> makeMaterial(const std::string &type_or_preset,
+                                       const std::map<std::string, double> &overrides);
+
 class Material {
 public:
   virtual ~Material() = default;
-  virtual const std::string &type() const = 0;
+  const std::string &type() const { return type_; } // the registry's name for it
   virtual double density() const = 0;       // rho0 [kg/m^3]
   virtual bool plastic() const = 0;         // true when a strength model (plastic flow) is on
   virtual void update(const StrainBatch &in, StressState &state, MaterialOutput &out) const = 0;
+
+private:
+  friend std::unique_ptr<Material> makeMaterial(const std::string &,
+                                                const std::map<std::string, double> &);
+  std::string type_;
 };
 
 // A material's parameter: name, unit, meaning, allowed closed range, default.

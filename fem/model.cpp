@@ -27,7 +27,7 @@ Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> ma
 
   Elements &el = model.elements;
   el.node = mesh.tri;
-  for (auto *v : {&el.area0, &el.mass, &el.area, &el.sxx, &el.syy, &el.sxy, &el.pressure, &el.energy,
+  for (auto *v : {&el.area0, &el.area, &el.sxx, &el.syy, &el.sxy, &el.pressure, &el.energy,
                   &el.plastic_strain, &el.viscosity})
     v->assign(n_elements, 0.0);
   el.body.assign(n_elements, 0);
@@ -56,10 +56,9 @@ Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> ma
         throw std::invalid_argument("buildModel: element " + std::to_string(e) + " of " + body.name +
                                     " is not counter-clockwise (area " + std::to_string(area) + " m^2)");
       el.area0[e] = el.area[e] = area;
-      el.mass[e] = rho * area;
       el.body[e] = static_cast<std::uint32_t>(b);
       for (int k = 0; k < 3; ++k) {
-        nd.mass[n[k]] += el.mass[e] / 3.0;
+        nd.mass[n[k]] += rho * area / 3.0;
         nd.area0[n[k]] += area / 3.0;
         const std::uint32_t a = n[k], c = n[(k + 1) % 3];
         edges[{std::min(a, c), std::max(a, c)}] += a < c ? 1 : -1;

@@ -28,7 +28,7 @@ struct Nodes {
 // internal energy E = m e per element [J/m], equivalent plastic strain.
 struct Elements {
   std::vector<std::uint32_t> node;   // 3 per element, counter-clockwise
-  std::vector<double> area0, mass;   // initial area [m^2], mass rho0 A0 [kg/m]
+  std::vector<double> area0;         // initial area [m^2] (the mass is rho0 A0)
   std::vector<double> area;          // current area [m^2]
   std::vector<double> sxx, syy, sxy, pressure, energy, plastic_strain;
   std::vector<double> viscosity;     // artificial viscous pressure q of the last step [Pa]

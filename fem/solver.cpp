@@ -10,6 +10,25 @@ namespace {
 constexpr std::size_t max_chunk = 256;   // elements per material batch (scratch on the stack)
 constexpr std::size_t node_block = 4096; // nodes per block of the node loops
 constexpr std::size_t unit_target = 4096; // elements per work unit of the element pass
+
+// Appends the range `piece` to `ranges` in pieces of at most `limit`, first filling up the last
+// range (if it is at index `first` or later, ends where `piece` begins and `joinable` says so).
+template <class R, class Joinable>
+void appendInPieces(std::vector<R> &ranges, std::size_t first, R piece, std::size_t limit,
+                    Joinable joinable) {
+  const std::size_t end = piece.end;
+  while (piece.begin < end) {
+    R *last = ranges.size() > first ? &ranges.back() : nullptr;
+    if (last && last->end == piece.begin && last->end - last->begin < limit && joinable(*last)) {
+      last->end += std::min(limit - (last->end - last->begin), end - piece.begin);
+      piece.begin = last->end;
+    } else {
+      piece.end = piece.begin + std::min(limit, end - piece.begin);
+      ranges.push_back(piece);
+      piece.begin = piece.end;
+    }
+  }
+}
 } // namespace
 
 Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) {
@@ -45,13 +64,13 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
 void Solver::step() {
   const double dt = dt_;
   kick_work_ = 0.0;
-  kick(0.5 * dt); // v(n+1/2) = v(n) + dt/2 f(n) / m, then the imposed velocities
-  drift(dt);             // x(n+1) = x(n) + dt v(n+1/2)
+  kick(0.5 * dt);     // v(n+1/2) = v(n) + dt/2 f(n) / m, then the imposed velocities
+  drift(dt);          // x(n+1) = x(n) + dt v(n+1/2)
   for (auto *provider : providers_) // external forces at x(n+1): contact, coupling
     provider->addForces(m_, time_ + dt);
-  updateActivity();
-  internalForces(dt);    // stresses at n+1, f(n+1), the next stable step
-  kick(0.5 * dt); // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
+  updateActivity();   // bodies the providers woke take part
+  internalForces(dt); // stresses at n+1, f(n+1), the next stable step
+  kick(0.5 * dt);     // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
   time_ += dt;
   ++steps_;
   dt_ = std::min(next_dt_, s_.max_dt);
@@ -71,7 +90,7 @@ void Solver::updateActivity() {
   units_.clear();
   node_ranges_.clear();
   std::size_t unit_elements = 0;
-  active_elements_ = active_nodes_ = 0;
+  active_elements_ = 0;
   any_averaged_ = false;
   for (std::size_t b = 0; b < n_bodies; ++b) {
     const Body &body = m_.bodies[b];
@@ -89,33 +108,13 @@ void Solver::updateActivity() {
       unit_elements = 0;
     }
     unit_elements += body.element_end - body.element_begin;
-    for (std::size_t e = body.element_begin; e < body.element_end;) {
-      Chunk *last = chunks_.size() > units_.back().first ? &chunks_.back() : nullptr;
-      if (last && last->end == e && last->material == material && last->averaged_volume == averaged &&
-          last->end - last->begin < s_.chunk) {
-        const std::size_t take = std::min(s_.chunk - (last->end - last->begin), body.element_end - e);
-        last->end += take;
-        e += take;
-      } else {
-        const std::size_t take = std::min(s_.chunk, body.element_end - e);
-        chunks_.push_back({e, e + take, material, averaged});
-        e += take;
-      }
-    }
-    for (std::size_t a = body.node_begin; a < body.node_end;) {
-      auto *last = node_ranges_.empty() ? nullptr : &node_ranges_.back();
-      if (last && last->second == a && last->second - last->first < node_block) {
-        const std::size_t take = std::min(node_block - (last->second - last->first), body.node_end - a);
-        last->second += take;
-        a += take;
-      } else {
-        const std::size_t take = std::min(node_block, body.node_end - a);
-        node_ranges_.emplace_back(a, a + take);
-        a += take;
-      }
-    }
+    appendInPieces(chunks_, units_.back().first, Chunk{{body.element_begin, body.element_end}, material, averaged},
+                   s_.chunk, [&](const Chunk &c) {
+                     return c.material == material && c.averaged_volume == averaged;
+                   });
+    appendInPieces(node_ranges_, 0, Range{body.node_begin, body.node_end}, node_block,
+                   [](const Range &) { return true; });
     active_elements_ += body.element_end - body.element_begin;
-    active_nodes_ += body.node_end - body.node_begin;
     units_.back().second = chunks_.size();
   }
   sums_.resize(chunks_.size());
@@ -130,7 +129,7 @@ void Solver::kick(double half_dt) {
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < blocks; ++i) {
     double work = 0.0; // of the external forces over this half step
-    for (std::size_t a = node_ranges_[i].first; a < node_ranges_[i].second; ++a) {
+    for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
       const double vx = nd.vx[a] + half_dt * nd.fx[a] * inv_mass_[a];
       const double vy = nd.vy[a] + half_dt * nd.fy[a] * inv_mass_[a];
       work += half_dt * (nd.fx_ext[a] * 0.5 * (nd.vx[a] + vx) + nd.fy_ext[a] * 0.5 * (nd.vy[a] + vy));
@@ -171,7 +170,7 @@ void Solver::drift(double dt) {
   const long blocks = static_cast<long>(node_ranges_.size());
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < blocks; ++i)
-    for (std::size_t a = node_ranges_[i].first; a < node_ranges_[i].second; ++a) {
+    for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
       nd.x[a] += dt * nd.vx[a];
       nd.y[a] += dt * nd.vy[a];
       nd.fx_ext[a] = nd.fy_ext[a] = 0.0; // providers add this step's external forces
@@ -184,7 +183,7 @@ void Solver::internalForces(double dt) {
   const long blocks = static_cast<long>(node_ranges_.size());
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < blocks; ++i)
-    for (std::size_t a = node_ranges_[i].first; a < node_ranges_[i].second; ++a)
+    for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a)
       nd.fx[a] = nd.fx_ext[a], nd.fy[a] = nd.fy_ext[a];
   if (any_averaged_)
     nodalVolumes();
@@ -220,7 +219,7 @@ void Solver::nodalVolumes() {
   const long blocks = static_cast<long>(node_ranges_.size());
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < blocks; ++i)
-    for (std::size_t a = node_ranges_[i].first; a < node_ranges_[i].second; ++a)
+    for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a)
       node_jacobian_[a] = 0.0;
   const long units = static_cast<long>(units_.size());
 #pragma omp parallel for schedule(dynamic)
@@ -237,7 +236,7 @@ void Solver::nodalVolumes() {
     }
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < blocks; ++i)
-    for (std::size_t a = node_ranges_[i].first; a < node_ranges_[i].second; ++a)
+    for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a)
       node_jacobian_[a] /= nd.area0[a];
 }
 
@@ -361,8 +360,8 @@ void Solver::accountEnergy() {
   // (1/2 m |v(n)|^2 carries an O((omega dt)^2) oscillation of the fastest modes).
   const Nodes &nd = m_.nodes;
   double kinetic = 0.0;
-  for (const auto &[begin, end] : node_ranges_)
-    for (std::size_t a = begin; a < end; ++a)
+  for (const Range &r : node_ranges_)
+    for (std::size_t a = r.begin; a < r.end; ++a)
       kinetic += 0.5 * nd.mass[a] * (nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a] -
                                      kick_dvx_[a] * kick_dvx_[a] - kick_dvy_[a] * kick_dvy_[a]);
   energy_.kinetic = kinetic;

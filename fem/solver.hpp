@@ -57,17 +57,18 @@ public:
   double dt() const { return dt_; }              // the step the next step() takes
   const Energy &energy() const { return energy_; }
   void addForceProvider(ForceProvider *provider) { providers_.push_back(provider); }
-  // Elements and nodes updated in the last step (bodies at rest are skipped).
+  // Elements updated in the last step (bodies at rest are skipped).
   std::size_t activeElements() const { return active_elements_; }
-  std::size_t activeNodes() const { return active_nodes_; }
 
   // The element pass alone, as the time loop calls it: stresses and forces at the current
   // positions with the current velocities over a step dt (for benchmarks).
   void internalForces(double dt);
 
 private:
-  struct Chunk {
+  struct Range {
     std::size_t begin, end;
+  };
+  struct Chunk : Range {
     const Material *material;
     bool averaged_volume;
   };
@@ -89,14 +90,14 @@ private:
   std::vector<ForceProvider *> providers_;
   std::vector<Chunk> chunks_;
   std::vector<std::pair<std::size_t, std::size_t>> units_;     // chunk ranges holding whole bodies
-  std::vector<std::pair<std::size_t, std::size_t>> node_ranges_; // active nodes
+  std::vector<Range> node_ranges_; // active nodes
   std::vector<ChunkSums> sums_;
   std::vector<double> node_sums_;
   std::vector<double> inv_mass_, node_jacobian_;
   std::vector<double> kick_dvx_, kick_dvy_; // velocity change of the last half-kick
   std::vector<char> body_active_seen_;
   bool any_averaged_ = false;
-  std::size_t active_elements_ = 0, active_nodes_ = 0;
+  std::size_t active_elements_ = 0;
   double time_ = 0.0, dt_ = 0.0, next_dt_ = 0.0;
   std::size_t steps_ = 0;
   Energy energy_;

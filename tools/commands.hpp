@@ -8,22 +8,22 @@
 
 namespace mesopen {
 
-struct TargetOptions {
+// What every scene command takes.
+struct SceneOptions {
   std::string scene;
   std::string out_dir;
   std::optional<std::uint64_t> seed;   // overrides target.seed
   std::optional<int> threads;
+};
+
+struct TargetOptions : SceneOptions {
   bool no_mesh = false;                // skip meshing (grains as polygons only)
   bool no_plot = false;                // skip the histogram PNG
 };
 
 int targetCommand(const TargetOptions &options);
 
-struct RunOptions {
-  std::string scene;
-  std::string out_dir;
-  std::optional<std::uint64_t> seed;   // overrides target.seed
-  std::optional<int> threads;
+struct RunOptions : SceneOptions {
   bool quiet = false;                  // no progress line
 };
 

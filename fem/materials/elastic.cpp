@@ -14,10 +14,6 @@ class Elastic final : public Material {
 public:
   explicit Elastic(const Parameters &p)
       : rho0_(p.at("density")), K_(p.at("bulk_modulus")), G_(p.at("shear_modulus")) {}
-  const std::string &type() const override {
-    static const std::string name = "elastic";
-    return name;
-  }
   double density() const override { return rho0_; }
   bool plastic() const override { return false; }
 

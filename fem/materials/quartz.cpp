@@ -24,10 +24,6 @@ public:
         G0_(p.at("g0")), G1_(p.at("g1")), G2_(p.at("g2")), B_(p.at("cohesion")),
         M_(p.at("friction_slope")), Y1_(p.at("yield_cap")), T_(p.at("relaxation_time")),
         strength_(p.at("strength") != 0.0) {}
-  const std::string &type() const override {
-    static const std::string name = "quartz";
-    return name;
-  }
   double density() const override { return rho0_; }
   bool plastic() const override { return strength_; }
 

@@ -81,7 +81,9 @@ std::unique_ptr<Material> makeMaterial(const std::string &type_or_preset, const 
   const MaterialType *type = findMaterialType(preset ? preset->type : type_or_preset);
   if (!type)
     throw std::invalid_argument("unknown material \"" + type_or_preset + "\"");
-  return type->make(completeParameters(*type, preset, overrides));
+  std::unique_ptr<Material> material = type->make(completeParameters(*type, preset, overrides));
+  material->type_ = type->name;
+  return material;
 }
 
 } // namespace mesopen::fem

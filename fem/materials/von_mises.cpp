@@ -20,10 +20,6 @@ public:
       : rho0_(p.at("density")), G_(p.at("shear_modulus")),
         eos_{p.at("bulk_modulus"), p.at("k1"), p.at("k2"), p.at("gruneisen"), p.at("pressure_cutoff")},
         Y0_(p.at("yield_stress")), M_(p.at("hardening_modulus")), plastic_(p.at("plastic") != 0.0) {}
-  const std::string &type() const override {
-    static const std::string name = "von-mises";
-    return name;
-  }
   double density() const override { return rho0_; }
   bool plastic() const override { return plastic_; }
 
