@@ -18,6 +18,7 @@ struct Nodes {
   std::vector<double> vx, vy;     // velocity [m/s]
   std::vector<double> fx, fy;     // total force of this step: internal + external [N/m]
   std::vector<double> fx_ext, fy_ext; // external forces (contact, coupling), set each step [N/m]
+  std::vector<double> fx_friction, fy_friction; // the frictional part of fx_ext, fy_ext [N/m]
   std::vector<double> mass;       // lumped mass [kg/m]
   std::vector<double> area0;      // a third of the initial area of each element at the node [m^2]
   std::vector<std::uint32_t> body;

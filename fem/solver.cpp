@@ -47,6 +47,9 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
     if ((c.constrain_x && c.vx != 0.0) || (c.constrain_y && c.vy != 0.0))
       for (std::uint32_t a : c.nodes)
         m_.wake(nd.body[a]);
+  if (s_.gravity_x != 0.0 || s_.gravity_y != 0.0) // gravity loads every body
+    for (std::size_t b = 0; b < m_.bodies.size(); ++b)
+      m_.wake(b);
   const Elements &el = m_.elements;
   for (std::size_t e = 0; e < el.size(); ++e)
     if (el.sxx[e] != 0.0 || el.syy[e] != 0.0 || el.sxy[e] != 0.0 || el.pressure[e] != 0.0 ||
@@ -63,11 +66,11 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
 // The time loop's step: each line one stage of the central-difference scheme.
 void Solver::step() {
   const double dt = dt_;
-  kick_work_ = 0.0;
+  kick_work_ = provider_work_ = friction_work_ = 0.0;
   kick(0.5 * dt);     // v(n+1/2) = v(n) + dt/2 f(n) / m, then the imposed velocities
   drift(dt);          // x(n+1) = x(n) + dt v(n+1/2)
   for (auto *provider : providers_) // external forces at x(n+1): contact, coupling
-    provider->addForces(m_, time_ + dt);
+    provider->addForces(m_, time_ + dt, dt);
   updateActivity();   // bodies the providers woke take part
   internalForces(dt); // stresses at n+1, f(n+1), the next stable step
   kick(0.5 * dt);     // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
@@ -118,77 +121,95 @@ void Solver::updateActivity() {
     units_.back().second = chunks_.size();
   }
   sums_.resize(chunks_.size());
-  node_sums_.resize(node_ranges_.size());
+  node_sums_.resize(3 * node_ranges_.size());
   if (any_averaged_)
     node_jacobian_.resize(m_.nodes.size(), 1.0);
 }
 
 void Solver::kick(double half_dt) {
   Nodes &nd = m_.nodes;
+  const double gx = s_.gravity_x, gy = s_.gravity_y;
   const long blocks = static_cast<long>(node_ranges_.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (blocks > 1)
   for (long i = 0; i < blocks; ++i) {
-    double work = 0.0; // of the external forces over this half step
+    // Work over this half step, force . mean velocity: providers', its frictional part, gravity's.
+    double provider = 0.0, friction = 0.0, gravity = 0.0;
     for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
       const double vx = nd.vx[a] + half_dt * nd.fx[a] * inv_mass_[a];
       const double vy = nd.vy[a] + half_dt * nd.fy[a] * inv_mass_[a];
-      work += half_dt * (nd.fx_ext[a] * 0.5 * (nd.vx[a] + vx) + nd.fy_ext[a] * 0.5 * (nd.vy[a] + vy));
+      const double mean_vx = 0.5 * (nd.vx[a] + vx), mean_vy = 0.5 * (nd.vy[a] + vy);
+      provider += nd.fx_ext[a] * mean_vx + nd.fy_ext[a] * mean_vy;
+      friction += nd.fx_friction[a] * mean_vx + nd.fy_friction[a] * mean_vy;
+      gravity += nd.mass[a] * (gx * mean_vx + gy * mean_vy);
       kick_dvx_[a] = vx - nd.vx[a], kick_dvy_[a] = vy - nd.vy[a];
       nd.vx[a] = vx, nd.vy[a] = vy;
     }
-    node_sums_[i] = work;
+    node_sums_[3 * i] = half_dt * provider;
+    node_sums_[3 * i + 1] = half_dt * friction;
+    node_sums_[3 * i + 2] = half_dt * gravity;
   }
-  for (long i = 0; i < blocks; ++i)
-    kick_work_ += node_sums_[i];
+  for (long i = 0; i < blocks; ++i) {
+    provider_work_ += node_sums_[3 * i];
+    friction_work_ += node_sums_[3 * i + 1];
+    kick_work_ += node_sums_[3 * i + 2];
+  }
   applyConstraints(half_dt);
 }
 
-// Imposed velocities; the reactions' work, impulse . mean velocity, is external work.
+// Imposed velocities; the reactions' work, impulse . mean velocity, is external work. The kick
+// took the work of the other external forces at the velocity before the constraint: corrected.
 void Solver::applyConstraints(double half_dt) {
   Nodes &nd = m_.nodes;
+  auto impose = [&](std::uint32_t a, double &v, double &dv, double target, double f, double f_ext,
+                    double f_friction, double gravity) {
+    const double before = v - half_dt * f * inv_mass_[a];
+    kick_work_ += nd.mass[a] * (target - v) * 0.5 * (before + target);
+    const double shift = 0.5 * half_dt * (target - v); // mean velocity change x half_dt
+    provider_work_ += f_ext * shift;
+    friction_work_ += f_friction * shift;
+    kick_work_ += nd.mass[a] * gravity * shift;
+    dv = target - before;
+    v = target;
+  };
   for (const auto &c : m_.constraints)
     for (std::uint32_t a : c.nodes) {
       if (m_.bodies[nd.body[a]].at_rest)
         continue;
-      if (c.constrain_x) {
-        const double before = nd.vx[a] - half_dt * nd.fx[a] * inv_mass_[a];
-        kick_work_ += nd.mass[a] * (c.vx - nd.vx[a]) * 0.5 * (before + c.vx);
-        kick_dvx_[a] = c.vx - before;
-        nd.vx[a] = c.vx;
-      }
-      if (c.constrain_y) {
-        const double before = nd.vy[a] - half_dt * nd.fy[a] * inv_mass_[a];
-        kick_work_ += nd.mass[a] * (c.vy - nd.vy[a]) * 0.5 * (before + c.vy);
-        kick_dvy_[a] = c.vy - before;
-        nd.vy[a] = c.vy;
-      }
+      if (c.constrain_x)
+        impose(a, nd.vx[a], kick_dvx_[a], c.vx, nd.fx[a], nd.fx_ext[a], nd.fx_friction[a],
+               s_.gravity_x);
+      if (c.constrain_y)
+        impose(a, nd.vy[a], kick_dvy_[a], c.vy, nd.fy[a], nd.fy_ext[a], nd.fy_friction[a],
+               s_.gravity_y);
     }
 }
 
 void Solver::drift(double dt) {
   Nodes &nd = m_.nodes;
   const long blocks = static_cast<long>(node_ranges_.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (blocks > 1)
   for (long i = 0; i < blocks; ++i)
     for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
       nd.x[a] += dt * nd.vx[a];
       nd.y[a] += dt * nd.vy[a];
       nd.fx_ext[a] = nd.fy_ext[a] = 0.0; // providers add this step's external forces
+      nd.fx_friction[a] = nd.fy_friction[a] = 0.0;
     }
 }
 
 void Solver::internalForces(double dt) {
-  // The external forces first; the elements add theirs.
+  // The external forces and gravity first; the elements add theirs.
   Nodes &nd = m_.nodes;
+  const double gx = s_.gravity_x, gy = s_.gravity_y;
   const long blocks = static_cast<long>(node_ranges_.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (blocks > 1)
   for (long i = 0; i < blocks; ++i)
     for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a)
-      nd.fx[a] = nd.fx_ext[a], nd.fy[a] = nd.fy_ext[a];
+      nd.fx[a] = nd.fx_ext[a] + nd.mass[a] * gx, nd.fy[a] = nd.fy_ext[a] + nd.mass[a] * gy;
   if (any_averaged_)
     nodalVolumes();
   const long units = static_cast<long>(units_.size());
-#pragma omp parallel for schedule(dynamic)
+#pragma omp parallel for schedule(dynamic) if (units > 1)
   for (long u = 0; u < units; ++u)
     for (std::size_t i = units_[u].first; i < units_[u].second; ++i)
       elementPass(chunks_[i], dt, sums_[i]);
@@ -217,12 +238,12 @@ void Solver::nodalVolumes() {
   const Nodes &nd = m_.nodes;
   const Elements &el = m_.elements;
   const long blocks = static_cast<long>(node_ranges_.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (blocks > 1)
   for (long i = 0; i < blocks; ++i)
     for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a)
       node_jacobian_[a] = 0.0;
   const long units = static_cast<long>(units_.size());
-#pragma omp parallel for schedule(dynamic)
+#pragma omp parallel for schedule(dynamic) if (units > 1)
   for (long u = 0; u < units; ++u)
     for (std::size_t i = units_[u].first; i < units_[u].second; ++i) {
       if (!chunks_[i].averaged_volume)
@@ -234,7 +255,7 @@ void Solver::nodalVolumes() {
         node_jacobian_[a] += third, node_jacobian_[b] += third, node_jacobian_[c] += third;
       }
     }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (blocks > 1)
   for (long i = 0; i < blocks; ++i)
     for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a)
       node_jacobian_[a] /= nd.area0[a];
@@ -317,9 +338,10 @@ void Solver::elementPass(const Chunk &chunk, double dt, ChunkSums &sums) {
     const double comp = std::max(-(dxx[i] + dyy[i]), 0.0);
     const double rho = rho0 * el.area0[e] / el.area[e];
     const double q = rho * len[i] * comp * (cq * len[i] * comp + cl * cs[i]);
+    const double q_work = -0.5 * (el.viscosity[e] + q) * dvol[i]; // trapezoid, as the stress
     el.viscosity[e] = q;
-    el.energy[e] -= q * dvol[i];
-    viscous -= q * dvol[i];
+    el.energy[e] += q_work;
+    viscous += q_work;
     internal += el.energy[e];
     const double pq = el.pressure[e] + q;
     const double sxx = el.sxx[e] - pq, syy = el.syy[e] - pq, sxy = el.sxy[e];
@@ -368,8 +390,10 @@ void Solver::accountEnergy() {
   energy_.internal = internal;
   energy_.plastic += plastic;
   energy_.viscous += viscous;
+  energy_.friction -= friction_work_;
+  energy_.contact -= provider_work_ - friction_work_;
   energy_.external += kick_work_;
-  const double total = kinetic + internal;
+  const double total = kinetic + internal + energy_.friction + energy_.contact;
   const double scale = std::max({std::abs(total), std::abs(energy_.initial), std::abs(energy_.external)});
   energy_.balance_error = scale > 0.0 ? (total - energy_.initial - energy_.external) / scale : 0.0;
 }

@@ -20,23 +20,29 @@ struct SolverSettings {
   double viscosity_quadratic = 4.0; // C_Q (thesis Table 3.1)
   bool anti_locking = true;         // averaged nodal volume in bodies with plastic flow
   double max_dt = std::numeric_limits<double>::infinity();
+  double gravity_x = 0.0, gravity_y = 0.0; // body force per unit mass [m/s^2]
   std::size_t chunk = 256;          // elements per material batch
 };
 
-// Energies per metre of depth [J/m]. Internal includes the plastic and viscous work done; the
-// balance error is (kinetic + internal - external work - initial) over the largest of the total
-// energy and the external work (0 when nothing moves).
+// Energies per metre of depth [J/m]. Internal includes the plastic and viscous work done.
+// Friction is the energy the frictional forces took out (minus their work), contact the energy the
+// normal contact forces took out (held in the penalty springs or dissipated by their damping);
+// external is the work of the imposed velocities and of gravity. The balance error is
+//   (kinetic + internal + friction + contact - external - initial) / max(|total|, initial, |external|)
+// (0 when nothing moves).
 struct Energy {
-  double kinetic = 0, internal = 0, plastic = 0, viscous = 0, external = 0;
+  double kinetic = 0, internal = 0, plastic = 0, viscous = 0, friction = 0, contact = 0,
+         external = 0;
   double initial = 0, balance_error = 0;
 };
 
 // Something that adds external nodal forces at x(n+1) before the second half-kick (contact,
-// coupling). It must wake every body it loads.
+// coupling): into Nodes::fx_ext, fy_ext, and their frictional part also into fx_friction,
+// fy_friction. It must wake every body it loads. `dt` is the step being taken.
 class ForceProvider {
 public:
   virtual ~ForceProvider() = default;
-  virtual void addForces(Model &model, double time) = 0;
+  virtual void addForces(Model &model, double time, double dt) = 0;
 };
 
 // A run that cannot go on (an inverted element); the message says which element and when.
@@ -101,7 +107,8 @@ private:
   double time_ = 0.0, dt_ = 0.0, next_dt_ = 0.0;
   std::size_t steps_ = 0;
   Energy energy_;
-  double kick_work_ = 0.0; // external work of the constraints and providers, this step
+  // Work of this step: constraints and gravity; providers' forces; their frictional part.
+  double kick_work_ = 0.0, provider_work_ = 0.0, friction_work_ = 0.0;
 };
 
 } // namespace mesopen::fem

@@ -1,0 +1,98 @@
+// Frictional contact between bodies and with the rigid walls of the box (thesis section 3;
+// MODELS.md "Contact"). Every step, at x(n+1):
+//   - broad phase: the bodies' bounding boxes in a uniform grid give the pairs of bodies whose boxes
+//     overlap (at least one of them moving);
+//   - narrow phase, node to segment both ways: a boundary node of one body inside the other is
+//     pushed out through the closest boundary segment (depth d, outward normal n), and the reaction
+//     goes to the segment's two nodes by the linear weights of the contact point;
+//   - normal force: a penalty tied to the nodal masses and the step, with damping on approach,
+//       f_n = max(0, m_eff / dt (kappa d / dt + 2 zeta sqrt(kappa) v_approach)),
+//       m_eff = m_node m_seg / (m_node + m_seg)
+//     kappa = 1, zeta = 1/2 would be f_n = m_eff (d + v_approach dt) / dt^2, the force that closes
+//     in one step the penetration two free nodes would reach at the next step (a kinematic
+//     constraint). Two nodes that meet are pushed apart by both passes, which doubles the
+//     stiffness: a head-on impact stays stable up to kappa = 0.5 and breaks its mirror symmetry
+//     from 0.7 (tests/verification/contact.cpp); the default is 0.5;
+//   - Coulomb friction against the relative tangential velocity v_t:
+//       f_t = min(mu f_n, m_eff |v_t| / dt)
+//     (sliding at mu f_n; the second term is the force that stops the slip in one step: sticking).
+// Forces go into Nodes::fx_ext, fy_ext (the frictional part also into fx_friction, fy_friction),
+// so that the solver accounts their work as contact and friction energy. Bodies that are loaded
+// are woken; pairs of bodies that both rest are not searched.
+#pragma once
+
+#include "solver.hpp"
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace mesopen::fem {
+
+struct ContactSettings {
+  // Coulomb coefficient per pair of materials (Model::materials indices), n x n row-major; a
+  // single value applies to every pair.
+  std::vector<double> friction{0.3};
+  double wall_friction = 0.3;
+  double stiffness = 0.5; // kappa: penalty k = kappa m_eff / dt^2
+  double damping = 0.5;   // zeta: fraction of the contact spring's critical damping
+  // Rigid walls, each a half-plane the nodes stay on the inside of (NaN: no wall).
+  double wall_left = std::numeric_limits<double>::quiet_NaN();   // x >= wall_left
+  double wall_right = std::numeric_limits<double>::quiet_NaN();  // x <= wall_right
+  double wall_bottom = std::numeric_limits<double>::quiet_NaN(); // y >= wall_bottom
+};
+
+struct ContactStatistics {
+  std::size_t pairs = 0, contacts = 0;   // this step: body pairs searched, nodes in contact
+  double depth = 0.0;                    // this step: deepest penetration / element size
+  double max_depth = 0.0;                // the same, over the run
+  std::size_t deep = 0;                  // over the run: node-steps deeper than half an element
+  double seconds = 0.0;                  // wall time spent in contact, over the run
+};
+
+class Contact final : public ForceProvider {
+public:
+  Contact(const Model &model, ContactSettings settings);
+  void addForces(Model &model, double time, double dt) override;
+  const ContactStatistics &statistics() const { return stats_; }
+
+  // One contact force: on `node`, and minus it on the segment's nodes by weights w1, w2 (no
+  // segment for a wall).
+  struct Hit {
+    std::uint32_t node, s1, s2;
+    double w1, w2, fx, fy, friction_x, friction_y, depth; // depth / element size
+  };
+
+private:
+  struct Box {
+    double x0, y0, x1, y1;
+  };
+  struct Segment {
+    std::uint32_t a, b;
+    double ax, ay, tx, ty, length, nx, ny; // start, unit tangent, length, outward normal
+  };
+
+  void updateBoxes(const Model &model);
+  void findPairs(const Model &model);
+  void touch(const Model &model, std::size_t A, std::size_t B, double dt, std::vector<Hit> &hits,
+             std::vector<Segment> &scratch) const;
+  void walls(const Model &model, double dt, std::vector<Hit> &hits) const;
+  void hit(const Model &model, std::uint32_t node, std::uint32_t s1, std::uint32_t s2, double w2,
+           double nx, double ny, double depth, double mu, double dt, std::vector<Hit> &hits) const;
+
+  ContactSettings s_;
+  std::size_t n_materials_;
+  std::vector<std::size_t> node_begin_, segment_begin_; // per body, into nodes_ and segments_
+  std::vector<std::uint32_t> nodes_;                    // boundary nodes, body by body
+  std::vector<std::uint32_t> segments_;                 // boundary edges (node pairs, ccw)
+  std::vector<double> size_;                            // per body: longest boundary edge [m]
+  std::vector<Box> boxes_;
+  std::vector<char> box_valid_;
+  double cell_ = 0.0;
+  std::vector<std::uint32_t> cell_start_, cell_bodies_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs_;
+  std::vector<std::vector<Hit>> thread_hits_;
+  ContactStatistics stats_;
+};
+
+} // namespace mesopen::fem

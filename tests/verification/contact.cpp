@@ -1,0 +1,159 @@
+// Frictional contact against exact answers: Coulomb sliding, a symmetric impact, impenetrability.
+#include "contact.hpp"
+#include "meshes.hpp"
+#include "solver.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+
+using namespace mesopen;
+using test::TestMesh;
+
+namespace {
+
+std::vector<std::uint32_t> bodyNodes(const fem::Model &model, std::size_t b) {
+  std::vector<std::uint32_t> nodes(model.bodies[b].node_end - model.bodies[b].node_begin);
+  std::iota(nodes.begin(), nodes.end(), static_cast<std::uint32_t>(model.bodies[b].node_begin));
+  return nodes;
+}
+
+// Deceleration of an elastic block sliding under gravity g on a fixed surface (a fixed body, or a
+// rigid wall) with Coulomb friction mu, from v0 until before it stops.
+struct Sliding {
+  double deceleration, balance_error, friction_energy, kinetic_lost;
+};
+Sliding slide(bool on_wall, double mu) {
+  const double g = 1e4, v0 = 1.0, width = 4e-3, height = 2e-3;
+  TestMesh mesh;
+  mesh.addRectangle(0, 0, width, height, 8, 4, 0.2, 3);
+  if (!on_wall)
+    mesh.addRectangle(-2e-3, -1e-3, 12e-3, 1e-3, 24, 2, 0.2, 4);
+  fem::Model model = mesh.model(test::oneMaterial("quartz-elastic"));
+  if (!on_wall)
+    model.constraints.push_back({"surface", bodyNodes(model, 1), true, true, 0.0, 0.0});
+  fem::setBodyVelocity(model, 0, v0, 0.0);
+  fem::ContactSettings cs;
+  cs.friction = {mu};
+  cs.wall_friction = mu;
+  if (on_wall)
+    cs.wall_bottom = 0.0;
+  fem::Contact contact(model, cs);
+  fem::Solver solver(model, {.gravity_y = -g});
+  solver.addForceProvider(&contact);
+  const double kinetic0 = solver.energy().kinetic;
+  const double end = 0.7 * v0 / (0.3 * g); // well before it stops at mu = 0.3
+  while (solver.time() < end)
+    solver.step();
+  const fem::BodyMotion m = fem::bodyMotion(model, 0);
+  return {(v0 - m.px / m.mass) / solver.time(), solver.energy().balance_error,
+          solver.energy().friction, kinetic0 - solver.energy().kinetic};
+}
+
+} // namespace
+
+// A block sliding on a fixed surface decelerates at mu g. Its vertical bouncing after gravity is
+// switched on moves the mean normal force by |dPy| / (m g t), a few 1e-4 here; tolerance 1 %
+// (the issue's).
+TEST(Contact, SlidingBlockDeceleratesAtMuG) {
+  for (bool on_wall : {false, true}) {
+    const Sliding s = slide(on_wall, 0.3);
+    EXPECT_NEAR(s.deceleration / (0.3 * 1e4), 1.0, 0.01) << (on_wall ? "on a wall" : "on a body");
+    EXPECT_LT(std::abs(s.balance_error), 1e-3);
+    EXPECT_GT(s.friction_energy, 0.0);
+    std::printf("sliding on %s: deceleration / (mu g) = %.5f, balance error %.2e\n",
+                on_wall ? "a wall" : "a fixed body", s.deceleration / (0.3 * 1e4), s.balance_error);
+  }
+  EXPECT_LT(std::abs(slide(false, 0.0).deceleration), 1e-3 * 0.3 * 1e4); // frictionless: no drag
+}
+
+// Two identical grains, one the mirror image of the other, meet head on: the motion stays a
+// mirror image and the total momentum stays zero. Tolerance: round-off accumulated over the steps
+// (1e-9 of the velocity scale; the impact is at 200 m/s and leaves the grains plastically
+// deformed).
+TEST(Contact, SymmetricHeadOnImpact) {
+  TestMesh mesh;
+  mesh.addRectangle(-0.11e-3, -0.05e-3, 0.1e-3, 0.1e-3, 8, 8, 0.3, 11);
+  const std::size_t n = mesh.x.size();
+  // The mirror image x -> -x, triangles turned back to counter-clockwise.
+  for (std::size_t a = 0; a < n; ++a)
+    mesh.x.push_back(-mesh.x[a]), mesh.y.push_back(mesh.y[a]);
+  const std::size_t t = mesh.tri.size();
+  for (std::size_t k = 0; k < t; k += 3)
+    mesh.tri.insert(mesh.tri.end(), {static_cast<std::uint32_t>(mesh.tri[k] + n),
+                                     static_cast<std::uint32_t>(mesh.tri[k + 2] + n),
+                                     static_cast<std::uint32_t>(mesh.tri[k + 1] + n)});
+  mesh.node_offset.push_back(2 * n);
+  mesh.tri_offset.push_back(2 * t / 3);
+  fem::Model model = mesh.model(test::oneMaterial("quartz"));
+  const double v = 200.0;
+  fem::setBodyVelocity(model, 0, v, 0.0);
+  fem::setBodyVelocity(model, 1, -v, 0.0);
+  fem::Contact contact(model, {});
+  fem::Solver solver(model, {});
+  solver.addForceProvider(&contact);
+  double worst_mirror = 0.0, worst_momentum = 0.0, mass = 0.0;
+  for (std::size_t a = 0; a < model.nodes.size(); ++a)
+    mass += model.nodes.mass[a];
+  const fem::Nodes &nd = model.nodes;
+  while (solver.time() < 0.1e-6) {
+    solver.step();
+    for (std::size_t a = 0; a < n; ++a)
+      worst_mirror = std::max({worst_mirror, std::abs(nd.vx[a] + nd.vx[a + n]) / v,
+                               std::abs(nd.vy[a] - nd.vy[a + n]) / v,
+                               std::abs(nd.x[a] + nd.x[a + n]) / 0.1e-3,
+                               std::abs(nd.y[a] - nd.y[a + n]) / 0.1e-3});
+    double px = 0.0, py = 0.0;
+    for (std::size_t a = 0; a < nd.size(); ++a)
+      px += nd.mass[a] * nd.vx[a], py += nd.mass[a] * nd.vy[a];
+    worst_momentum = std::max({worst_momentum, std::abs(px), std::abs(py)});
+  }
+  std::printf("head-on: mirror error %.2e, momentum %.2e of m v, max depth %.3f elements, "
+              "plastic work %.3g J/m\n",
+              worst_mirror, worst_momentum / (mass * v), contact.statistics().max_depth,
+              solver.energy().plastic);
+  EXPECT_GT(contact.statistics().max_depth, 0.0); // they did meet
+  EXPECT_GT(fem::bodyMotion(model, 0).px, -0.9 * fem::bodyMotion(model, 0).mass * v);
+  EXPECT_LT(worst_mirror, 1e-9);
+  EXPECT_LT(worst_momentum, 1e-12 * mass * v);
+}
+
+// A grain dropped on a rigid wall, corner first and face first, at 1 to 100 m/s: its nodes never
+// get further into the wall than 1 % of the element size (the bound). Penetration grows
+// with the speed: about 4 % corner first at 1000 m/s (printed, not asserted).
+TEST(Contact, DroppedGrainDoesNotPenetrateTheWall) {
+  for (double angle : {0.0, 0.6})
+    for (double speed : {1.0, 10.0, 100.0, 1000.0}) {
+      TestMesh mesh;
+      mesh.addRectangle(-30e-6, -30e-6, 60e-6, 60e-6, 6, 6, 0.2, 5);
+      for (std::size_t a = 0; a < mesh.x.size(); ++a) { // turned, lowest point just above y = 0
+        const double x = mesh.x[a], y = mesh.y[a];
+        mesh.x[a] = std::cos(angle) * x - std::sin(angle) * y;
+        mesh.y[a] = std::sin(angle) * x + std::cos(angle) * y;
+      }
+      const double lowest = *std::min_element(mesh.y.begin(), mesh.y.end());
+      for (double &y : mesh.y)
+        y += 1e-7 - lowest;
+      fem::Model model = mesh.model(test::oneMaterial("quartz"));
+      fem::setBodyVelocity(model, 0, 0.0, -speed);
+      fem::ContactSettings cs;
+      cs.wall_bottom = 0.0;
+      fem::Contact contact(model, cs);
+      fem::Solver solver(model, {.gravity_y = -9.81});
+      solver.addForceProvider(&contact);
+      double deepest = 0.0;
+      bool rebounded = false;
+      while (solver.time() < 3 * 60e-6 / 5000.0 + 2e-7 / speed && !rebounded) {
+        solver.step();
+        for (double y : model.nodes.y)
+          deepest = std::max(deepest, -y);
+        rebounded = fem::bodyMotion(model, 0).py > 0.0 && solver.time() > 1e-9;
+      }
+      std::printf("dropped at %5.1f m/s, angle %.1f: deepest %.2e m = %.4f elements, rebound %d\n",
+                  speed, angle, deepest, deepest / 10e-6, rebounded);
+      EXPECT_TRUE(rebounded);
+      if (speed <= 100.0)
+        EXPECT_LT(deepest, 0.01 * 10e-6) << speed << " m/s, angle " << angle;
+    }
+}
