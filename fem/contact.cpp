@@ -17,6 +17,7 @@ constexpr double deep = 0.5;        // penetration beyond this fraction of an el
 constexpr std::size_t max_cells = 1u << 22;
 
 bool overlap(double a0, double a1, double b0, double b1) { return a0 <= b1 && b0 <= a1; }
+double sq(double x) { return x * x; }
 } // namespace
 
 Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(settings)) {
@@ -28,7 +29,6 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
   const Nodes &nd = model.nodes;
   const std::size_t n_bodies = model.bodies.size();
   node_begin_.push_back(0), segment_begin_.push_back(0);
-  std::vector<double> extents;
   for (const Body &body : model.bodies) {
     std::vector<std::uint32_t> nodes(body.boundary.begin(), body.boundary.end());
     std::sort(nodes.begin(), nodes.end());
@@ -37,31 +37,45 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
     segments_.insert(segments_.end(), body.boundary.begin(), body.boundary.end());
     node_begin_.push_back(nodes_.size());
     segment_begin_.push_back(segments_.size() / 2);
-    double longest = 0.0, x0 = HUGE_VAL, x1 = -HUGE_VAL, y0 = HUGE_VAL, y1 = -HUGE_VAL;
+    double longest = 0.0;
     for (std::size_t k = 0; k + 1 < body.boundary.size(); k += 2) {
       const std::uint32_t a = body.boundary[k], b = body.boundary[k + 1];
-      longest = std::max(longest, std::hypot(nd.x[b] - nd.x[a], nd.y[b] - nd.y[a]));
+      longest = std::max(longest, std::sqrt(sq(nd.x[b] - nd.x[a]) + sq(nd.y[b] - nd.y[a])));
     }
-    for (std::uint32_t a : nodes)
-      x0 = std::min(x0, nd.x[a]), x1 = std::max(x1, nd.x[a]), y0 = std::min(y0, nd.y[a]),
-      y1 = std::max(y1, nd.y[a]);
     size_.push_back(longest);
-    if (!nodes.empty())
-      extents.push_back(std::max(x1 - x0, y1 - y0));
   }
+  geometry_.resize(segments_.size() / 2);
+  boxes_.resize(n_bodies);
+  for (std::size_t b = 0; b < n_bodies; ++b)
+    measure(model, b);
   // Grid cells about twice the typical body: a grain sits in at most four cells.
+  std::vector<double> extents;
+  for (std::size_t b = 0; b < n_bodies; ++b)
+    if (node_begin_[b] < node_begin_[b + 1])
+      extents.push_back(std::max(boxes_[b].x1 - boxes_[b].x0, boxes_[b].y1 - boxes_[b].y0));
   if (!extents.empty()) {
     std::nth_element(extents.begin(), extents.begin() + extents.size() / 2, extents.end());
     cell_ = 2.0 * extents[extents.size() / 2];
   }
-  boxes_.resize(n_bodies);
-  box_valid_.assign(n_bodies, 0);
+  // The bodies at rest now, in a grid that stays: a body at rest does not move.
+  std::vector<std::uint32_t> resting;
+  for (std::size_t b = 0; b < n_bodies; ++b)
+    if (model.bodies[b].at_rest && node_begin_[b] < node_begin_[b + 1])
+      resting.push_back(static_cast<std::uint32_t>(b));
+  rest_grid_.build(boxes_, resting, cell_);
   thread_hits_.resize(static_cast<std::size_t>(omp_get_max_threads()));
 }
 
 void Contact::addForces(Model &model, double, double dt) {
   const auto start = std::chrono::steady_clock::now();
-  updateBoxes(model);
+  moving_.clear();
+  for (std::size_t b = 0; b < model.bodies.size(); ++b)
+    if (!model.bodies[b].at_rest && node_begin_[b] < node_begin_[b + 1])
+      moving_.push_back(static_cast<std::uint32_t>(b));
+  const long n_moving = static_cast<long>(moving_.size());
+#pragma omp parallel for schedule(static) if (n_moving > 64)
+  for (long i = 0; i < n_moving; ++i)
+    measure(model, moving_[i]);
   findPairs(model);
 
   // Narrow phase: each thread takes a contiguous run of pairs, so that the hits, taken thread by
@@ -77,10 +91,10 @@ void Contact::addForces(Model &model, double, double dt) {
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
     const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
     std::vector<Hit> &hits = thread_hits_[t];
-    std::vector<Segment> scratch;
+    std::vector<std::uint32_t> near;
     for (std::size_t i = n_pairs * t / T; i < n_pairs * (t + 1) / T; ++i) {
-      touch(model, pairs_[i].first, pairs_[i].second, dt, hits, scratch);
-      touch(model, pairs_[i].second, pairs_[i].first, dt, hits, scratch);
+      touch(model, pairs_[i].first, pairs_[i].second, dt, hits, near);
+      touch(model, pairs_[i].second, pairs_[i].first, dt, hits, near);
     }
     if (t + 1 == T)
       walls(model, dt, hits);
@@ -111,107 +125,122 @@ void Contact::addForces(Model &model, double, double dt) {
   stats_.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// Bounding boxes of the boundary nodes: of every moving body; of a body at rest once.
-void Contact::updateBoxes(const Model &model) {
+// A body's bounding box and its boundary segments' geometry at the current positions.
+void Contact::measure(const Model &model, std::size_t b) {
   const Nodes &nd = model.nodes;
-  const long n = static_cast<long>(model.bodies.size());
-#pragma omp parallel for schedule(static) if (n > 256)
-  for (long b = 0; b < n; ++b) {
-    if (model.bodies[b].at_rest && box_valid_[b])
-      continue;
-    Box box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-    for (std::size_t k = node_begin_[b]; k < node_begin_[b + 1]; ++k) {
-      const std::uint32_t a = nodes_[k];
-      box.x0 = std::min(box.x0, nd.x[a]), box.x1 = std::max(box.x1, nd.x[a]);
-      box.y0 = std::min(box.y0, nd.y[a]), box.y1 = std::max(box.y1, nd.y[a]);
-    }
-    boxes_[b] = box;
-    box_valid_[b] = 1;
+  Box box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (std::size_t k = node_begin_[b]; k < node_begin_[b + 1]; ++k) {
+    const std::uint32_t a = nodes_[k];
+    box.x0 = std::min(box.x0, nd.x[a]), box.x1 = std::max(box.x1, nd.x[a]);
+    box.y0 = std::min(box.y0, nd.y[a]), box.y1 = std::max(box.y1, nd.y[a]);
+  }
+  boxes_[b] = box;
+  for (std::size_t k = segment_begin_[b]; k < segment_begin_[b + 1]; ++k) {
+    const std::uint32_t s1 = segments_[2 * k], s2 = segments_[2 * k + 1];
+    const double ax = nd.x[s1], ay = nd.y[s1], dx = nd.x[s2] - ax, dy = nd.y[s2] - ay;
+    const double length = std::sqrt(dx * dx + dy * dy), inv = length > 0.0 ? 1.0 / length : 0.0;
+    // outward normal: the tangent turned right (the boundary runs counter-clockwise)
+    geometry_[k] = {ax, ay, dx * inv, dy * inv, length, dy * inv, -dx * inv};
   }
 }
 
-// Broad phase: the boxes in a uniform grid (cell lists); a pair of bodies whose boxes overlap is
-// taken once, in the cell that holds the lower-left corner of the overlap.
+std::size_t Contact::Grid::ix(double x) const {
+  const double i = std::floor((x - x0) / cell);
+  return i <= 0.0 ? 0 : std::min(static_cast<std::size_t>(i), nx - 1);
+}
+std::size_t Contact::Grid::iy(double y) const {
+  const double j = std::floor((y - y0) / cell);
+  return j <= 0.0 ? 0 : std::min(static_cast<std::size_t>(j), ny - 1);
+}
+
+// Cell lists of the bodies `which` (counting sort: cell by cell, bodies in the given order).
+void Contact::Grid::build(const std::vector<Box> &boxes, const std::vector<std::uint32_t> &which,
+                          double cell_size) {
+  double xa = HUGE_VAL, ya = HUGE_VAL, xb = -HUGE_VAL, yb = -HUGE_VAL;
+  for (std::uint32_t b : which) {
+    xa = std::min(xa, boxes[b].x0), xb = std::max(xb, boxes[b].x1);
+    ya = std::min(ya, boxes[b].y0), yb = std::max(yb, boxes[b].y1);
+  }
+  nx = ny = 0;
+  start.assign(1, 0);
+  bodies.clear();
+  if (which.empty() || !(cell_size > 0.0))
+    return;
+  x0 = xa, y0 = ya, cell = cell_size;
+  // A body flung far away must not make the grid huge: coarser cells then.
+  while (((xb - xa) / cell + 1) * ((yb - ya) / cell + 1) > static_cast<double>(max_cells))
+    cell *= 2.0;
+  nx = static_cast<std::size_t>((xb - xa) / cell) + 1;
+  ny = static_cast<std::size_t>((yb - ya) / cell) + 1;
+  start.assign(nx * ny + 1, 0);
+  for (std::uint32_t b : which)
+    for (std::size_t j = iy(boxes[b].y0); j <= iy(boxes[b].y1); ++j)
+      for (std::size_t i = ix(boxes[b].x0); i <= ix(boxes[b].x1); ++i)
+        ++start[j * nx + i + 1];
+  for (std::size_t c = 0; c < nx * ny; ++c)
+    start[c + 1] += start[c];
+  bodies.resize(start.back());
+  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+  for (std::uint32_t b : which)
+    for (std::size_t j = iy(boxes[b].y0); j <= iy(boxes[b].y1); ++j)
+      for (std::size_t i = ix(boxes[b].x0); i <= ix(boxes[b].x1); ++i)
+        bodies[fill[j * nx + i]++] = b;
+}
+
+// Broad phase: pairs of bodies whose boxes overlap, at least one of them moving; each pair taken
+// once, in the cell that holds the lower-left corner of the overlap. Moving bodies meet each other
+// in a grid built every step, and the bodies at rest in the grid built at the start.
 void Contact::findPairs(const Model &model) {
   pairs_.clear();
-  const std::size_t n = model.bodies.size();
-  double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
-  for (std::size_t b = 0; b < n; ++b)
-    if (node_begin_[b] < node_begin_[b + 1]) {
-      x0 = std::min(x0, boxes_[b].x0), x1 = std::max(x1, boxes_[b].x1);
-      y0 = std::min(y0, boxes_[b].y0), y1 = std::max(y1, boxes_[b].y1);
-    }
-  if (!(x1 >= x0) || !(cell_ > 0.0))
-    return;
-  double cell = cell_;
-  // A body flung far away must not make the grid huge: coarser cells then.
-  while (((x1 - x0) / cell + 1) * ((y1 - y0) / cell + 1) > static_cast<double>(max_cells))
-    cell *= 2.0;
-  const auto nx = static_cast<std::size_t>((x1 - x0) / cell) + 1;
-  const auto ny = static_cast<std::size_t>((y1 - y0) / cell) + 1;
-  auto ix = [&](double x) { return std::min(static_cast<std::size_t>((x - x0) / cell), nx - 1); };
-  auto iy = [&](double y) { return std::min(static_cast<std::size_t>((y - y0) / cell), ny - 1); };
-  cell_start_.assign(nx * ny + 1, 0);
-  for (int pass = 0; pass < 2; ++pass) {
-    for (std::size_t b = 0; b < n; ++b) {
-      if (node_begin_[b] == node_begin_[b + 1])
-        continue;
-      const Box &box = boxes_[b];
-      for (std::size_t j = iy(box.y0); j <= iy(box.y1); ++j)
-        for (std::size_t i = ix(box.x0); i <= ix(box.x1); ++i) {
-          if (pass == 0)
-            ++cell_start_[j * nx + i + 1];
-          else
-            cell_bodies_[cell_start_[j * nx + i]++] = static_cast<std::uint32_t>(b);
-        }
-    }
-    if (pass == 0) {
-      for (std::size_t c = 0; c < nx * ny; ++c)
-        cell_start_[c + 1] += cell_start_[c];
-      cell_bodies_.resize(cell_start_.back());
-    } else { // the fill moved each start to the next cell's: shift back
-      for (std::size_t c = nx * ny; c > 0; --c)
-        cell_start_[c] = cell_start_[c - 1];
-      cell_start_[0] = 0;
-    }
-  }
-  for (std::size_t c = 0; c < nx * ny; ++c)
-    for (std::size_t i = cell_start_[c]; i < cell_start_[c + 1]; ++i)
-      for (std::size_t j = i + 1; j < cell_start_[c + 1]; ++j) {
-        const std::uint32_t a = cell_bodies_[i], b = cell_bodies_[j];
-        if (model.bodies[a].at_rest && model.bodies[b].at_rest)
-          continue;
-        const Box &A = boxes_[a], &B = boxes_[b];
-        if (!overlap(A.x0, A.x1, B.x0, B.x1) || !overlap(A.y0, A.y1, B.y0, B.y1))
-          continue;
-        if (iy(std::max(A.y0, B.y0)) * nx + ix(std::max(A.x0, B.x0)) == c)
+  auto overlapping = [&](std::uint32_t a, std::uint32_t b) {
+    const Box &A = boxes_[a], &B = boxes_[b];
+    return overlap(A.x0, A.x1, B.x0, B.x1) && overlap(A.y0, A.y1, B.y0, B.y1);
+  };
+  moving_grid_.build(boxes_, moving_, cell_);
+  const Grid &g = moving_grid_;
+  for (std::size_t c = 0; c < g.nx * g.ny; ++c)
+    for (std::size_t i = g.start[c]; i < g.start[c + 1]; ++i)
+      for (std::size_t j = i + 1; j < g.start[c + 1]; ++j) {
+        const std::uint32_t a = g.bodies[i], b = g.bodies[j];
+        if (overlapping(a, b) &&
+            g.iy(std::max(boxes_[a].y0, boxes_[b].y0)) * g.nx +
+                    g.ix(std::max(boxes_[a].x0, boxes_[b].x0)) == c)
           pairs_.emplace_back(a, b);
       }
+  const Grid &r = rest_grid_;
+  if (r.nx == 0)
+    return;
+  for (std::uint32_t a : moving_) {
+    const Box &A = boxes_[a];
+    for (std::size_t j = r.iy(A.y0); j <= r.iy(A.y1); ++j)
+      for (std::size_t i = r.ix(A.x0); i <= r.ix(A.x1); ++i)
+        for (std::size_t k = r.start[j * r.nx + i]; k < r.start[j * r.nx + i + 1]; ++k) {
+          const std::uint32_t b = r.bodies[k];
+          if (model.bodies[b].at_rest && overlapping(a, b) &&
+              r.iy(std::max(A.y0, boxes_[b].y0)) == j && r.ix(std::max(A.x0, boxes_[b].x0)) == i)
+            pairs_.emplace_back(a, b);
+        }
+  }
 }
 
 // The boundary nodes of body A that are inside body B. A node inside B is in the overlap of the
 // two boxes; the segment that decides is the closest to it, within one element size of it.
 void Contact::touch(const Model &model, std::size_t A, std::size_t B, double dt,
-                    std::vector<Hit> &hits, std::vector<Segment> &segs) const {
+                    std::vector<Hit> &hits, std::vector<std::uint32_t> &near) const {
   const Nodes &nd = model.nodes;
   const Box &a = boxes_[A], &b = boxes_[B];
   const double rx0 = std::max(a.x0, b.x0), rx1 = std::min(a.x1, b.x1);
   const double ry0 = std::max(a.y0, b.y0), ry1 = std::min(a.y1, b.y1);
-  const double h = size_[B], reach = h;
-  segs.clear();
+  const double h = size_[B];
+  near.clear();
   for (std::size_t k = segment_begin_[B]; k < segment_begin_[B + 1]; ++k) {
-    const std::uint32_t s1 = segments_[2 * k], s2 = segments_[2 * k + 1];
-    const double ax = nd.x[s1], ay = nd.y[s1], bx = nd.x[s2], by = nd.y[s2];
-    if (std::max(ax, bx) < rx0 - reach || std::min(ax, bx) > rx1 + reach ||
-        std::max(ay, by) < ry0 - reach || std::min(ay, by) > ry1 + reach)
-      continue;
-    const double length = std::hypot(bx - ax, by - ay);
-    if (!(length > 0.0))
-      continue;
-    const double tx = (bx - ax) / length, ty = (by - ay) / length;
-    segs.push_back({s1, s2, ax, ay, tx, ty, length, ty, -tx}); // outward: the tangent turned right
+    const Segment &s = geometry_[k];
+    const double bx = s.ax + s.length * s.tx, by = s.ay + s.length * s.ty;
+    if (s.length > 0.0 && std::max(s.ax, bx) >= rx0 - h && std::min(s.ax, bx) <= rx1 + h &&
+        std::max(s.ay, by) >= ry0 - h && std::min(s.ay, by) <= ry1 + h)
+      near.push_back(static_cast<std::uint32_t>(k));
   }
-  if (segs.empty())
+  if (near.empty())
     return;
   const double mu = s_.friction[model.bodies[A].material * n_materials_ + model.bodies[B].material];
   for (std::size_t k = node_begin_[A]; k < node_begin_[A + 1]; ++k) {
@@ -222,18 +251,20 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, double dt,
     // The closest point of B's boundary: on a segment's inside (the node then lies on the normal
     // through it) or at a corner (the node is then outside a convex corner: no contact).
     double best = HUGE_VAL, depth = 0.0, along = 0.0;
-    const Segment *closest = nullptr;
-    for (const Segment &s : segs) {
+    std::uint32_t closest = no_node;
+    for (std::uint32_t i : near) {
+      const Segment &s = geometry_[i];
       const double dx = px - s.ax, dy = py - s.ay;
       const double t = dx * s.tx + dy * s.ty, g = dx * s.nx + dy * s.ny;
       const double excess = t < 0.0 ? -t : (t > s.length ? t - s.length : 0.0);
       const double distance = excess * excess + g * g;
       if (distance < best)
-        best = distance, closest = excess > 0.0 ? nullptr : &s, depth = -g, along = t;
+        best = distance, closest = excess > 0.0 ? no_node : i, depth = -g, along = t;
     }
-    if (!closest || depth <= touching * h)
+    if (closest == no_node || depth <= touching * h)
       continue;
-    hit(model, p, closest->a, closest->b, along / closest->length, closest->nx, closest->ny,
+    const Segment &s = geometry_[closest];
+    hit(model, p, segments_[2 * closest], segments_[2 * closest + 1], along / s.length, s.nx, s.ny,
         depth - touching * h, mu, dt, hits);
     hits.back().depth = depth / h;
   }
@@ -246,9 +277,7 @@ void Contact::walls(const Model &model, double dt, std::vector<Hit> &hits) const
              bottom = !std::isnan(s_.wall_bottom);
   if (!left && !right && !bottom)
     return;
-  for (std::size_t b = 0; b < model.bodies.size(); ++b) {
-    if (model.bodies[b].at_rest)
-      continue;
+  for (std::uint32_t b : moving_) {
     const double tol = touching * size_[b];
     for (std::size_t k = node_begin_[b]; k < node_begin_[b + 1]; ++k) {
       const std::uint32_t p = nodes_[k];
@@ -280,7 +309,7 @@ void Contact::hit(const Model &model, std::uint32_t p, std::uint32_t s1, std::ui
   const double vn = vx * nx + vy * ny; // > 0: separating
   const double kappa = s_.stiffness, c = 2.0 * s_.damping * std::sqrt(kappa);
   const double fn = std::max(0.0, m_eff / dt * (kappa * depth / dt - c * vn));
-  const double tx = vx - vn * nx, ty = vy - vn * ny, slip = std::hypot(tx, ty);
+  const double tx = vx - vn * nx, ty = vy - vn * ny, slip = std::sqrt(tx * tx + ty * ty);
   const double ft = slip > 0.0 ? std::min(mu * fn, m_eff * slip / dt) / slip : 0.0;
   hits.push_back({p, s1, s2, w1, w2, fn * nx - ft * tx, fn * ny - ft * ty, -ft * tx, -ft * ty, 0.0});
 }

@@ -68,14 +68,22 @@ private:
     double x0, y0, x1, y1;
   };
   struct Segment {
-    std::uint32_t a, b;
     double ax, ay, tx, ty, length, nx, ny; // start, unit tangent, length, outward normal
   };
+  // Bodies in a uniform grid of cells (cell lists), for the broad phase.
+  struct Grid {
+    double x0 = 0, y0 = 0, cell = 0;
+    std::size_t nx = 0, ny = 0;
+    std::vector<std::uint32_t> start, bodies;
+    std::size_t ix(double x) const;
+    std::size_t iy(double y) const;
+    void build(const std::vector<Box> &boxes, const std::vector<std::uint32_t> &which, double cell);
+  };
 
-  void updateBoxes(const Model &model);
+  void measure(const Model &model, std::size_t body);
   void findPairs(const Model &model);
   void touch(const Model &model, std::size_t A, std::size_t B, double dt, std::vector<Hit> &hits,
-             std::vector<Segment> &scratch) const;
+             std::vector<std::uint32_t> &near) const;
   void walls(const Model &model, double dt, std::vector<Hit> &hits) const;
   void hit(const Model &model, std::uint32_t node, std::uint32_t s1, std::uint32_t s2, double w2,
            double nx, double ny, double depth, double mu, double dt, std::vector<Hit> &hits) const;
@@ -85,11 +93,12 @@ private:
   std::vector<std::size_t> node_begin_, segment_begin_; // per body, into nodes_ and segments_
   std::vector<std::uint32_t> nodes_;                    // boundary nodes, body by body
   std::vector<std::uint32_t> segments_;                 // boundary edges (node pairs, ccw)
+  std::vector<Segment> geometry_;                       // of each boundary edge, this step
   std::vector<double> size_;                            // per body: longest boundary edge [m]
-  std::vector<Box> boxes_;
-  std::vector<char> box_valid_;
+  std::vector<Box> boxes_;                              // per body, this step
+  std::vector<std::uint32_t> moving_;                   // bodies not at rest, this step
   double cell_ = 0.0;
-  std::vector<std::uint32_t> cell_start_, cell_bodies_;
+  Grid rest_grid_, moving_grid_;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs_;
   std::vector<std::vector<Hit>> thread_hits_;
   ContactStatistics stats_;

@@ -1,6 +1,7 @@
 // mesopen run SCENE -o DIR: the target and the projectile of a scene as finite-element bodies,
 // integrated in time; run.h5 (series and frames), vtk/run.pvd, summary.json.
 #include "commands.hpp"
+#include "contact.hpp"
 #include "generator.hpp"
 #include "output.hpp"
 #include "projectile.hpp"
@@ -109,22 +110,39 @@ fem::Model buildRunModel(const Scene &scene, const Target *target, const PlacedP
   return model;
 }
 
+// Contact of the scene: Coulomb coefficients per pair of materials (0 the projectile's, 1 the
+// grains'), the box's left, right and bottom walls when there is a target.
+fem::ContactSettings contactSettings(const Scene &scene, bool walls) {
+  const ContactSpec &c = scene.contact;
+  fem::ContactSettings s;
+  s.friction = {0.0, c.projectile_friction, c.projectile_friction, c.friction};
+  s.wall_friction = c.friction; // grains meet the walls; the projectile does not reach them
+  s.stiffness = c.stiffness;
+  s.damping = c.damping;
+  if (walls)
+    s.wall_left = 0.0, s.wall_right = scene.target.width, s.wall_bottom = 0.0;
+  return s;
+}
+
 // One line on a terminal, rewritten in place at most four times a second: step, simulated time,
-// step size, speed and time left.
+// depth, step size, speed and time left (from the simulated time or the depth, whichever is
+// further along).
 class Progress {
 public:
-  Progress(bool on, double end_time) : on_(on), end_time_(end_time) {}
-  void show(const fem::Solver &solver) {
+  Progress(bool on, double end_time, double end_depth)
+      : on_(on), end_time_(end_time), end_depth_(end_depth) {}
+  void show(const fem::Solver &solver, double depth) {
     if (!on_ || Clock::now() - last_ < std::chrono::milliseconds(250))
       return;
     last_ = Clock::now();
     const double wall = secondsSince(start_), t = solver.time();
+    const double done = std::max(t / end_time_, end_depth_ > 0.0 ? depth / end_depth_ : 0.0);
     std::fprintf(stderr,
-                 "\r\033[Kmesopen run: step %zu, t = %.3f of %.3f ns, dt = %.3g ps, %.0f steps/s, "
-                 "ETA %.0f s",
-                 solver.steps(), 1e9 * t, 1e9 * end_time_, 1e12 * solver.dt(),
-                 solver.steps() / std::max(wall, 1e-9),
-                 std::max(0.0, wall * (end_time_ - t) / std::max(t, 1e-30)));
+                 "\r\033[Kmesopen run: step %zu, t = %.3f ns, depth %.3f mm, dt = %.3g ps, "
+                 "%.0f steps/s, %.0f %% done, ETA %.0f s",
+                 solver.steps(), 1e9 * t, 1e3 * depth, 1e12 * solver.dt(),
+                 solver.steps() / std::max(wall, 1e-9), 100.0 * done,
+                 std::max(0.0, wall * (1.0 - done) / std::max(done, 1e-30)));
   }
   void clear() const {
     if (on_)
@@ -133,37 +151,50 @@ public:
 
 private:
   bool on_;
-  double end_time_;
+  double end_time_, end_depth_;
   Clock::time_point start_ = Clock::now(), last_ = Clock::now();
 };
 
 struct LoopResult {
   std::string failure; // empty when the run reached its end
+  std::string end;     // what ended it: end_time, end_depth or max_steps
   double element_steps = 0.0;
   double seconds = 0.0, solver_seconds = 0.0; // the whole loop; the steps alone
 };
 
-// The time loop: step, sample the series, take frames, show progress; until run.end_time or
-// run.max_steps, or a failure (an inverted element, a frame that cannot be written).
-LoopResult timeLoop(const RunSpec &run, const fem::Model &model, fem::Solver &solver,
+// The time loop: step, sample the series, take frames, show progress; until run.end_time,
+// run.end_depth or run.max_steps, or a failure (an inverted element, a frame that cannot be
+// written).
+LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &solver,
                     Series &series, Frames &frames, Progress &progress) {
+  const RunSpec &run = scene.run;
   LoopResult result;
   const auto start = Clock::now();
   const auto max_steps = static_cast<std::size_t>(run.max_steps);
   const auto every = static_cast<std::size_t>(run.series_interval);
+  const double end_depth = run.end_depth * scene.projectile.length;
+  auto ended = [&] {
+    if (solver.time() >= run.end_time)
+      result.end = "end_time";
+    else if (end_depth > 0.0 && series.depth(model) >= end_depth)
+      result.end = "end_depth";
+    else if (solver.steps() >= max_steps)
+      result.end = "max_steps";
+    return !result.end.empty();
+  };
   try {
     series.sample(model, solver);
     frames.offer(model, solver, true);
-    while (solver.time() < run.end_time && solver.steps() < max_steps) {
+    while (!ended()) {
       const auto step_start = Clock::now();
       solver.step();
       result.solver_seconds += secondsSince(step_start);
       result.element_steps += static_cast<double>(solver.activeElements());
-      const bool last = solver.time() >= run.end_time || solver.steps() >= max_steps;
+      const bool last = ended();
       if (last || solver.steps() % every == 0)
         series.sample(model, solver);
       frames.offer(model, solver, last);
-      progress.show(solver);
+      progress.show(solver, series.depth(model));
     }
   } catch (const std::exception &e) {
     result.failure = e.what();
@@ -176,7 +207,7 @@ LoopResult timeLoop(const RunSpec &run, const fem::Model &model, fem::Solver &so
 // summary.json: what ran, how it ended, its figures and files.
 nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const fem::Model &model,
                           const fem::Solver &solver, const Series &series, const Frames &frames,
-                          const LoopResult &loop, double wall) {
+                          const LoopResult &loop, const fem::Contact *contact, double wall) {
   const fem::Energy &e = solver.energy();
   nlohmann::json j;
   j["command"] = "run";
@@ -195,6 +226,8 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
                 {"nodes", model.nodes.size()},
                 {"elements", model.elements.size()},
                 {"fixed_nodes", model.constraints.empty() ? 0 : model.constraints[0].nodes.size()}};
+  if (!loop.end.empty())
+    j["ended_by"] = loop.end;
   j["steps"] = solver.steps();
   j["time"] = solver.time();
   j["threads"] = omp_get_max_threads();
@@ -203,9 +236,23 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
   j["steps_per_second"] = solver.steps() / std::max(loop.seconds, 1e-9);
   j["solver_seconds"] = loop.solver_seconds;
   j["element_steps_per_second"] = loop.element_steps / std::max(loop.solver_seconds, 1e-9);
-  j["energy"] = {{"kinetic", e.kinetic},   {"internal", e.internal},
-                 {"plastic", e.plastic},   {"viscous", e.viscous},
-                 {"external", e.external}, {"balance_error", e.balance_error}};
+  // Bodies at rest are skipped: the element-steps computed, against every element every step.
+  j["element_steps"] = loop.element_steps;
+  j["active_element_share"] =
+      loop.element_steps / std::max(1.0, static_cast<double>(model.elements.size()) * solver.steps());
+  j["ns_per_element_step"] = 1e9 * loop.solver_seconds / std::max(loop.element_steps, 1.0);
+  j["energy"] = {{"kinetic", e.kinetic},   {"internal", e.internal},   {"plastic", e.plastic},
+                 {"viscous", e.viscous},   {"friction", e.friction},   {"contact", e.contact},
+                 {"external", e.external}, {"initial", e.initial},     {"balance_error", e.balance_error}};
+  if (contact) {
+    const fem::ContactStatistics &c = contact->statistics();
+    j["contact"] = {{"seconds", c.seconds},
+                    {"share_of_steps", c.seconds / std::max(loop.solver_seconds, 1e-9)},
+                    {"deepest_penetration_over_element_size", c.max_depth},
+                    {"deep_node_steps", c.deep},
+                    {"last_step_pairs", c.pairs},
+                    {"last_step_contacts", c.contacts}};
+  }
   j["projectile"] = {{"depth", series.last("projectile/depth")},
                      {"tilt", series.last("projectile/tilt")},
                      {"vx", series.last("projectile/vx")},
@@ -231,17 +278,24 @@ int simulate(const Scene &scene, const RunOptions &options, Clock::time_point st
   const PlacedProjectile projectile = placeProjectile(
       scene.projectile, scene.target.mesh_size, scene.target, target ? target->grains : no_grains);
   fem::Model model = buildRunModel(scene, target.get(), projectile);
+  const bool walls = target != nullptr;
   target.reset();
   fem::Solver solver(model, {.safety = run.safety,
                              .viscosity_linear = run.viscosity_linear,
                              .viscosity_quadratic = run.viscosity_quadratic,
                              .anti_locking = run.anti_locking});
+  std::unique_ptr<fem::Contact> contact;
+  if (scene.contact.enabled) {
+    contact = std::make_unique<fem::Contact>(model, contactSettings(scene, walls));
+    solver.addForceProvider(contact.get());
+  }
 
   H5File h5 = H5File::create(h5_path + ".tmp");
   Series series(model);
   Frames frames(h5, model, run.frame_interval, run.vtk ? dir + "/vtk" : std::string());
-  Progress progress(!options.quiet && isatty(STDERR_FILENO), run.end_time);
-  const LoopResult loop = timeLoop(run, model, solver, series, frames, progress);
+  Progress progress(!options.quiet && isatty(STDERR_FILENO), run.end_time,
+                    run.end_depth * scene.projectile.length);
+  const LoopResult loop = timeLoop(scene, model, solver, series, frames, progress);
 
   // Whatever happened, the files hold everything computed so far and are whole.
   series.write(h5);
@@ -257,7 +311,7 @@ int simulate(const Scene &scene, const RunOptions &options, Clock::time_point st
   frames.writeCollection();
   const double wall = secondsSince(start);
   writeJson(dir + "/summary.json",
-            runSummary(scene, options, model, solver, series, frames, loop, wall));
+            runSummary(scene, options, model, solver, series, frames, loop, contact.get(), wall));
 
   if (!loop.failure.empty()) {
     std::cerr << "mesopen run: failed at t = " << solver.time() << " s, step " << solver.steps()

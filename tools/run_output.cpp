@@ -35,11 +35,11 @@ const Series::Column series_columns[] = {
      {}},
     {"projectile/lateral_force",
      "N/m",
-     "sum of the external nodal forces, x (zero without contact)",
+     "contact force on the projectile, x (sum of its external nodal forces)",
      {}},
     {"projectile/axial_force",
      "N/m",
-     "sum of the external nodal forces, y (zero without contact)",
+     "contact force on the projectile, y (sum of its external nodal forces)",
      {}},
     {"projectile/tilt",
      "rad",
@@ -50,10 +50,16 @@ const Series::Column series_columns[] = {
     {"energy/internal", "J/m", "internal energy (includes the plastic and viscous work)", {}},
     {"energy/plastic", "J/m", "plastic work", {}},
     {"energy/viscous", "J/m", "work of the artificial viscosity", {}},
-    {"energy/external", "J/m", "work of the imposed velocities and external forces", {}},
+    {"energy/friction", "J/m", "energy the frictional contact forces took out (minus their work)", {}},
+    {"energy/contact",
+     "J/m",
+     "energy the normal contact forces took out: held in the penalty springs or dissipated",
+     {}},
+    {"energy/external", "J/m", "work of the imposed velocities (fixed nodes) and gravity", {}},
     {"energy/balance_error",
      "",
-     "(kinetic + internal - initial - external) / max(total, initial, external)",
+     "(kinetic + internal + friction + contact - initial - external) / max(|total|, initial, "
+     "|external|)",
      {}},
 };
 
@@ -150,6 +156,13 @@ double Series::last(const std::string &name) const {
   return NAN;
 }
 
+double Series::depth(const fem::Model &model) const {
+  double lowest = HUGE_VAL;
+  for (std::size_t a = model.bodies[0].node_begin; a < model.bodies[0].node_end; ++a)
+    lowest = std::min(lowest, model.nodes.y[a]);
+  return lowest0_ - lowest;
+}
+
 void Series::sample(const fem::Model &model, const fem::Solver &solver) {
   const fem::Body &p = model.bodies[0];
   const fem::Nodes &nd = model.nodes;
@@ -182,6 +195,8 @@ void Series::sample(const fem::Model &model, const fem::Solver &solver) {
                            e.internal,
                            e.plastic,
                            e.viscous,
+                           e.friction,
+                           e.contact,
                            e.external,
                            e.balance_error};
   static_assert(std::size(values) == std::size(series_columns));

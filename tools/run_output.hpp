@@ -5,7 +5,8 @@
 //   /series/{time, step, dt}                                   one value per sample
 //   /series/projectile/{com_x, com_y, vx, vy, rotational_momentum, lateral_force, axial_force,
 //                       tilt, depth}                           attributes unit, meaning
-//   /series/energy/{kinetic, internal, plastic, viscous, external, balance_error}
+//   /series/energy/{kinetic, internal, plastic, viscous, friction, contact, external,
+//                   balance_error}
 //   /mesh/{x, y (initial node positions), triangles (n x 3, uint32), element_body, node_body}
 //                                                              attribute body_names
 //   /frames/NNNNNN/{x, y, vx, vy (nodes); sxx, syy, sxy, szz (total stress sigma = S - p I),
@@ -32,6 +33,8 @@ public:
   std::size_t size() const { return time_.size(); }
   // The last sample of "projectile/NAME" or "energy/NAME"; NaN before the first.
   double last(const std::string &name) const;
+  // The projectile's depth now: its initial lowest point minus its current lowest point [m].
+  double depth(const fem::Model &model) const;
 
   struct Column {
     std::string name, unit, meaning;

@@ -174,6 +174,8 @@ const std::vector<Key> &keys() {
     auto t = &Scene::target;
     auto p = &Scene::projectile;
     auto r = &Scene::run;
+    using C = ContactSpec;
+    auto c = &Scene::contact;
     return std::vector<Key>{
         real("target", "width", t, &T::width, "m", 0, true, 10, "box width W"),
         real("target", "height", t, &T::height, "m", 0, true, 10, "box height H"),
@@ -240,11 +242,24 @@ const std::vector<Key> &keys() {
                 "averaged nodal volume in bodies with plastic flow (against volumetric locking)"),
         integer("run", "series_interval", r, &R::series_interval, 1, 1e9,
                 "steps between samples of the series in run.h5"),
+        real("run", "end_depth", r, &R::end_depth, "", 0, false, 100,
+             "stop when the projectile's depth reaches this many projectile lengths (thesis: 1); "
+             "0: run to end_time"),
         real("run", "frame_interval", r, &R::frame_interval, "s", 0, false, 1,
              "simulated time between frames (fields) in run.h5, also taken at the start and the "
              "end; 0: no frames"),
         boolean("run", "vtk", r, &R::vtk, "write the frames also as VTK files (vtk/run.pvd)"),
         integer("run", "max_steps", r, &R::max_steps, 1, 1e12, "time steps at most"),
+        boolean("contact", "enabled", c, &C::enabled,
+                "contact between the bodies and with the box's walls; false: bodies pass through"),
+        real("contact", "friction", c, &C::friction, "", 0, false, 10,
+             "Coulomb coefficient between grains and between grains and walls (thesis: 0.3)"),
+        real("contact", "projectile_friction", c, &C::projectile_friction, "", 0, false, 10,
+             "Coulomb coefficient between the projectile and grains or walls (thesis: 0.3)"),
+        real("contact", "stiffness", c, &C::stiffness, "", 0, true, 2,
+             "penalty kappa: normal stiffness kappa m_eff / dt^2 per node (stable up to about 0.6)"),
+        real("contact", "damping", c, &C::damping, "", 0, false, 2,
+             "damping of the contact spring, a fraction of its critical damping"),
     };
   }();
   return all;
@@ -440,7 +455,7 @@ Scene readScene(const std::string &path) {
     }
     if (knownIn(table).empty())
       throw InputError(path + ": unknown table [" + table +
-                       "]; known tables: target, projectile, run, materials");
+                       "]; known tables: target, projectile, run, contact, materials");
     const toml::table *tab = tnode.as_table();
     if (!tab)
       throw InputError(path + ": " + table + " must be a table ([" + table + "])");

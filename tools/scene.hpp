@@ -23,11 +23,21 @@ struct RunSpec {
   double safety = 0.9;             // time step over the stable step
   double viscosity_linear = 0.5;   // artificial viscosity C_L (thesis Table 3.1)
   double viscosity_quadratic = 4.0;
-  bool anti_locking = true;        // averaged nodal volume where plastic flow is on
+  bool anti_locking = false;       // averaged nodal volume where plastic flow is on (see docs)
   std::int64_t series_interval = 1;  // steps between series samples
+  double end_depth = 0.0;          // stop when the depth reaches this many projectile lengths
   double frame_interval = 1e-7;    // simulated time between frames [s]; 0: no frames
   bool vtk = true;                 // frames also as VTK files for ParaView
   std::int64_t max_steps = 100000000;
+};
+
+// Contact between the bodies and with the box's walls (table [contact]; fem/contact.hpp).
+struct ContactSpec {
+  bool enabled = true;
+  double friction = 0.3;            // Coulomb mu between grains, and grains and walls
+  double projectile_friction = 0.3; // between the projectile and grains or walls
+  double stiffness = 0.5;           // penalty kappa: k = kappa m_eff / dt^2
+  double damping = 0.5;             // fraction of the contact spring's critical damping
 };
 
 // A body group's material (tables [materials.projectile], [materials.grains]): a preset or a
@@ -42,6 +52,7 @@ struct Scene {
   TargetSpec target;
   ProjectileSpec projectile;
   RunSpec run;
+  ContactSpec contact;
   MaterialChoice projectile_material{"steel", {}}, grain_material{"quartz", {}};
 };
 

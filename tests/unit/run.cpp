@@ -40,6 +40,8 @@ const char *series_names[] = {"step",
                               "energy/internal",
                               "energy/plastic",
                               "energy/viscous",
+                              "energy/friction",
+                              "energy/contact",
                               "energy/external",
                               "energy/balance_error"};
 
