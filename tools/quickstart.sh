@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Set up (Debian 12: installs missing packages), build in build/, make the default target
-# (examples/targets/baseline.toml) in out/baseline, and say where the results are.
+# Set up (Debian 12: installs missing packages), build in build/, run the reduced default
+# penetration scene (examples/quickstart.toml: target, projectile, contact; a few minutes) in
+# out/quickstart, and say where the results are.
 set -euo pipefail
 
 # shellcheck source=tools/setup.sh
@@ -10,21 +11,18 @@ mesopen_install
 mesopen_build
 
 cd "$MESOPEN_ROOT"
-build/bin/mesopen target examples/targets/baseline.toml -o out/baseline
+build/bin/mesopen run examples/quickstart.toml -o out/quickstart
 
-out="$MESOPEN_ROOT/out/baseline"
-plot="grain-sizes.png   grain-size histogram"
-if [ ! -f "$out/grain-sizes.png" ]; then
-  plot="grain-sizes.png   not made (see the warning above; needs /usr/bin/python3 with matplotlib)"
-fi
+out="$MESOPEN_ROOT/out/quickstart"
 cat <<EOF
 
 Results are in $out:
-  target.vtu        grains and projectile: open in ParaView
-  target.h5         everything (sites, grain polygons, mesh, projectile)
-  target.json       grains, porosity, mean/std diameter, timings
-  $plot
-  (also target.data for LIGGGHTS, target.spheres for YADE, summary.json)
+  vtk/run.pvd       the frames (grains and projectile: stresses, pressure, plastic strain,
+                    velocities): open in ParaView
+  run.h5            the projectile's series (depth, rotational momentum, lateral force, tilt),
+                    the energies, and the frames
+  summary.json      what ran, how it ended, wall time, contact figures
 
-The simulator (mesopen run) comes in a later version.
+The thesis's runs: examples/baseline.toml (run 6) and examples/thesis/*.toml. A target alone:
+  build/bin/mesopen target examples/targets/baseline.toml -o out/baseline
 EOF

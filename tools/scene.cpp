@@ -239,7 +239,8 @@ const std::vector<Key> &keys() {
         real("run", "viscosity_quadratic", r, &R::viscosity_quadratic, "", 0, false, 100,
              "artificial viscosity, quadratic coefficient C_Q (thesis Table 3.1: 4.0)"),
         boolean("run", "anti_locking", r, &R::anti_locking,
-                "averaged nodal volume in bodies with plastic flow (against volumetric locking)"),
+                "averaged nodal volume in bodies with plastic flow (against volumetric locking); off "
+                "by default: under a penetrator it lets crushed elements collapse (docs/solver.md)"),
         integer("run", "series_interval", r, &R::series_interval, 1, 1e9,
                 "steps between samples of the series in run.h5"),
         real("run", "end_depth", r, &R::end_depth, "", 0, false, 100,
