@@ -249,7 +249,8 @@ void Solver::elementPass(const Chunk &chunk, double dt, ChunkSums &sums) {
   const std::size_t n = chunk.end - chunk.begin, e0 = chunk.begin;
   const std::uint32_t *conn = el.node.data() + 3 * e0;
   const double *x = nd.x.data(), *y = nd.y.data(), *vx = nd.vx.data(), *vy = nd.vy.data();
-  const double *nj = node_jacobian_.data();
+  const double *nj = node_jacobian_.data(), *area0 = el.area0.data() + e0;
+  double *area = el.area.data() + e0;
   const bool averaged = chunk.averaged_volume;
   const double hdt = 0.5 * dt;
   double min_ratio = HUGE_VAL;
@@ -261,7 +262,7 @@ void Solver::elementPass(const Chunk &chunk, double dt, ChunkSums &sums) {
     const std::uint32_t a = conn[3 * i], b = conn[3 * i + 1], c = conn[3 * i + 2];
     const double xa = x[a], xb = x[b], xc = x[c], ya = y[a], yb = y[b], yc = y[c];
     const double vxa = vx[a], vxb = vx[b], vxc = vx[c], vya = vy[a], vyb = vy[b], vyc = vy[c];
-    const double area = 0.5 * ((xb - xa) * (yc - ya) - (xc - xa) * (yb - ya));
+    const double area_new = 0.5 * ((xb - xa) * (yc - ya) - (xc - xa) * (yb - ya));
     const double mxa = xa - hdt * vxa, mxb = xb - hdt * vxb, mxc = xc - hdt * vxc;
     const double mya = ya - hdt * vya, myb = yb - hdt * vyb, myc = yc - hdt * vyc;
     const double two_am = (mxb - mxa) * (myc - mya) - (mxc - mxa) * (myb - mya);
@@ -271,21 +272,20 @@ void Solver::elementPass(const Chunk &chunk, double dt, ChunkSums &sums) {
     const double lxx = vxa * bxa + vxb * bxb + vxc * bxc, lyy = vya * bya + vyb * byb + vyc * byc;
     const double lxy = vxa * bya + vxb * byb + vxc * byc, lyx = vya * bxa + vyb * bxb + vyc * bxc;
     dxx[i] = lxx, dyy[i] = lyy, dxy[i] = 0.5 * (lxy + lyx), spin[i] = 0.5 * (lyx - lxy);
-    const std::size_t e = e0 + i;
-    dvol[i] = area - el.area[e];
+    dvol[i] = area_new - area[i];
     vmid[i] = 0.5 * two_am;
-    el.area[e] = area;
-    jac[i] = averaged ? (nj[a] + nj[b] + nj[c]) * (1.0 / 3.0) : area / el.area0[e];
+    area[i] = area_new;
+    jac[i] = averaged ? (nj[a] + nj[b] + nj[c]) * (1.0 / 3.0) : area_new / area0[i];
     const double lab = (xb - xa) * (xb - xa) + (yb - ya) * (yb - ya);
     const double lbc = (xc - xb) * (xc - xb) + (yc - yb) * (yc - yb);
     const double lca = (xa - xc) * (xa - xc) + (ya - yc) * (ya - yc);
-    len[i] = 2.0 * area / std::sqrt(std::max(lab, std::max(lbc, lca)));
-    min_ratio = std::min(min_ratio, std::min(area, two_am) / el.area0[e]);
+    len[i] = 2.0 * area_new / std::sqrt(std::max(lab, std::max(lbc, lca)));
+    min_ratio = std::min(min_ratio, std::min(area_new, two_am) / area0[i]);
   }
   sums.inverted = -1;
   if (!(min_ratio > 0.0)) {
     for (std::size_t i = 0; i < n; ++i)
-      if (!(el.area[e0 + i] > 0.0 && vmid[i] > 0.0))
+      if (!(area[i] > 0.0 && vmid[i] > 0.0))
         sums.inverted = static_cast<long>(e0 + i);
     if (sums.inverted < 0)
       sums.inverted = static_cast<long>(e0);
@@ -311,18 +311,20 @@ void Solver::elementPass(const Chunk &chunk, double dt, ChunkSums &sums) {
   double internal = 0.0, viscous = 0.0, dt_min = HUGE_VAL;
   alignas(64) double fx[3][max_chunk], fy[3][max_chunk];
   const double rho0 = chunk.material->density();
+  const double *sxx_ = el.sxx.data() + e0, *syy_ = el.syy.data() + e0, *sxy_ = el.sxy.data() + e0;
+  const double *pressure = el.pressure.data() + e0;
+  double *energy = el.energy.data() + e0, *viscosity = el.viscosity.data() + e0;
 #pragma omp simd reduction(+ : internal, viscous) reduction(min : dt_min)
   for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t e = e0 + i;
     const double comp = std::max(-(dxx[i] + dyy[i]), 0.0);
-    const double rho = rho0 * el.area0[e] / el.area[e];
+    const double rho = rho0 * area0[i] / area[i];
     const double q = rho * len[i] * comp * (cq * len[i] * comp + cl * cs[i]);
-    el.viscosity[e] = q;
-    el.energy[e] -= q * dvol[i];
+    viscosity[i] = q;
+    energy[i] -= q * dvol[i];
     viscous -= q * dvol[i];
-    internal += el.energy[e];
-    const double pq = el.pressure[e] + q;
-    const double sxx = el.sxx[e] - pq, syy = el.syy[e] - pq, sxy = el.sxy[e];
+    internal += energy[i];
+    const double pq = pressure[i] + q;
+    const double sxx = sxx_[i] - pq, syy = syy_[i] - pq, sxy = sxy_[i];
     const std::uint32_t a = conn[3 * i], b = conn[3 * i + 1], c = conn[3 * i + 2];
     const double xa = x[a], xb = x[b], xc = x[c], ya = y[a], yb = y[b], yc = y[c];
     fx[0][i] = -0.5 * (sxx * (yb - yc) + sxy * (xc - xb));
