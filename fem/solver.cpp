@@ -244,6 +244,7 @@ void Solver::nodalVolumes() {
 void Solver::elementPass(const Chunk &chunk, double dt, ChunkSums &sums) {
   alignas(64) double dxx[max_chunk], dyy[max_chunk], dxy[max_chunk], spin[max_chunk];
   alignas(64) double jac[max_chunk], dvol[max_chunk], vmid[max_chunk], len[max_chunk], cs[max_chunk];
+  alignas(64) double gx[3][max_chunk], gy[3][max_chunk]; // 2A dN_k/dx, 2A dN_k/dy at n+1
   const Nodes &nd = m_.nodes;
   Elements &el = m_.elements;
   const std::size_t n = chunk.end - chunk.begin, e0 = chunk.begin;
@@ -253,11 +254,12 @@ void Solver::elementPass(const Chunk &chunk, double dt, ChunkSums &sums) {
   double *area = el.area.data() + e0;
   const bool averaged = chunk.averaged_volume;
   const double hdt = 0.5 * dt;
-  double min_ratio = HUGE_VAL;
+  double min_area = HUGE_VAL;
 
   // Kinematics: D and w on the mid-step configuration x(n+1/2) = x(n+1) - dt/2 v(n+1/2) (a rigid
-  // rotation then gives D = 0 exactly), the area at n+1, and the element's shortest altitude.
-#pragma omp simd reduction(min : min_ratio)
+  // rotation then gives D = 0 exactly); the area, the shape function gradients and the element's
+  // shortest altitude at n+1.
+#pragma omp simd reduction(min : min_area)
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t a = conn[3 * i], b = conn[3 * i + 1], c = conn[3 * i + 2];
     const double xa = x[a], xb = x[b], xc = x[c], ya = y[a], yb = y[b], yc = y[c];
@@ -275,15 +277,16 @@ void Solver::elementPass(const Chunk &chunk, double dt, ChunkSums &sums) {
     dvol[i] = area_new - area[i];
     vmid[i] = 0.5 * two_am;
     area[i] = area_new;
-    jac[i] = averaged ? (nj[a] + nj[b] + nj[c]) * (1.0 / 3.0) : area_new / area0[i];
+    gx[0][i] = yb - yc, gx[1][i] = yc - ya, gx[2][i] = ya - yb;
+    gy[0][i] = xc - xb, gy[1][i] = xa - xc, gy[2][i] = xb - xa;
     const double lab = (xb - xa) * (xb - xa) + (yb - ya) * (yb - ya);
     const double lbc = (xc - xb) * (xc - xb) + (yc - yb) * (yc - yb);
     const double lca = (xa - xc) * (xa - xc) + (ya - yc) * (ya - yc);
     len[i] = 2.0 * area_new / std::sqrt(std::max(lab, std::max(lbc, lca)));
-    min_ratio = std::min(min_ratio, std::min(area_new, two_am) / area0[i]);
+    min_area = std::min(min_area, std::min(area_new, two_am));
   }
   sums.inverted = -1;
-  if (!(min_ratio > 0.0)) {
+  if (!(min_area > 0.0)) {
     for (std::size_t i = 0; i < n; ++i)
       if (!(area[i] > 0.0 && vmid[i] > 0.0))
         sums.inverted = static_cast<long>(e0 + i);
@@ -291,6 +294,16 @@ void Solver::elementPass(const Chunk &chunk, double dt, ChunkSums &sums) {
       sums.inverted = static_cast<long>(e0);
     sums.dt_min = HUGE_VAL;
     return;
+  }
+  // J = V / V0, or the mean of the three nodal J (averaged nodal volume, see nodalVolumes).
+  if (averaged) {
+#pragma omp simd
+    for (std::size_t i = 0; i < n; ++i)
+      jac[i] = (nj[conn[3 * i]] + nj[conn[3 * i + 1]] + nj[conn[3 * i + 2]]) * (1.0 / 3.0);
+  } else {
+#pragma omp simd
+    for (std::size_t i = 0; i < n; ++i)
+      jac[i] = area[i] / area0[i];
   }
 
   // Stress update by the body's material.
@@ -325,14 +338,10 @@ void Solver::elementPass(const Chunk &chunk, double dt, ChunkSums &sums) {
     internal += energy[i];
     const double pq = pressure[i] + q;
     const double sxx = sxx_[i] - pq, syy = syy_[i] - pq, sxy = sxy_[i];
-    const std::uint32_t a = conn[3 * i], b = conn[3 * i + 1], c = conn[3 * i + 2];
-    const double xa = x[a], xb = x[b], xc = x[c], ya = y[a], yb = y[b], yc = y[c];
-    fx[0][i] = -0.5 * (sxx * (yb - yc) + sxy * (xc - xb));
-    fy[0][i] = -0.5 * (sxy * (yb - yc) + syy * (xc - xb));
-    fx[1][i] = -0.5 * (sxx * (yc - ya) + sxy * (xa - xc));
-    fy[1][i] = -0.5 * (sxy * (yc - ya) + syy * (xa - xc));
-    fx[2][i] = -0.5 * (sxx * (ya - yb) + sxy * (xb - xa));
-    fy[2][i] = -0.5 * (sxy * (ya - yb) + syy * (xb - xa));
+    for (int k = 0; k < 3; ++k) {
+      fx[k][i] = -0.5 * (sxx * gx[k][i] + sxy * gy[k][i]);
+      fy[k][i] = -0.5 * (sxy * gx[k][i] + syy * gy[k][i]);
+    }
     const double ls = (2.0 / 3.0) * len[i], Q = cl * cs[i] + cq * ls * comp;
     dt_min = std::min(dt_min, ls / (Q + std::sqrt(Q * Q + cs[i] * cs[i])));
   }
