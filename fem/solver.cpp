@@ -88,6 +88,7 @@ void Solver::updateActivity() {
   body_active_seen_.resize(n_bodies);
   chunks_.clear();
   units_.clear();
+  unit_nodes_.clear();
   node_ranges_.clear();
   std::size_t unit_elements = 0;
   active_elements_ = 0;
@@ -104,18 +105,23 @@ void Solver::updateActivity() {
     // elements' forces into the nodes without races, in element order).
     const bool new_unit = units_.empty() || unit_elements >= unit_target;
     if (new_unit) {
-      units_.emplace_back(chunks_.size(), chunks_.size());
+      units_.push_back({chunks_.size(), chunks_.size(), unit_nodes_.size(), unit_nodes_.size(), false});
       unit_elements = 0;
     }
+    Unit &unit = units_.back();
     unit_elements += body.element_end - body.element_begin;
-    appendInPieces(chunks_, units_.back().first, Chunk{{body.element_begin, body.element_end}, material, averaged},
+    appendInPieces(chunks_, unit.chunk_begin, Chunk{{body.element_begin, body.element_end}, material, averaged},
                    s_.chunk, [&](const Chunk &c) {
                      return c.material == material && c.averaged_volume == averaged;
                    });
+    appendInPieces(unit_nodes_, unit.nodes_begin, Range{body.node_begin, body.node_end},
+                   std::numeric_limits<std::size_t>::max(), [](const Range &) { return true; });
     appendInPieces(node_ranges_, 0, Range{body.node_begin, body.node_end}, node_block,
                    [](const Range &) { return true; });
     active_elements_ += body.element_end - body.element_begin;
-    units_.back().second = chunks_.size();
+    unit.chunk_end = chunks_.size();
+    unit.nodes_end = unit_nodes_.size();
+    unit.averaged_volume = unit.averaged_volume || averaged;
   }
   sums_.resize(chunks_.size());
   node_sums_.resize(node_ranges_.size());
@@ -177,21 +183,22 @@ void Solver::drift(double dt) {
     }
 }
 
+// Unit by unit (whole bodies, so that a unit's nodes and elements stay in cache between the
+// nodal volumes and the element pass): the external forces first, the elements add theirs.
 void Solver::internalForces(double dt) {
-  // The external forces first; the elements add theirs.
   Nodes &nd = m_.nodes;
-  const long blocks = static_cast<long>(node_ranges_.size());
-#pragma omp parallel for schedule(static)
-  for (long i = 0; i < blocks; ++i)
-    for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a)
-      nd.fx[a] = nd.fx_ext[a], nd.fy[a] = nd.fy_ext[a];
-  if (any_averaged_)
-    nodalVolumes();
   const long units = static_cast<long>(units_.size());
 #pragma omp parallel for schedule(dynamic)
-  for (long u = 0; u < units; ++u)
-    for (std::size_t i = units_[u].first; i < units_[u].second; ++i)
+  for (long u = 0; u < units; ++u) {
+    const Unit &unit = units_[u];
+    for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
+      for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a)
+        nd.fx[a] = nd.fx_ext[a], nd.fy[a] = nd.fy_ext[a];
+    if (unit.averaged_volume)
+      nodalVolumes(unit);
+    for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
       elementPass(chunks_[i], dt, sums_[i]);
+  }
   const long n = static_cast<long>(chunks_.size());
   double dt_min = std::numeric_limits<double>::infinity();
   for (long i = 0; i < n; ++i) {
@@ -213,30 +220,24 @@ void Solver::internalForces(double dt) {
 // Averaged nodal volume (Bonet & Burton 1998): J at a node is the area of its elements over their
 // initial area (a third of each); an element takes the mean J of its three nodes for its
 // pressure, which removes the volumetric locking of constant-strain triangles in plastic flow.
-void Solver::nodalVolumes() {
+void Solver::nodalVolumes(const Unit &unit) {
   const Nodes &nd = m_.nodes;
   const Elements &el = m_.elements;
-  const long blocks = static_cast<long>(node_ranges_.size());
-#pragma omp parallel for schedule(static)
-  for (long i = 0; i < blocks; ++i)
-    for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a)
+  for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
+    for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a)
       node_jacobian_[a] = 0.0;
-  const long units = static_cast<long>(units_.size());
-#pragma omp parallel for schedule(dynamic)
-  for (long u = 0; u < units; ++u)
-    for (std::size_t i = units_[u].first; i < units_[u].second; ++i) {
-      if (!chunks_[i].averaged_volume)
-        continue;
-      for (std::size_t e = chunks_[i].begin; e < chunks_[i].end; ++e) {
-        const std::uint32_t a = el.node[3 * e], b = el.node[3 * e + 1], c = el.node[3 * e + 2];
-        const double third = (1.0 / 6.0) * ((nd.x[b] - nd.x[a]) * (nd.y[c] - nd.y[a]) -
-                                            (nd.x[c] - nd.x[a]) * (nd.y[b] - nd.y[a]));
-        node_jacobian_[a] += third, node_jacobian_[b] += third, node_jacobian_[c] += third;
-      }
+  for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i) {
+    if (!chunks_[i].averaged_volume)
+      continue;
+    for (std::size_t e = chunks_[i].begin; e < chunks_[i].end; ++e) {
+      const std::uint32_t a = el.node[3 * e], b = el.node[3 * e + 1], c = el.node[3 * e + 2];
+      const double third = (1.0 / 6.0) * ((nd.x[b] - nd.x[a]) * (nd.y[c] - nd.y[a]) -
+                                          (nd.x[c] - nd.x[a]) * (nd.y[b] - nd.y[a]));
+      node_jacobian_[a] += third, node_jacobian_[b] += third, node_jacobian_[c] += third;
     }
-#pragma omp parallel for schedule(static)
-  for (long i = 0; i < blocks; ++i)
-    for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a)
+  }
+  for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
+    for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a)
       node_jacobian_[a] /= nd.area0[a];
 }
 

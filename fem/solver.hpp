@@ -72,6 +72,12 @@ private:
     const Material *material;
     bool averaged_volume;
   };
+  // Whole bodies: their element chunks and node ranges (no node is shared between units).
+  struct Unit {
+    std::size_t chunk_begin, chunk_end; // in chunks_
+    std::size_t nodes_begin, nodes_end; // in unit_nodes_
+    bool averaged_volume;               // some chunk needs the nodal volumes
+  };
   struct ChunkSums {
     double internal, plastic, viscous, dt_min;
     long inverted; // an inverted element, or -1
@@ -80,7 +86,7 @@ private:
   void updateActivity();
   void kick(double half_dt);
   void drift(double dt);
-  void nodalVolumes();
+  void nodalVolumes(const Unit &unit);
   void elementPass(const Chunk &chunk, double dt, ChunkSums &sums);
   void applyConstraints(double half_dt);
   void accountEnergy();
@@ -89,8 +95,9 @@ private:
   SolverSettings s_;
   std::vector<ForceProvider *> providers_;
   std::vector<Chunk> chunks_;
-  std::vector<std::pair<std::size_t, std::size_t>> units_;     // chunk ranges holding whole bodies
-  std::vector<Range> node_ranges_; // active nodes
+  std::vector<Unit> units_;
+  std::vector<Range> unit_nodes_;  // node ranges of the units
+  std::vector<Range> node_ranges_; // active nodes, in blocks
   std::vector<ChunkSums> sums_;
   std::vector<double> node_sums_;
   std::vector<double> inv_mass_, node_jacobian_;
