@@ -78,6 +78,10 @@ private:
     std::size_t nodes_begin, nodes_end; // in unit_nodes_
     bool averaged_volume;               // some chunk needs the nodal volumes
   };
+  // A node's position and velocity side by side: the element pass reads all four at once.
+  struct alignas(32) NodeState {
+    double x, y, vx, vy;
+  };
   struct ChunkSums {
     double internal, plastic, viscous, dt_min;
     long inverted; // an inverted element, or -1
@@ -86,8 +90,9 @@ private:
   void updateActivity();
   void kick(double half_dt);
   void drift(double dt);
-  void nodalVolumes(const Unit &unit);
-  void elementPass(const Chunk &chunk, double dt, ChunkSums &sums);
+  void nodalVolumes(const Unit &unit, const NodeState *nodes, std::size_t base);
+  void elementPass(const Chunk &chunk, double dt, const NodeState *nodes, std::size_t base,
+                   ChunkSums &sums);
   void applyConstraints(double half_dt);
   void accountEnergy();
 
