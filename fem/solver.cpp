@@ -220,21 +220,27 @@ void Solver::internalForces(double dt) {
   const long units = static_cast<long>(units_.size());
 #pragma omp parallel
   {
-    std::vector<NodeState> state; // x, y, vx, vy of the unit's nodes, from its first node on
+    std::vector<NodeState> state; // this thread's copies of a unit's nodes (cache-resident)
+    std::vector<NodeForce> force;
 #pragma omp for schedule(dynamic)
     for (long u = 0; u < units; ++u) {
       const Unit &unit = units_[u];
       const std::size_t base = unit_nodes_[unit.nodes_begin].begin;
       state.resize(unit_nodes_[unit.nodes_end - 1].end - base);
+      force.resize(state.size());
       for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
         for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
-          nd.fx[a] = nd.fx_ext[a], nd.fy[a] = nd.fy_ext[a];
           state[a - base] = {nd.x[a], nd.y[a], nd.vx[a], nd.vy[a]};
+          force[a - base] = {nd.fx_ext[a], nd.fy_ext[a]};
         }
+      const UnitNodes nodes{state.data(), force.data(), base};
       if (unit.averaged_volume)
-        nodalVolumes(unit, state.data(), base);
+        nodalVolumes(unit, nodes);
       for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
-        elementPass(chunks_[i], dt, state.data(), base, sums_[i]);
+        elementPass(chunks_[i], dt, nodes, sums_[i]);
+      for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
+        for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a)
+          nd.fx[a] = force[a - base].x, nd.fy[a] = force[a - base].y;
     }
   }
   const long n = static_cast<long>(chunks_.size());
@@ -258,7 +264,7 @@ void Solver::internalForces(double dt) {
 // Averaged nodal volume (Bonet & Burton 1998): J at a node is the area of its elements over their
 // initial area (a third of each); an element takes the mean J of its three nodes for its
 // pressure, which removes the volumetric locking of constant-strain triangles in plastic flow.
-void Solver::nodalVolumes(const Unit &unit, const NodeState *nodes, std::size_t base) {
+void Solver::nodalVolumes(const Unit &unit, const UnitNodes &nodes) {
   const Nodes &nd = m_.nodes;
   const Elements &el = m_.elements;
   for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
@@ -269,7 +275,8 @@ void Solver::nodalVolumes(const Unit &unit, const NodeState *nodes, std::size_t 
       continue;
     for (std::size_t e = chunks_[i].begin; e < chunks_[i].end; ++e) {
       const std::uint32_t a = el.node[3 * e], b = el.node[3 * e + 1], c = el.node[3 * e + 2];
-      const NodeState &sa = nodes[a - base], &sb = nodes[b - base], &sc = nodes[c - base];
+      const std::size_t base = nodes.base;
+      const NodeState &sa = nodes.state[a - base], &sb = nodes.state[b - base], &sc = nodes.state[c - base];
       const double third = (1.0 / 6.0) * ((sb.x - sa.x) * (sc.y - sa.y) - (sc.x - sa.x) * (sb.y - sa.y));
       node_jacobian_[a] += third, node_jacobian_[b] += third, node_jacobian_[c] += third;
     }
@@ -280,8 +287,7 @@ void Solver::nodalVolumes(const Unit &unit, const NodeState *nodes, std::size_t 
 }
 
 // Kinematics, material update, artificial viscosity and nodal forces of one batch of elements.
-void Solver::elementPass(const Chunk &chunk, double dt, const NodeState *nodes, std::size_t base,
-                         ChunkSums &sums) {
+void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums) {
   alignas(64) double dxx[max_chunk], dyy[max_chunk], dxy[max_chunk], spin[max_chunk];
   alignas(64) double jac[max_chunk], dvol[max_chunk], vmid[max_chunk], len[max_chunk], cs[max_chunk];
   alignas(64) double gx[3][max_chunk], gy[3][max_chunk]; // 2A dN_k/dx, 2A dN_k/dy at n+1
@@ -299,7 +305,7 @@ void Solver::elementPass(const Chunk &chunk, double dt, const NodeState *nodes, 
   // shortest altitude at n+1.
   alignas(64) double x[3][max_chunk], y[3][max_chunk], vx[3][max_chunk], vy[3][max_chunk];
   for (int k = 0; k < 3; ++k)
-    gatherNodeStates(nodes, base, conn, k, n, x[k], y[k], vx[k], vy[k]);
+    gatherNodeStates(nodes.state, nodes.base, conn, k, n, x[k], y[k], vx[k], vy[k]);
 #pragma omp simd reduction(min : min_area)
   for (std::size_t i = 0; i < n; ++i) {
     const double xa = x[0][i], xb = x[1][i], xc = x[2][i], ya = y[0][i], yb = y[1][i], yc = y[2][i];
@@ -386,12 +392,11 @@ void Solver::elementPass(const Chunk &chunk, double dt, const NodeState *nodes, 
     const double ls = (2.0 / 3.0) * len[i], Q = cl * cs[i] + cq * ls * comp;
     dt_min = std::min(dt_min, ls / (Q + std::sqrt(Q * Q + cs[i] * cs[i])));
   }
-  // Into the nodes, in element order (this unit owns the nodes of its bodies).
-  double *node_fx = m_.nodes.fx.data(), *node_fy = m_.nodes.fy.data();
+  // Into the unit's nodes, in element order.
   for (std::size_t i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) {
-      node_fx[conn[3 * i + k]] += fx[k][i];
-      node_fy[conn[3 * i + k]] += fy[k][i];
+      NodeForce &f = nodes.force[conn[3 * i + k] - nodes.base];
+      f.x += fx[k][i], f.y += fy[k][i];
     }
   sums.internal = internal;
   sums.plastic = out.plastic_work;

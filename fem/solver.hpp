@@ -78,9 +78,18 @@ private:
     std::size_t nodes_begin, nodes_end; // in unit_nodes_
     bool averaged_volume;               // some chunk needs the nodal volumes
   };
-  // A node's position and velocity side by side: the element pass reads all four at once.
+  // A unit's nodes, numbered from its first node `base`: position and velocity side by side (the
+  // element pass reads all four at once) and the force being assembled.
   struct alignas(32) NodeState {
     double x, y, vx, vy;
+  };
+  struct alignas(16) NodeForce {
+    double x, y;
+  };
+  struct UnitNodes {
+    const NodeState *state;
+    NodeForce *force;
+    std::size_t base;
   };
   struct ChunkSums {
     double internal, plastic, viscous, dt_min;
@@ -90,9 +99,8 @@ private:
   void updateActivity();
   void kick(double half_dt);
   void drift(double dt);
-  void nodalVolumes(const Unit &unit, const NodeState *nodes, std::size_t base);
-  void elementPass(const Chunk &chunk, double dt, const NodeState *nodes, std::size_t base,
-                   ChunkSums &sums);
+  void nodalVolumes(const Unit &unit, const UnitNodes &nodes);
+  void elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums);
   void applyConstraints(double half_dt);
   void accountEnergy();
 
