@@ -122,7 +122,6 @@ void Solver::updateActivity() {
   node_ranges_.clear();
   std::size_t unit_elements = 0;
   active_elements_ = 0;
-  any_averaged_ = false;
   for (std::size_t b = 0; b < n_bodies; ++b) {
     const Body &body = m_.bodies[b];
     body_active_seen_[b] = !body.at_rest;
@@ -130,7 +129,6 @@ void Solver::updateActivity() {
       continue;
     const Material *material = m_.materials[body.material].get();
     const bool averaged = s_.anti_locking && material->plastic();
-    any_averaged_ = any_averaged_ || averaged;
     // A work unit holds whole bodies (no node is shared between units, so each unit adds its
     // elements' forces into the nodes without races, in element order).
     const bool new_unit = units_.empty() || unit_elements >= unit_target;
@@ -155,8 +153,6 @@ void Solver::updateActivity() {
   }
   sums_.resize(chunks_.size());
   node_sums_.resize(node_ranges_.size());
-  if (any_averaged_)
-    node_jacobian_.resize(m_.nodes.size(), 1.0);
 }
 
 void Solver::kick(double half_dt) {
@@ -222,18 +218,20 @@ void Solver::internalForces(double dt) {
   {
     std::vector<NodeState> state; // this thread's copies of a unit's nodes (cache-resident)
     std::vector<NodeForce> force;
+    std::vector<double> jacobian;
 #pragma omp for schedule(dynamic)
     for (long u = 0; u < units; ++u) {
       const Unit &unit = units_[u];
       const std::size_t base = unit_nodes_[unit.nodes_begin].begin;
       state.resize(unit_nodes_[unit.nodes_end - 1].end - base);
       force.resize(state.size());
+      jacobian.resize(unit.averaged_volume ? state.size() : 0);
       for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
         for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
           state[a - base] = {nd.x[a], nd.y[a], nd.vx[a], nd.vy[a]};
           force[a - base] = {nd.fx_ext[a], nd.fy_ext[a]};
         }
-      const UnitNodes nodes{state.data(), force.data(), base};
+      const UnitNodes nodes{state.data(), force.data(), jacobian.data(), base};
       if (unit.averaged_volume)
         nodalVolumes(unit, nodes);
       for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
@@ -265,25 +263,27 @@ void Solver::internalForces(double dt) {
 // initial area (a third of each); an element takes the mean J of its three nodes for its
 // pressure, which removes the volumetric locking of constant-strain triangles in plastic flow.
 void Solver::nodalVolumes(const Unit &unit, const UnitNodes &nodes) {
-  const Nodes &nd = m_.nodes;
-  const Elements &el = m_.elements;
+  const double *area0 = m_.nodes.area0.data();
+  const std::uint32_t *conn = m_.elements.node.data();
+  const NodeState *state = nodes.state;
+  double *jacobian = nodes.jacobian;
+  const std::size_t base = nodes.base;
   for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
     for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a)
-      node_jacobian_[a] = 0.0;
+      jacobian[a - base] = 0.0;
   for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i) {
     if (!chunks_[i].averaged_volume)
       continue;
     for (std::size_t e = chunks_[i].begin; e < chunks_[i].end; ++e) {
-      const std::uint32_t a = el.node[3 * e], b = el.node[3 * e + 1], c = el.node[3 * e + 2];
-      const std::size_t base = nodes.base;
-      const NodeState &sa = nodes.state[a - base], &sb = nodes.state[b - base], &sc = nodes.state[c - base];
+      const std::size_t a = conn[3 * e] - base, b = conn[3 * e + 1] - base, c = conn[3 * e + 2] - base;
+      const NodeState &sa = state[a], &sb = state[b], &sc = state[c];
       const double third = (1.0 / 6.0) * ((sb.x - sa.x) * (sc.y - sa.y) - (sc.x - sa.x) * (sb.y - sa.y));
-      node_jacobian_[a] += third, node_jacobian_[b] += third, node_jacobian_[c] += third;
+      jacobian[a] += third, jacobian[b] += third, jacobian[c] += third;
     }
   }
   for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
     for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a)
-      node_jacobian_[a] /= nd.area0[a];
+      jacobian[a - base] /= area0[a];
 }
 
 // Kinematics, material update, artificial viscosity and nodal forces of one batch of elements.
@@ -294,7 +294,7 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   Elements &el = m_.elements;
   const std::size_t n = chunk.end - chunk.begin, e0 = chunk.begin;
   const std::uint32_t *conn = el.node.data() + 3 * e0;
-  const double *nj = node_jacobian_.data(), *area0 = el.area0.data() + e0;
+  const double *area0 = el.area0.data() + e0;
   double *area = el.area.data() + e0;
   const bool averaged = chunk.averaged_volume;
   const double hdt = 0.5 * dt;
@@ -344,9 +344,12 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   }
   // J = V / V0, or the mean of the three nodal J (averaged nodal volume, see nodalVolumes).
   if (averaged) {
+    const double *nj = nodes.jacobian;
+    const std::size_t base = nodes.base;
 #pragma omp simd
     for (std::size_t i = 0; i < n; ++i)
-      jac[i] = (nj[conn[3 * i]] + nj[conn[3 * i + 1]] + nj[conn[3 * i + 2]]) * (1.0 / 3.0);
+      jac[i] = (nj[conn[3 * i] - base] + nj[conn[3 * i + 1] - base] + nj[conn[3 * i + 2] - base]) *
+               (1.0 / 3.0);
   } else {
 #pragma omp simd
     for (std::size_t i = 0; i < n; ++i)

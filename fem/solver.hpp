@@ -79,7 +79,7 @@ private:
     bool averaged_volume;               // some chunk needs the nodal volumes
   };
   // A unit's nodes, numbered from its first node `base`: position and velocity side by side (the
-  // element pass reads all four at once) and the force being assembled.
+  // element pass reads all four at once), the force being assembled, the nodal volume ratio J.
   struct alignas(32) NodeState {
     double x, y, vx, vy;
   };
@@ -89,6 +89,7 @@ private:
   struct UnitNodes {
     const NodeState *state;
     NodeForce *force;
+    double *jacobian;
     std::size_t base;
   };
   struct ChunkSums {
@@ -113,10 +114,9 @@ private:
   std::vector<Range> node_ranges_; // active nodes, in blocks
   std::vector<ChunkSums> sums_;
   std::vector<double> node_sums_;
-  std::vector<double> inv_mass_, node_jacobian_;
+  std::vector<double> inv_mass_;
   std::vector<double> kick_dvx_, kick_dvy_; // velocity change of the last half-kick
   std::vector<char> body_active_seen_;
-  bool any_averaged_ = false;
   std::size_t active_elements_ = 0;
   double time_ = 0.0, dt_ = 0.0, next_dt_ = 0.0;
   std::size_t steps_ = 0;
