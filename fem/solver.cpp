@@ -154,7 +154,8 @@ void Solver::updateActivity() {
     // elements' forces into the nodes without races, in element order).
     const bool new_unit = units_.empty() || unit_elements >= unit_target;
     if (new_unit) {
-      units_.push_back({chunks_.size(), chunks_.size(), unit_nodes_.size(), unit_nodes_.size(), false});
+      units_.push_back({chunks_.size(), chunks_.size(), unit_nodes_.size(), unit_nodes_.size(),
+                        body.node_begin, body.node_end, false});
       unit_elements = 0;
     }
     Unit &unit = units_.back();
@@ -170,6 +171,8 @@ void Solver::updateActivity() {
     active_elements_ += body.element_end - body.element_begin;
     unit.chunk_end = chunks_.size();
     unit.nodes_end = unit_nodes_.size();
+    unit.node_lo = std::min(unit.node_lo, body.node_begin);
+    unit.node_hi = std::max(unit.node_hi, body.node_end);
     unit.averaged_volume = unit.averaged_volume || averaged;
   }
   sums_.resize(chunks_.size());
@@ -243,8 +246,8 @@ void Solver::internalForces(double dt) {
 #pragma omp for schedule(dynamic)
     for (long u = 0; u < units; ++u) {
       const Unit &unit = units_[u];
-      const std::size_t base = unit_nodes_[unit.nodes_begin].begin;
-      state.resize(unit_nodes_[unit.nodes_end - 1].end - base);
+      const std::size_t base = unit.node_lo;
+      state.resize(unit.node_hi - base);
       force.resize(state.size());
       jacobian.resize(unit.averaged_volume ? state.size() : 0);
       for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)

@@ -76,6 +76,7 @@ private:
   struct Unit {
     std::size_t chunk_begin, chunk_end; // in chunks_
     std::size_t nodes_begin, nodes_end; // in unit_nodes_
+    std::size_t node_lo, node_hi;       // its nodes lie in [node_lo, node_hi)
     bool averaged_volume;               // some chunk needs the nodal volumes
   };
   // A unit's nodes, numbered from its first node `base`: position and velocity side by side (the
