@@ -78,6 +78,27 @@ private:
     const Material *material;
     bool averaged_volume;
   };
+  // Whole bodies: their element chunks and node ranges (no node is shared between units).
+  struct Unit {
+    std::size_t chunk_begin, chunk_end; // in chunks_
+    std::size_t nodes_begin, nodes_end; // in unit_nodes_
+    std::size_t node_lo, node_hi;       // its nodes lie in [node_lo, node_hi)
+    bool averaged_volume;               // some chunk needs the nodal volumes
+  };
+  // A unit's nodes, numbered from its first node `base`: position and velocity side by side (the
+  // element pass reads all four at once), the force being assembled, the nodal volume ratio J.
+  struct alignas(32) NodeState {
+    double x, y, vx, vy;
+  };
+  struct alignas(16) NodeForce {
+    double x, y;
+  };
+  struct UnitNodes {
+    const NodeState *state;
+    NodeForce *force;
+    double *jacobian;
+    std::size_t base;
+  };
   struct ChunkSums {
     double internal, plastic, viscous, dt_min;
     long inverted; // an inverted element, or -1
@@ -86,8 +107,8 @@ private:
   void updateActivity();
   void kick(double half_dt);
   void drift(double dt);
-  void nodalVolumes();
-  void elementPass(const Chunk &chunk, double dt, ChunkSums &sums);
+  void nodalVolumes(const Unit &unit, const UnitNodes &nodes);
+  void elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums);
   void applyConstraints(double half_dt);
   void accountEnergy();
 
@@ -95,14 +116,14 @@ private:
   SolverSettings s_;
   std::vector<ForceProvider *> providers_;
   std::vector<Chunk> chunks_;
-  std::vector<std::pair<std::size_t, std::size_t>> units_;     // chunk ranges holding whole bodies
-  std::vector<Range> node_ranges_; // active nodes
+  std::vector<Unit> units_;
+  std::vector<Range> unit_nodes_;  // node ranges of the units
+  std::vector<Range> node_ranges_; // active nodes, in blocks
   std::vector<ChunkSums> sums_;
   std::vector<double> node_sums_;
-  std::vector<double> inv_mass_, node_jacobian_;
+  std::vector<double> inv_mass_;
   std::vector<double> kick_dvx_, kick_dvy_; // velocity change of the last half-kick
   std::vector<char> body_active_seen_;
-  bool any_averaged_ = false;
   std::size_t active_elements_ = 0;
   double time_ = 0.0, dt_ = 0.0, next_dt_ = 0.0;
   std::size_t steps_ = 0;

@@ -470,7 +470,6 @@ Planar collectGrains(const Cells<Tri> &c, const Sites &s, TessellationReport &re
 
 // Merge the ends of every grain edge shorter than `h` (thesis 4.2.2), shortest first, where
 // every grain at either end stays convex up to a slight dent. Points on a wall stay on it.
-constexpr double dent_turn = 0.3;
 void mergeShortEdges(Planar &p, double w, double h_box, double h, TessellationReport &report) {
   const std::size_t nv = p.x.size();
   // The grains at each vertex: three at most where cells meet, a few more after merges.
@@ -554,10 +553,9 @@ void mergeShortEdges(Planar &p, double w, double h_box, double h, TessellationRe
       for (std::size_t k = first; k < trial.size(); ++k)
         tx.push_back(trial[k] == a ? mx : p.x[trial[k]]), ty.push_back(trial[k] == a ? my : p.y[trial[k]]);
       // An edge of round-off length always goes; otherwise the grains must stay convex but for
-      // a slight dent (a turn of up to asin(dent_turn)), which is far less harmful than the
-      // tiny elements a short edge forces on the mesh (and so on the solver's time step).
+      // a slight dent (see max_dent_turn).
       ok = n >= 3 && signedArea(tx.data(), ty.data(), n) > 0.0 &&
-           (e.len < 1e-9 * h || isConvex(tx.data(), ty.data(), n, dent_turn));
+           (e.len < 1e-9 * h || isConvex(tx.data(), ty.data(), n, max_dent_turn));
     }
     if (!ok) {
       ++report.kept_short_edges;

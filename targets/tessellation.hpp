@@ -9,7 +9,7 @@
 // power: the Laguerre (power) tessellation with weights r^2, whose cells are convex by
 //   construction and need no relaxation; a grain whose cell is empty is lost (and counted).
 // Both: the box walls act as mirrors (cells end exactly on the walls), and vertices closer than
-// the mesh size are merged where the grains stay convex.
+// the mesh size are merged where the grains stay convex (up to a slight dent).
 #pragma once
 
 #include "target.hpp"
@@ -19,6 +19,12 @@
 #include <vector>
 
 namespace mesopen {
+
+// A short polygon edge is collapsed even where a grain then turns inward by a little: by at most
+// asin(max_dent_turn) (17 degrees) at a vertex. Leaving it would force sub-micron triangles on
+// the mesh, and so a tiny time step on the solver (baseline: shortest altitude 0.02 um kept,
+// 2.2 um collapsed).
+constexpr double max_dent_turn = 0.3;
 
 struct TessellationReport {
   std::size_t merged_grains = 0;       // grain pairs merged because their cells overlapped

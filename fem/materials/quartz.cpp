@@ -38,36 +38,41 @@ private:
   template <bool Strength> void run(const StrainBatch &in, StressState &s, MaterialOutput &out) const {
     const double dt = in.dt, sqrt23 = std::sqrt(2.0 / 3.0), p_min = -eos_.cutoff;
     const double relax = std::min(dt / T_, 1.0);
+    // Local array pointers: contiguous vector loads and stores (no per-lane gathers).
+    const double *dxx = in.dxx, *dyy = in.dyy, *dxy = in.dxy, *spin = in.spin, *jac = in.jacobian;
+    const double *dvol = in.volume_change, *vmid = in.volume_mid, *vol0 = in.volume0;
+    double *sxx_ = s.sxx, *syy_ = s.syy, *sxy_ = s.sxy, *pressure = s.pressure, *energy = s.energy;
+    double *eps = s.plastic_strain, *cs = out.sound_speed;
     double plastic_work = 0.0;
 #pragma omp simd reduction(+ : plastic_work)
     for (std::size_t i = 0; i < in.n; ++i) {
-      const double mu = 1.0 / in.jacobian[i] - 1.0;
-      const double cold = eos_.cold(mu), a = eos_.energyFree(mu, cold), b = eos_.gamma / in.volume0[i];
+      const double mu = 1.0 / jac[i] - 1.0;
+      const double cold = eos_.cold(mu), a = eos_.energyFree(mu, cold), b = eos_.gamma / vol0[i];
       const double P = std::max(cold, 0.0);
       const double G = G0_ + (G2_ * P + G1_) * P;
-      double sxx = s.sxx[i], syy = s.syy[i], sxy = s.sxy[i];
-      rotateDeviator(sxx, syy, sxy, in.spin[i] * dt);
-      const double power_old = stressPower(sxx, syy, sxy, in.dxx[i], in.dyy[i], in.dxy[i]);
-      addDeviatoricIncrement(sxx, syy, sxy, 2.0 * G * dt, in.dxx[i], in.dyy[i], in.dxy[i]);
+      double sxx = sxx_[i], syy = syy_[i], sxy = sxy_[i];
+      rotateDeviator(sxx, syy, sxy, spin[i] * dt);
+      const double power_old = stressPower(sxx, syy, sxy, dxx[i], dyy[i], dxy[i]);
+      addDeviatoricIncrement(sxx, syy, sxy, 2.0 * G * dt, dxx[i], dyy[i], dxy[i]);
       if constexpr (Strength) {
         // Yield at the new volume with the old energy (the energy follows the new stress).
-        const double p_yield = std::max(a + b * s.energy[i], p_min);
+        const double p_yield = std::max(a + b * energy[i], p_min);
         const double Se = sqrt23 * std::min(B_ + M_ * p_yield, Y1_);
         const double norm = deviatorNorm(sxx, syy, sxy);
         if (norm > Se) {
           const double scale = 1.0 - (1.0 - Se / norm) * relax;
           sxx *= scale, syy *= scale, sxy *= scale;
           const double dev_plastic = (1.0 - scale) * norm / (2.0 * G); // |S* - S| / 2G
-          s.plastic_strain[i] += sqrt23 * dev_plastic;
-          plastic_work += in.volume_mid[i] * scale * norm * dev_plastic;
+          eps[i] += sqrt23 * dev_plastic;
+          plastic_work += vmid[i] * scale * norm * dev_plastic;
         }
       }
-      const double power_new = stressPower(sxx, syy, sxy, in.dxx[i], in.dyy[i], in.dxy[i]);
-      s.sxx[i] = sxx, s.syy[i] = syy, s.sxy[i] = sxy;
-      const double w_dev = 0.5 * (power_old + power_new) * in.volume_mid[i] * dt;
-      energyEquation(a, b, p_min, in.volume_change[i], w_dev, s.energy[i], s.pressure[i]);
-      const double bulk = eos_.bulkModulus(mu, s.pressure[i]);
-      out.sound_speed[i] = std::sqrt((bulk + 4.0 / 3.0 * G) * in.jacobian[i] / rho0_);
+      const double power_new = stressPower(sxx, syy, sxy, dxx[i], dyy[i], dxy[i]);
+      sxx_[i] = sxx, syy_[i] = syy, sxy_[i] = sxy;
+      const double w_dev = 0.5 * (power_old + power_new) * vmid[i] * dt;
+      energyEquation(a, b, p_min, dvol[i], w_dev, energy[i], pressure[i]);
+      const double bulk = eos_.bulkModulus(mu, pressure[i]);
+      cs[i] = std::sqrt((bulk + 4.0 / 3.0 * G) * jac[i] / rho0_);
     }
     out.plastic_work = plastic_work;
   }

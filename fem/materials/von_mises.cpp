@@ -34,34 +34,39 @@ private:
   template <bool Plastic> void run(const StrainBatch &in, StressState &s, MaterialOutput &out) const {
     const double dt = in.dt, two_g_dt = 2.0 * G_ * dt, sqrt23 = std::sqrt(2.0 / 3.0);
     const double p_min = -eos_.cutoff;
+    // Local array pointers: contiguous vector loads and stores (no per-lane gathers).
+    const double *dxx = in.dxx, *dyy = in.dyy, *dxy = in.dxy, *spin = in.spin, *jac = in.jacobian;
+    const double *dvol = in.volume_change, *vmid = in.volume_mid, *vol0 = in.volume0;
+    double *sxx_ = s.sxx, *syy_ = s.syy, *sxy_ = s.sxy, *pressure = s.pressure, *energy = s.energy;
+    double *eps = s.plastic_strain, *cs = out.sound_speed;
     double plastic_work = 0.0;
 #pragma omp simd reduction(+ : plastic_work)
     for (std::size_t i = 0; i < in.n; ++i) {
-      const double mu = 1.0 / in.jacobian[i] - 1.0;
+      const double mu = 1.0 / jac[i] - 1.0;
       // Deviator: rotate, add the elastic trial increment, return to the yield surface.
-      double sxx = s.sxx[i], syy = s.syy[i], sxy = s.sxy[i];
-      rotateDeviator(sxx, syy, sxy, in.spin[i] * dt);
-      const double power_old = stressPower(sxx, syy, sxy, in.dxx[i], in.dyy[i], in.dxy[i]);
-      addDeviatoricIncrement(sxx, syy, sxy, two_g_dt, in.dxx[i], in.dyy[i], in.dxy[i]);
+      double sxx = sxx_[i], syy = syy_[i], sxy = sxy_[i];
+      rotateDeviator(sxx, syy, sxy, spin[i] * dt);
+      const double power_old = stressPower(sxx, syy, sxy, dxx[i], dyy[i], dxy[i]);
+      addDeviatoricIncrement(sxx, syy, sxy, two_g_dt, dxx[i], dyy[i], dxy[i]);
       if constexpr (Plastic) {
         const double norm = deviatorNorm(sxx, syy, sxy);
-        const double f = norm - sqrt23 * (Y0_ + M_ * s.plastic_strain[i]);
+        const double f = norm - sqrt23 * (Y0_ + M_ * eps[i]);
         if (f > 0.0) {
           const double dgamma = f / (2.0 * G_ + 2.0 / 3.0 * M_);
           const double scale = 1.0 - 2.0 * G_ * dgamma / norm;
           sxx *= scale, syy *= scale, sxy *= scale;
-          s.plastic_strain[i] += sqrt23 * dgamma;
-          plastic_work += in.volume_mid[i] * dgamma * scale * norm; // V S : (S* - S) / 2G
+          eps[i] += sqrt23 * dgamma;
+          plastic_work += vmid[i] * dgamma * scale * norm; // V S : (S* - S) / 2G
         }
       }
-      const double power_new = stressPower(sxx, syy, sxy, in.dxx[i], in.dyy[i], in.dxy[i]);
-      s.sxx[i] = sxx, s.syy[i] = syy, s.sxy[i] = sxy;
+      const double power_new = stressPower(sxx, syy, sxy, dxx[i], dyy[i], dxy[i]);
+      sxx_[i] = sxx, syy_[i] = syy, sxy_[i] = sxy;
       // Pressure and energy together (the pressure depends on the new energy).
-      const double w_dev = 0.5 * (power_old + power_new) * in.volume_mid[i] * dt;
-      energyEquation(eos_.energyFree(mu, eos_.cold(mu)), eos_.gamma / in.volume0[i], p_min,
-                     in.volume_change[i], w_dev, s.energy[i], s.pressure[i]);
-      const double bulk = eos_.bulkModulus(mu, s.pressure[i]);
-      out.sound_speed[i] = std::sqrt((bulk + 4.0 / 3.0 * G_) * in.jacobian[i] / rho0_);
+      const double w_dev = 0.5 * (power_old + power_new) * vmid[i] * dt;
+      energyEquation(eos_.energyFree(mu, eos_.cold(mu)), eos_.gamma / vol0[i], p_min, dvol[i], w_dev,
+                     energy[i], pressure[i]);
+      const double bulk = eos_.bulkModulus(mu, pressure[i]);
+      cs[i] = std::sqrt((bulk + 4.0 / 3.0 * G_) * jac[i] / rho0_);
     }
     out.plastic_work = plastic_work;
   }

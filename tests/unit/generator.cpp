@@ -53,7 +53,7 @@ void expectValidGrains(const Polygons &grains, const TargetSpec &spec) {
     const std::size_t n = grains.corners(g);
     ASSERT_GE(n, 3u);
     EXPECT_GT(signedArea(x, y, n), 0.0) << "grain " << g << " is not counter-clockwise";
-    EXPECT_TRUE(isConvex(x, y, n, 1e-9)) << "grain " << g << " is not convex";
+    EXPECT_TRUE(isConvex(x, y, n, max_dent_turn + 1e-9)) << "grain " << g << " is not convex (up to the allowed dent)";
     for (std::size_t i = 0; i < n; ++i)
       EXPECT_TRUE(x[i] >= 0 && x[i] <= spec.width && y[i] >= 0 && y[i] <= spec.height);
   }
