@@ -14,6 +14,7 @@ namespace {
 constexpr std::uint32_t no_node = 0xffffffffu;
 constexpr double touching = 1e-6; // penetration (this fraction of an element) taken as touching
 constexpr double deep = 0.5;        // penetration beyond this fraction of an element counts as deep
+constexpr double check_depth = 0.05; // penetration from which a contact is checked by crossings
 constexpr std::size_t max_cells = 1u << 22;
 
 bool overlap(double a0, double a1, double b0, double b1) { return a0 <= b1 && b0 <= a1; }
@@ -248,10 +249,12 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, double dt,
     const double px = nd.x[p], py = nd.y[p];
     if (px < rx0 || px > rx1 || py < ry0 || py > ry1)
       continue;
-    // The closest point of B's boundary: on a segment's inside (the node then lies on the normal
-    // through it) or at a corner (the node is then outside a convex corner: no contact).
-    double best = HUGE_VAL, depth = 0.0, along = 0.0;
+    // The closest point of B's boundary: on a segment's inside (the node is in contact when behind
+    // it) or at a corner. Near a convex corner the node is then outside; behind the closest
+    // segment's line it may be inside a dented corner, which the crossing count decides.
+    double best = HUGE_VAL, g_best = 0.0, along = 0.0;
     std::uint32_t closest = no_node;
+    bool corner = false;
     for (std::uint32_t i : near) {
       const Segment &s = geometry_[i];
       const double dx = px - s.ax, dy = py - s.ay;
@@ -259,15 +262,41 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, double dt,
       const double excess = t < 0.0 ? -t : (t > s.length ? t - s.length : 0.0);
       const double distance = excess * excess + g * g;
       if (distance < best)
-        best = distance, closest = excess > 0.0 ? no_node : i, depth = -g, along = t;
+        best = distance, closest = i, corner = excess > 0.0, g_best = g, along = t;
     }
-    if (closest == no_node || depth <= touching * h)
+    if (closest == no_node || g_best >= 0.0)
       continue;
     const Segment &s = geometry_[closest];
-    hit(model, p, segments_[2 * closest], segments_[2 * closest + 1], along / s.length, s.nx, s.ny,
+    double depth = -g_best, nx = s.nx, ny = s.ny, w2 = along / s.length;
+    if (corner) { // pushed out toward the corner
+      w2 = along < 0.0 ? 0.0 : 1.0;
+      const double vx = s.ax + w2 * s.length * s.tx - px, vy = s.ay + w2 * s.length * s.ty - py;
+      depth = std::sqrt(vx * vx + vy * vy);
+      if (!(depth > check_depth * h) || !inside(nd, B, px, py)) // clear of the boundary
+        continue;
+      nx = vx / depth, ny = vy / depth;
+    } else if (depth <= touching * h || (depth > check_depth * h && !inside(nd, B, px, py))) {
+      // touching only; or deeper than a few percent of an element, where a dented grain can put
+      // a node outside it behind one of its segments: the crossing count decides
+      continue;
+    }
+    hit(model, p, segments_[2 * closest], segments_[2 * closest + 1], w2, nx, ny,
         depth - touching * h, mu, dt, hits);
     hits.back().depth = depth / h;
   }
+}
+
+// Whether (px, py) lies inside body B's boundary polygon: the number of boundary segments a ray
+// in +x crosses is odd.
+bool Contact::inside(const Nodes &nd, std::size_t B, double px, double py) const {
+  bool in = false;
+  for (std::size_t k = segment_begin_[B]; k < segment_begin_[B + 1]; ++k) {
+    const std::uint32_t a = segments_[2 * k], b = segments_[2 * k + 1];
+    const double ax = nd.x[a], ay = nd.y[a], bx = nd.x[b], by = nd.y[b];
+    if ((ay > py) != (by > py) && px < ax + (py - ay) * (bx - ax) / (by - ay))
+      in = !in;
+  }
+  return in;
 }
 
 // The rigid walls: a boundary node of a moving body beyond a wall is pushed back along its normal.

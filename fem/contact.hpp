@@ -84,6 +84,7 @@ private:
   void findPairs(const Model &model);
   void touch(const Model &model, std::size_t A, std::size_t B, double dt, std::vector<Hit> &hits,
              std::vector<std::uint32_t> &near) const;
+  bool inside(const Nodes &nodes, std::size_t B, double px, double py) const;
   void walls(const Model &model, double dt, std::vector<Hit> &hits) const;
   void hit(const Model &model, std::uint32_t node, std::uint32_t s1, std::uint32_t s2, double w2,
            double nx, double ny, double depth, double mu, double dt, std::vector<Hit> &hits) const;
