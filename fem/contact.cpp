@@ -46,6 +46,8 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
     size_.push_back(longest);
   }
   geometry_.resize(segments_.size() / 2);
+  node_x_.resize(nodes_.size());
+  node_y_.resize(nodes_.size());
   boxes_.resize(n_bodies);
   for (std::size_t b = 0; b < n_bodies; ++b)
     measure(model, b);
@@ -131,9 +133,10 @@ void Contact::measure(const Model &model, std::size_t b) {
   const Nodes &nd = model.nodes;
   Box box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
   for (std::size_t k = node_begin_[b]; k < node_begin_[b + 1]; ++k) {
-    const std::uint32_t a = nodes_[k];
-    box.x0 = std::min(box.x0, nd.x[a]), box.x1 = std::max(box.x1, nd.x[a]);
-    box.y0 = std::min(box.y0, nd.y[a]), box.y1 = std::max(box.y1, nd.y[a]);
+    const double x = nd.x[nodes_[k]], y = nd.y[nodes_[k]];
+    node_x_[k] = x, node_y_[k] = y;
+    box.x0 = std::min(box.x0, x), box.x1 = std::max(box.x1, x);
+    box.y0 = std::min(box.y0, y), box.y1 = std::max(box.y1, y);
   }
   boxes_[b] = box;
   for (std::size_t k = segment_begin_[b]; k < segment_begin_[b + 1]; ++k) {
@@ -141,7 +144,9 @@ void Contact::measure(const Model &model, std::size_t b) {
     const double ax = nd.x[s1], ay = nd.y[s1], dx = nd.x[s2] - ax, dy = nd.y[s2] - ay;
     const double length = std::sqrt(dx * dx + dy * dy), inv = length > 0.0 ? 1.0 / length : 0.0;
     // outward normal: the tangent turned right (the boundary runs counter-clockwise)
-    geometry_[k] = {ax, ay, dx * inv, dy * inv, length, dy * inv, -dx * inv};
+    geometry_[k] = {ax,       ay,        dx * inv,  dy * inv,  length, dy * inv, -dx * inv,
+                    std::min(ax, ax + dx), std::min(ay, ay + dy), std::max(ax, ax + dx),
+                    std::max(ay, ay + dy)};
   }
 }
 
@@ -225,30 +230,31 @@ void Contact::findPairs(const Model &model) {
 }
 
 // The boundary nodes of body A that are inside body B. A node inside B is in the overlap of the
-// two boxes; the segment that decides is the closest to it, within one element size of it.
+// two boxes; the segment that decides is the closest to it.
 void Contact::touch(const Model &model, std::size_t A, std::size_t B, double dt,
                     std::vector<Hit> &hits, std::vector<std::uint32_t> &near) const {
   const Nodes &nd = model.nodes;
   const Box &a = boxes_[A], &b = boxes_[B];
   const double rx0 = std::max(a.x0, b.x0), rx1 = std::min(a.x1, b.x1);
   const double ry0 = std::max(a.y0, b.y0), ry1 = std::min(a.y1, b.y1);
-  const double h = size_[B];
+  // Segments within `reach` of the overlap: a node behind one of them by less than `reach` finds
+  // its closest segment among them; deeper contacts are checked by the crossing count.
+  const double h = size_[B], reach = check_depth * h;
   near.clear();
   for (std::size_t k = segment_begin_[B]; k < segment_begin_[B + 1]; ++k) {
     const Segment &s = geometry_[k];
-    const double bx = s.ax + s.length * s.tx, by = s.ay + s.length * s.ty;
-    if (s.length > 0.0 && std::max(s.ax, bx) >= rx0 - h && std::min(s.ax, bx) <= rx1 + h &&
-        std::max(s.ay, by) >= ry0 - h && std::min(s.ay, by) <= ry1 + h)
+    if (s.length > 0.0 && s.x1 >= rx0 - reach && s.x0 <= rx1 + reach && s.y1 >= ry0 - reach &&
+        s.y0 <= ry1 + reach)
       near.push_back(static_cast<std::uint32_t>(k));
   }
   if (near.empty())
     return;
   const double mu = s_.friction[model.bodies[A].material * n_materials_ + model.bodies[B].material];
   for (std::size_t k = node_begin_[A]; k < node_begin_[A + 1]; ++k) {
-    const std::uint32_t p = nodes_[k];
-    const double px = nd.x[p], py = nd.y[p];
+    const double px = node_x_[k], py = node_y_[k];
     if (px < rx0 || px > rx1 || py < ry0 || py > ry1)
       continue;
+    const std::uint32_t p = nodes_[k];
     // The closest point of B's boundary: on a segment's inside (the node is in contact when behind
     // it) or at a corner. Near a convex corner the node is then outside; behind the closest
     // segment's line it may be inside a dented corner, which the crossing count decides.
@@ -307,6 +313,10 @@ void Contact::walls(const Model &model, double dt, std::vector<Hit> &hits) const
   if (!left && !right && !bottom)
     return;
   for (std::uint32_t b : moving_) {
+    const Box &box = boxes_[b];
+    if (!(left && box.x0 < s_.wall_left) && !(right && box.x1 > s_.wall_right) &&
+        !(bottom && box.y0 < s_.wall_bottom))
+      continue;
     const double tol = touching * size_[b];
     for (std::size_t k = node_begin_[b]; k < node_begin_[b + 1]; ++k) {
       const std::uint32_t p = nodes_[k];

@@ -69,6 +69,7 @@ private:
   };
   struct Segment {
     double ax, ay, tx, ty, length, nx, ny; // start, unit tangent, length, outward normal
+    double x0, y0, x1, y1;                 // bounding box
   };
   // Bodies in a uniform grid of cells (cell lists), for the broad phase.
   struct Grid {
@@ -93,6 +94,7 @@ private:
   std::size_t n_materials_;
   std::vector<std::size_t> node_begin_, segment_begin_; // per body, into nodes_ and segments_
   std::vector<std::uint32_t> nodes_;                    // boundary nodes, body by body
+  std::vector<double> node_x_, node_y_;                 // their positions, this step
   std::vector<std::uint32_t> segments_;                 // boundary edges (node pairs, ccw)
   std::vector<Segment> geometry_;                       // of each boundary edge, this step
   std::vector<double> size_;                            // per body: longest boundary edge [m]
