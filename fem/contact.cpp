@@ -114,7 +114,7 @@ void Contact::addForces(Model &model, double, double dt) {
       nd.fx_friction[h.node] += h.friction_x, nd.fy_friction[h.node] += h.friction_y;
       model.wake(nd.body[h.node]);
       if (h.s1 != no_node) {
-        for (auto [s, w] : {std::pair{h.s1, h.w1}, {h.s2, h.w2}}) {
+        for (auto [s, w] : {std::pair{h.s1, 1.0 - h.w2}, {h.s2, h.w2}}) {
           nd.fx_ext[s] -= w * h.fx, nd.fy_ext[s] -= w * h.fy;
           nd.fx_friction[s] -= w * h.friction_x, nd.fy_friction[s] -= w * h.friction_y;
         }
@@ -286,9 +286,8 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, double dt,
       // a node outside it behind one of its segments: the crossing count decides
       continue;
     }
-    hit(model, p, segments_[2 * closest], segments_[2 * closest + 1], w2, nx, ny,
-        depth - touching * h, mu, dt, hits);
-    hits.back().depth = depth / h;
+    hit(model, p, segments_[2 * closest], segments_[2 * closest + 1], w2, nx, ny, depth, h, mu, dt,
+        hits);
   }
 }
 
@@ -307,7 +306,6 @@ bool Contact::inside(const Nodes &nd, std::size_t B, double px, double py) const
 
 // The rigid walls: a boundary node of a moving body beyond a wall is pushed back along its normal.
 void Contact::walls(const Model &model, double dt, std::vector<Hit> &hits) const {
-  const Nodes &nd = model.nodes;
   const bool left = !std::isnan(s_.wall_left), right = !std::isnan(s_.wall_right),
              bottom = !std::isnan(s_.wall_bottom);
   if (!left && !right && !bottom)
@@ -317,24 +315,24 @@ void Contact::walls(const Model &model, double dt, std::vector<Hit> &hits) const
     if (!(left && box.x0 < s_.wall_left) && !(right && box.x1 > s_.wall_right) &&
         !(bottom && box.y0 < s_.wall_bottom))
       continue;
-    const double tol = touching * size_[b];
+    const double h = size_[b];
     for (std::size_t k = node_begin_[b]; k < node_begin_[b + 1]; ++k) {
       const std::uint32_t p = nodes_[k];
-      for (auto [on, depth, nx, ny] : {std::tuple{left, s_.wall_left - nd.x[p], 1.0, 0.0},
-                                       {right, nd.x[p] - s_.wall_right, -1.0, 0.0},
-                                       {bottom, s_.wall_bottom - nd.y[p], 0.0, 1.0}})
-        if (on && depth > tol) {
-          hit(model, p, no_node, no_node, 0.0, nx, ny, depth - tol, s_.wall_friction, dt, hits);
-          hits.back().depth = depth / size_[b];
-        }
+      const double x = node_x_[k], y = node_y_[k];
+      for (auto [on, depth, nx, ny] : {std::tuple{left, s_.wall_left - x, 1.0, 0.0},
+                                       {right, x - s_.wall_right, -1.0, 0.0},
+                                       {bottom, s_.wall_bottom - y, 0.0, 1.0}})
+        if (on && depth > touching * h)
+          hit(model, p, no_node, no_node, 0.0, nx, ny, depth, h, s_.wall_friction, dt, hits);
     }
   }
 }
 
 // The force on `node`, pushed out along (nx, ny) by `depth` from the segment s1-s2 (at weight w2
-// from s1) or from a wall (s1 = no_node); relative velocities at mid-step.
+// from s1) or from a wall (s1 = no_node), `h` the element size (the first `touching` h of the
+// depth is free); relative velocities at mid-step.
 void Contact::hit(const Model &model, std::uint32_t p, std::uint32_t s1, std::uint32_t s2,
-                  double w2, double nx, double ny, double depth, double mu, double dt,
+                  double w2, double nx, double ny, double depth, double h, double mu, double dt,
                   std::vector<Hit> &hits) const {
   const Nodes &nd = model.nodes;
   const double w1 = 1.0 - w2;
@@ -347,10 +345,10 @@ void Contact::hit(const Model &model, std::uint32_t p, std::uint32_t s1, std::ui
   }
   const double vn = vx * nx + vy * ny; // > 0: separating
   const double kappa = s_.stiffness, c = 2.0 * s_.damping * std::sqrt(kappa);
-  const double fn = std::max(0.0, m_eff / dt * (kappa * depth / dt - c * vn));
+  const double fn = std::max(0.0, m_eff / dt * (kappa * (depth - touching * h) / dt - c * vn));
   const double tx = vx - vn * nx, ty = vy - vn * ny, slip = std::sqrt(tx * tx + ty * ty);
   const double ft = slip > 0.0 ? std::min(mu * fn, m_eff * slip / dt) / slip : 0.0;
-  hits.push_back({p, s1, s2, w1, w2, fn * nx - ft * tx, fn * ny - ft * ty, -ft * tx, -ft * ty, 0.0});
+  hits.push_back({p, s1, s2, w2, fn * nx - ft * tx, fn * ny - ft * ty, -ft * tx, -ft * ty, depth / h});
 }
 
 } // namespace mesopen::fem

@@ -56,11 +56,11 @@ public:
   void addForces(Model &model, double time, double dt) override;
   const ContactStatistics &statistics() const { return stats_; }
 
-  // One contact force: on `node`, and minus it on the segment's nodes by weights w1, w2 (no
+  // One contact force: on `node`, and minus it on the segment's nodes by weights 1 - w2, w2 (no
   // segment for a wall).
   struct Hit {
     std::uint32_t node, s1, s2;
-    double w1, w2, fx, fy, friction_x, friction_y, depth; // depth / element size
+    double w2, fx, fy, friction_x, friction_y, depth; // depth / element size
   };
 
 private:
@@ -88,7 +88,8 @@ private:
   bool inside(const Nodes &nodes, std::size_t B, double px, double py) const;
   void walls(const Model &model, double dt, std::vector<Hit> &hits) const;
   void hit(const Model &model, std::uint32_t node, std::uint32_t s1, std::uint32_t s2, double w2,
-           double nx, double ny, double depth, double mu, double dt, std::vector<Hit> &hits) const;
+           double nx, double ny, double depth, double h, double mu, double dt,
+           std::vector<Hit> &hits) const;
 
   ContactSettings s_;
   std::size_t n_materials_;

@@ -131,9 +131,8 @@ class Progress {
 public:
   Progress(bool on, double end_time, double end_depth)
       : on_(on), end_time_(end_time), end_depth_(end_depth) {}
+  bool due() const { return on_ && Clock::now() - last_ >= std::chrono::milliseconds(250); }
   void show(const fem::Solver &solver, double depth) {
-    if (!on_ || Clock::now() - last_ < std::chrono::milliseconds(250))
-      return;
     last_ = Clock::now();
     const double wall = secondsSince(start_), t = solver.time();
     const double done = std::max(t / end_time_, end_depth_ > 0.0 ? depth / end_depth_ : 0.0);
@@ -185,16 +184,17 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
   try {
     series.sample(model, solver);
     frames.offer(model, solver, true);
-    while (!ended()) {
+    for (bool last = ended(); !last;) {
       const auto step_start = Clock::now();
       solver.step();
       result.solver_seconds += secondsSince(step_start);
       result.element_steps += static_cast<double>(solver.activeElements());
-      const bool last = ended();
+      last = ended();
       if (last || solver.steps() % every == 0)
         series.sample(model, solver);
       frames.offer(model, solver, last);
-      progress.show(solver, series.depth(model));
+      if (progress.due())
+        progress.show(solver, series.depth(model));
     }
   } catch (const std::exception &e) {
     result.failure = e.what();

@@ -156,7 +156,8 @@ TEST(Contact, DroppedGrainDoesNotPenetrateTheWall) {
       std::printf("dropped at %5.1f m/s, angle %.1f: deepest %.2e m = %.4f elements, rebound %d\n",
                   speed, angle, deepest, deepest / 10e-6, rebounded);
       EXPECT_TRUE(rebounded);
-      if (speed <= 100.0)
+      if (speed <= 100.0) {
         EXPECT_LT(deepest, 0.01 * 10e-6) << speed << " m/s, angle " << angle;
+      }
     }
 }
