@@ -16,6 +16,8 @@ constexpr double touching = 1e-6; // penetration (this fraction of an element) t
 constexpr double deep = 0.5;        // penetration beyond this fraction of an element counts as deep
 constexpr double check_depth = 0.05; // penetration from which a contact is checked by crossings
 constexpr std::size_t max_cells = 1u << 22;
+constexpr double margin_fraction = 0.5; // a pair list's margin / the smaller body's element size
+constexpr std::size_t forget_after = 1024; // steps after which an unused pair list goes
 
 bool overlap(double a0, double a1, double b0, double b1) { return a0 <= b1 && b0 <= a1; }
 double sq(double x) { return x * x; }
@@ -34,6 +36,9 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
     std::vector<std::uint32_t> nodes(body.boundary.begin(), body.boundary.end());
     std::sort(nodes.begin(), nodes.end());
     nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    for (std::uint32_t p : body.boundary)
+      segment_ends_.push_back(static_cast<std::uint32_t>(
+          nodes_.size() + (std::lower_bound(nodes.begin(), nodes.end(), p) - nodes.begin())));
     nodes_.insert(nodes_.end(), nodes.begin(), nodes.end());
     segments_.insert(segments_.end(), body.boundary.begin(), body.boundary.end());
     node_begin_.push_back(nodes_.size());
@@ -45,10 +50,12 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
     }
     size_.push_back(longest);
   }
-  geometry_.resize(segments_.size() / 2);
   node_x_.resize(nodes_.size());
   node_y_.resize(nodes_.size());
   boxes_.resize(n_bodies);
+  travel_.assign(n_bodies, 0.0);
+  for (std::size_t k = 0; k < nodes_.size(); ++k)
+    node_x_[k] = nd.x[nodes_[k]], node_y_[k] = nd.y[nodes_[k]];
   for (std::size_t b = 0; b < n_bodies; ++b)
     measure(model, b);
   // Grid cells about twice the typical body: a grain sits in at most four cells.
@@ -81,9 +88,20 @@ void Contact::addForces(Model &model, double, double dt) {
     measure(model, moving_[i]);
   findPairs(model);
 
+  // Each pair's list of nodes and segments near the overlap (lists not used for a while go).
+  ++step_;
+  const std::size_t n_pairs = pairs_.size();
+  pair_lists_.resize(n_pairs);
+  for (std::size_t i = 0; i < n_pairs; ++i) {
+    PairList &list = lists_[std::uint64_t{pairs_[i].first} << 32 | pairs_[i].second];
+    list.used = step_;
+    pair_lists_[i] = &list;
+  }
+  if (step_ % forget_after == 0)
+    std::erase_if(lists_, [&](const auto &entry) { return entry.second.used + forget_after < step_; });
+
   // Narrow phase: each thread takes a contiguous run of pairs, so that the hits, taken thread by
   // thread, come in pair order whatever the number of threads.
-  const std::size_t n_pairs = pairs_.size();
   const int threads = omp_get_max_threads();
   if (thread_hits_.size() < static_cast<std::size_t>(threads))
     thread_hits_.resize(threads);
@@ -94,11 +112,24 @@ void Contact::addForces(Model &model, double, double dt) {
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
     const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
     std::vector<Hit> &hits = thread_hits_[t];
-    std::vector<std::uint32_t> near;
+    std::vector<Segment> near;
+    std::vector<std::uint32_t> near_index;
+    std::size_t refreshed = 0;
     for (std::size_t i = n_pairs * t / T; i < n_pairs * (t + 1) / T; ++i) {
-      touch(model, pairs_[i].first, pairs_[i].second, dt, hits, near);
-      touch(model, pairs_[i].second, pairs_[i].first, dt, hits, near);
+      const std::uint32_t a = pairs_[i].first, b = pairs_[i].second;
+      PairList &list = *pair_lists_[i];
+      // Each boundary node has moved by at most the travel since the list was built: the overlap
+      // by as much as either body, a node by its body's, a segment's box by its body's.
+      if (2.0 * ((travel_[a] - list.travel_a) + (travel_[b] - list.travel_b)) > list.margin)
+        refresh(a, b, list), ++refreshed;
+      const std::uint32_t *items = list.items.data();
+      touch(model, a, b, items, items + list.end[0], items + list.end[0], items + list.end[1], dt,
+            hits, near, near_index);
+      touch(model, b, a, items + list.end[1], items + list.end[2], items + list.end[2],
+            items + list.items.size(), dt, hits, near, near_index);
     }
+#pragma omp atomic
+    stats_.refreshed += refreshed;
     if (t + 1 == T)
       walls(model, dt, hits);
   }
@@ -110,14 +141,11 @@ void Contact::addForces(Model &model, double, double dt) {
   stats_.depth = 0.0;
   for (const auto &hits : thread_hits_)
     for (const Hit &h : hits) {
-      nd.fx_ext[h.node] += h.fx, nd.fy_ext[h.node] += h.fy;
-      nd.fx_friction[h.node] += h.friction_x, nd.fy_friction[h.node] += h.friction_y;
+      nd.addExternal(h.node, h.fx, h.fy, h.friction_x, h.friction_y);
       model.wake(nd.body[h.node]);
       if (h.s1 != no_node) {
-        for (auto [s, w] : {std::pair{h.s1, 1.0 - h.w2}, {h.s2, h.w2}}) {
-          nd.fx_ext[s] -= w * h.fx, nd.fy_ext[s] -= w * h.fy;
-          nd.fx_friction[s] -= w * h.friction_x, nd.fy_friction[s] -= w * h.friction_y;
-        }
+        for (auto [s, w] : {std::pair{h.s1, 1.0 - h.w2}, {h.s2, h.w2}})
+          nd.addExternal(s, -w * h.fx, -w * h.fy, -w * h.friction_x, -w * h.friction_y);
         model.wake(nd.body[h.s1]);
       }
       ++stats_.contacts;
@@ -128,26 +156,55 @@ void Contact::addForces(Model &model, double, double dt) {
   stats_.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// A body's bounding box and its boundary segments' geometry at the current positions.
+// A body's boundary node positions and bounding box now, and how far its nodes moved since the
+// last call (the largest coordinate change, added to travel_).
 void Contact::measure(const Model &model, std::size_t b) {
   const Nodes &nd = model.nodes;
   Box box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  double moved = 0.0;
   for (std::size_t k = node_begin_[b]; k < node_begin_[b + 1]; ++k) {
     const double x = nd.x[nodes_[k]], y = nd.y[nodes_[k]];
+    moved = std::max(moved, std::max(std::abs(x - node_x_[k]), std::abs(y - node_y_[k])));
     node_x_[k] = x, node_y_[k] = y;
     box.x0 = std::min(box.x0, x), box.x1 = std::max(box.x1, x);
     box.y0 = std::min(box.y0, y), box.y1 = std::max(box.y1, y);
   }
   boxes_[b] = box;
-  for (std::size_t k = segment_begin_[b]; k < segment_begin_[b + 1]; ++k) {
-    const std::uint32_t s1 = segments_[2 * k], s2 = segments_[2 * k + 1];
-    const double ax = nd.x[s1], ay = nd.y[s1], dx = nd.x[s2] - ax, dy = nd.y[s2] - ay;
-    const double length = std::sqrt(dx * dx + dy * dy), inv = length > 0.0 ? 1.0 / length : 0.0;
-    // outward normal: the tangent turned right (the boundary runs counter-clockwise)
-    geometry_[k] = {ax,       ay,        dx * inv,  dy * inv,  length, dy * inv, -dx * inv,
-                    std::min(ax, ax + dx), std::min(ay, ay + dy), std::max(ax, ax + dx),
-                    std::max(ay, ay + dy)};
-  }
+  travel_[b] += moved;
+}
+
+// The nodes of a and b inside the overlap of their boxes widened by the margin, and the segments
+// whose boxes come within the margin plus the reach of the narrow phase (see touch).
+void Contact::refresh(std::size_t a, std::size_t b, PairList &list) const {
+  const Box &A = boxes_[a], &B = boxes_[b];
+  const double margin = margin_fraction * std::min(size_[a], size_[b]);
+  const double rx0 = std::max(A.x0, B.x0) - margin, rx1 = std::min(A.x1, B.x1) + margin;
+  const double ry0 = std::max(A.y0, B.y0) - margin, ry1 = std::min(A.y1, B.y1) + margin;
+  list.items.clear();
+  auto nodes = [&](std::size_t body) {
+    for (std::size_t k = node_begin_[body]; k < node_begin_[body + 1]; ++k)
+      if (node_x_[k] >= rx0 && node_x_[k] <= rx1 && node_y_[k] >= ry0 && node_y_[k] <= ry1)
+        list.items.push_back(static_cast<std::uint32_t>(k));
+  };
+  auto segments = [&](std::size_t body) {
+    const double reach = check_depth * size_[body];
+    for (std::size_t k = segment_begin_[body]; k < segment_begin_[body + 1]; ++k) {
+      const std::uint32_t p = segment_ends_[2 * k], q = segment_ends_[2 * k + 1];
+      if (std::max(node_x_[p], node_x_[q]) >= rx0 - reach &&
+          std::min(node_x_[p], node_x_[q]) <= rx1 + reach &&
+          std::max(node_y_[p], node_y_[q]) >= ry0 - reach &&
+          std::min(node_y_[p], node_y_[q]) <= ry1 + reach)
+        list.items.push_back(static_cast<std::uint32_t>(k));
+    }
+  };
+  nodes(a);
+  list.end[0] = static_cast<std::uint32_t>(list.items.size());
+  segments(b);
+  list.end[1] = static_cast<std::uint32_t>(list.items.size());
+  nodes(b);
+  list.end[2] = static_cast<std::uint32_t>(list.items.size());
+  segments(a);
+  list.travel_a = travel_[a], list.travel_b = travel_[b], list.margin = margin;
 }
 
 std::size_t Contact::Grid::ix(double x) const {
@@ -229,10 +286,13 @@ void Contact::findPairs(const Model &model) {
   }
 }
 
-// The boundary nodes of body A that are inside body B. A node inside B is in the overlap of the
-// two boxes; the segment that decides is the closest to it.
-void Contact::touch(const Model &model, std::size_t A, std::size_t B, double dt,
-                    std::vector<Hit> &hits, std::vector<std::uint32_t> &near) const {
+// The boundary nodes of body A that are inside body B, among A's `nodes` and B's `segments` (from
+// the pair's list). A node inside B is in the overlap of the two boxes; the segment that decides
+// is the closest to it.
+void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
+                    const std::uint32_t *nodes_end, const std::uint32_t *segments,
+                    const std::uint32_t *segments_end, double dt, std::vector<Hit> &hits,
+                    std::vector<Segment> &near, std::vector<std::uint32_t> &near_index) const {
   const Nodes &nd = model.nodes;
   const Box &a = boxes_[A], &b = boxes_[B];
   const double rx0 = std::max(a.x0, b.x0), rx1 = std::min(a.x1, b.x1);
@@ -241,28 +301,37 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, double dt,
   // its closest segment among them; deeper contacts are checked by the crossing count.
   const double h = size_[B], reach = check_depth * h;
   near.clear();
-  for (std::size_t k = segment_begin_[B]; k < segment_begin_[B + 1]; ++k) {
-    const Segment &s = geometry_[k];
-    if (s.length > 0.0 && s.x1 >= rx0 - reach && s.x0 <= rx1 + reach && s.y1 >= ry0 - reach &&
-        s.y0 <= ry1 + reach)
-      near.push_back(static_cast<std::uint32_t>(k));
+  near_index.clear();
+  for (const std::uint32_t *k = segments; k != segments_end; ++k) {
+    const std::uint32_t p = segment_ends_[2 * *k], q = segment_ends_[2 * *k + 1];
+    const double ax = node_x_[p], ay = node_y_[p], dx = node_x_[q] - ax, dy = node_y_[q] - ay;
+    if (std::max(ax, ax + dx) >= rx0 - reach && std::min(ax, ax + dx) <= rx1 + reach &&
+        std::max(ay, ay + dy) >= ry0 - reach && std::min(ay, ay + dy) <= ry1 + reach) {
+      const double length = std::sqrt(dx * dx + dy * dy);
+      if (!(length > 0.0))
+        continue;
+      // outward normal: the tangent turned right (the boundary runs counter-clockwise)
+      const double inv = 1.0 / length;
+      near.push_back({ax, ay, dx * inv, dy * inv, length, dy * inv, -dx * inv});
+      near_index.push_back(*k);
+    }
   }
   if (near.empty())
     return;
   const double mu = s_.friction[model.bodies[A].material * n_materials_ + model.bodies[B].material];
-  for (std::size_t k = node_begin_[A]; k < node_begin_[A + 1]; ++k) {
-    const double px = node_x_[k], py = node_y_[k];
+  for (const std::uint32_t *k = nodes; k != nodes_end; ++k) {
+    const double px = node_x_[*k], py = node_y_[*k];
     if (px < rx0 || px > rx1 || py < ry0 || py > ry1)
       continue;
-    const std::uint32_t p = nodes_[k];
+    const std::uint32_t p = nodes_[*k];
     // The closest point of B's boundary: on a segment's inside (the node is in contact when behind
     // it) or at a corner. Near a convex corner the node is then outside; behind the closest
     // segment's line it may be inside a dented corner, which the crossing count decides.
     double best = HUGE_VAL, g_best = 0.0, along = 0.0;
     std::uint32_t closest = no_node;
     bool corner = false;
-    for (std::uint32_t i : near) {
-      const Segment &s = geometry_[i];
+    for (std::uint32_t i = 0; i < near.size(); ++i) {
+      const Segment &s = near[i];
       const double dx = px - s.ax, dy = py - s.ay;
       const double t = dx * s.tx + dy * s.ty, g = dx * s.nx + dy * s.ny;
       const double excess = t < 0.0 ? -t : (t > s.length ? t - s.length : 0.0);
@@ -272,7 +341,7 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, double dt,
     }
     if (closest == no_node || g_best >= 0.0)
       continue;
-    const Segment &s = geometry_[closest];
+    const Segment &s = near[closest];
     double depth = -g_best, nx = s.nx, ny = s.ny, w2 = along / s.length;
     if (corner) { // pushed out toward the corner
       w2 = along < 0.0 ? 0.0 : 1.0;
@@ -286,7 +355,8 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, double dt,
       // a node outside it behind one of its segments: the crossing count decides
       continue;
     }
-    hit(model, p, segments_[2 * closest], segments_[2 * closest + 1], w2, nx, ny, depth, h, mu, dt,
+    const std::uint32_t segment = near_index[closest];
+    hit(model, p, segments_[2 * segment], segments_[2 * segment + 1], w2, nx, ny, depth, h, mu, dt,
         hits);
   }
 }

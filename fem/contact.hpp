@@ -16,15 +16,21 @@
 //   - Coulomb friction against the relative tangential velocity v_t:
 //       f_t = min(mu f_n, m_eff |v_t| / dt)
 //     (sliding at mu f_n; the second term is the force that stops the slip in one step: sticking).
-// Forces go into Nodes::fx_ext, fy_ext (the frictional part also into fx_friction, fy_friction),
+// Forces go into the nodes by Nodes::addExternal (with their frictional part),
 // so that the solver accounts their work as contact and friction energy. Bodies that are loaded
 // are woken; pairs of bodies that both rest are not searched.
+// Each pair keeps the lists of its boundary nodes and segments near the overlap of the two boxes,
+// taken with a margin and refreshed only when the two bodies may have moved by a quarter of that
+// margin (a bound on the displacement of every boundary node, summed step by step): a step then
+// looks at a handful of nodes and segments per pair, and finds exactly what a search of the whole
+// boundaries would.
 #pragma once
 
 #include "solver.hpp"
 
 #include <cstdint>
 #include <limits>
+#include <unordered_map>
 #include <vector>
 
 namespace mesopen::fem {
@@ -47,6 +53,7 @@ struct ContactStatistics {
   double depth = 0.0;                    // this step: deepest penetration / element size
   double max_depth = 0.0;                // the same, over the run
   std::size_t deep = 0;                  // over the run: node-steps deeper than half an element
+  std::size_t refreshed = 0;             // over the run: pair lists (re)built
   double seconds = 0.0;                  // wall time spent in contact, over the run
 };
 
@@ -69,7 +76,15 @@ private:
   };
   struct Segment {
     double ax, ay, tx, ty, length, nx, ny; // start, unit tangent, length, outward normal
-    double x0, y0, x1, y1;                 // bounding box
+  };
+  // What a pair of bodies (a, b), a < b, looks at: a's boundary nodes (indices into nodes_), b's
+  // segments, b's nodes, a's segments (indices into the segment lists), near the boxes' overlap.
+  struct PairList {
+    double travel_a = -std::numeric_limits<double>::infinity(), travel_b = 0.0; // the bodies' travel_ when it was built
+    double margin = 0.0;
+    std::size_t used = 0;                        // the last step that used it
+    std::uint32_t end[3] = {};                   // ends of the first three parts of `items`
+    std::vector<std::uint32_t> items;
   };
   // Bodies in a uniform grid of cells (cell lists), for the broad phase.
   struct Grid {
@@ -83,8 +98,11 @@ private:
 
   void measure(const Model &model, std::size_t body);
   void findPairs(const Model &model);
-  void touch(const Model &model, std::size_t A, std::size_t B, double dt, std::vector<Hit> &hits,
-             std::vector<std::uint32_t> &near) const;
+  void refresh(std::size_t a, std::size_t b, PairList &list) const;
+  void touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
+             const std::uint32_t *nodes_end, const std::uint32_t *segments,
+             const std::uint32_t *segments_end, double dt, std::vector<Hit> &hits,
+             std::vector<Segment> &near, std::vector<std::uint32_t> &near_index) const;
   bool inside(const Nodes &nodes, std::size_t B, double px, double py) const;
   void walls(const Model &model, double dt, std::vector<Hit> &hits) const;
   void hit(const Model &model, std::uint32_t node, std::uint32_t s1, std::uint32_t s2, double w2,
@@ -97,13 +115,17 @@ private:
   std::vector<std::uint32_t> nodes_;                    // boundary nodes, body by body
   std::vector<double> node_x_, node_y_;                 // their positions, this step
   std::vector<std::uint32_t> segments_;                 // boundary edges (node pairs, ccw)
-  std::vector<Segment> geometry_;                       // of each boundary edge, this step
+  std::vector<std::uint32_t> segment_ends_;             // the same as indices into nodes_
   std::vector<double> size_;                            // per body: longest boundary edge [m]
   std::vector<Box> boxes_;                              // per body, this step
+  std::vector<double> travel_; // per body: sum over steps of its boundary nodes' largest move
   std::vector<std::uint32_t> moving_;                   // bodies not at rest, this step
   double cell_ = 0.0;
   Grid rest_grid_, moving_grid_;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs_;
+  std::unordered_map<std::uint64_t, PairList> lists_;  // per pair of bodies seen lately
+  std::vector<PairList *> pair_lists_;                  // of pairs_, this step
+  std::size_t step_ = 0;
   std::vector<std::vector<Hit>> thread_hits_;
   ContactStatistics stats_;
 };

@@ -25,6 +25,7 @@ Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> ma
                   &nd.fy_friction, &nd.mass, &nd.area0})
     v->assign(n_nodes, 0.0);
   nd.body.assign(n_nodes, 0);
+  nd.is_loaded.assign(n_nodes, 0);
 
   Elements &el = model.elements;
   el.node = mesh.tri;

@@ -17,12 +17,29 @@ struct Nodes {
   std::vector<double> x0, y0;     // initial position [m]
   std::vector<double> vx, vy;     // velocity [m/s]
   std::vector<double> fx, fy;     // total force of this step: internal + external [N/m]
-  std::vector<double> fx_ext, fy_ext; // external forces (contact, coupling), set each step [N/m]
-  std::vector<double> fx_friction, fy_friction; // the frictional part of fx_ext, fy_ext [N/m]
   std::vector<double> mass;       // lumped mass [kg/m]
   std::vector<double> area0;      // a third of the initial area of each element at the node [m^2]
   std::vector<std::uint32_t> body;
+  // External forces of this step (contact, coupling) [N/m] and their frictional part, nonzero only
+  // at the nodes listed in `loaded` (each once): few nodes carry them, and the node loops of the
+  // time step then stream four arrays fewer.
+  std::vector<double> fx_ext, fy_ext, fx_friction, fy_friction;
+  std::vector<std::uint32_t> loaded;
+  std::vector<std::uint8_t> is_loaded;
   std::size_t size() const { return x.size(); }
+
+  void addExternal(std::uint32_t a, double fx, double fy, double friction_x, double friction_y) {
+    if (!is_loaded[a])
+      is_loaded[a] = 1, loaded.push_back(a);
+    fx_ext[a] += fx, fy_ext[a] += fy, fx_friction[a] += friction_x, fy_friction[a] += friction_y;
+  }
+  // No external force on any node (the solver calls this before the providers add theirs).
+  void clearExternal() {
+    for (std::uint32_t a : loaded)
+      fx_ext[a] = fy_ext[a] = fx_friction[a] = fy_friction[a] = 0.0, is_loaded[a] = 0;
+    loaded.clear();
+    is_loaded.resize(x.size(), 0);
+  }
 };
 
 // Element state: deviatoric stress S (S_zz = -S_xx - S_yy), pressure p (compression positive),

@@ -10,6 +10,7 @@
 namespace mesopen::fem {
 
 namespace {
+double sq(double x) { return x * x; }
 constexpr std::size_t max_chunk = 256;   // elements per material batch (scratch on the stack)
 constexpr std::size_t node_block = 4096; // nodes per block of the node loops
 constexpr std::size_t unit_target = 4096; // elements per work unit of the element pass
@@ -86,8 +87,6 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
   s_.chunk = std::clamp<std::size_t>(s_.chunk, 1, max_chunk);
   const Nodes &nd = m_.nodes;
   inv_mass_.resize(nd.size());
-  kick_dvx_.assign(nd.size(), 0.0);
-  kick_dvy_.assign(nd.size(), 0.0);
   for (std::size_t a = 0; a < nd.size(); ++a)
     inv_mass_[a] = nd.mass[a] > 0.0 ? 1.0 / nd.mass[a] : 0.0;
   // A body moves if any of its nodes moves, is driven, or any of its elements is stressed.
@@ -106,9 +105,13 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
     if (el.sxx[e] != 0.0 || el.syy[e] != 0.0 || el.sxy[e] != 0.0 || el.pressure[e] != 0.0 ||
         el.energy[e] != 0.0)
       m_.wake(el.body[e]);
+  m_.nodes.clearExternal();
   updateActivity();
   internalForces(0.0);
   dt_ = std::min(next_dt_, s_.max_dt);
+  for (const Range &r : node_ranges_)
+    for (std::size_t a = r.begin; a < r.end; ++a)
+      kinetic_ += 0.5 * nd.mass[a] * (nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a]);
   accountEnergy();
   energy_.initial = energy_.kinetic + energy_.internal;
   energy_.balance_error = 0.0;
@@ -118,13 +121,14 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
 void Solver::step() {
   const double dt = dt_;
   kick_work_ = provider_work_ = friction_work_ = 0.0;
-  kick(0.5 * dt);     // v(n+1/2) = v(n) + dt/2 f(n) / m, then the imposed velocities
-  drift(dt);          // x(n+1) = x(n) + dt v(n+1/2)
+  kick(0.5 * dt, false); // v(n+1/2) = v(n) + dt/2 f(n) / m, then the imposed velocities
+  drift(dt);             // x(n+1) = x(n) + dt v(n+1/2)
+  m_.nodes.clearExternal();
   for (auto *provider : providers_) // external forces at x(n+1): contact, coupling
     provider->addForces(m_, time_ + dt, dt);
-  updateActivity();   // bodies the providers woke take part
-  internalForces(dt); // stresses at n+1, f(n+1), the next stable step
-  kick(0.5 * dt);     // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
+  updateActivity();      // bodies the providers woke take part
+  internalForces(dt);    // stresses at n+1, f(n+1), the next stable step
+  kick(0.5 * dt, true);  // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
   time_ += dt;
   ++steps_;
   dt_ = std::min(next_dt_, s_.max_dt);
@@ -179,44 +183,60 @@ void Solver::updateActivity() {
     unit.averaged_volume = unit.averaged_volume || averaged;
   }
   sums_.resize(chunks_.size());
-  node_sums_.resize(3 * node_ranges_.size());
+  node_sums_.resize(2 * node_ranges_.size());
 }
 
-void Solver::kick(double half_dt) {
+// A half-kick of the active nodes. The work of the external forces over it, force . mean velocity,
+// is summed over the loaded nodes alone (with the kick's own arithmetic), gravity's over every
+// node when there is gravity. After the second half, the kinetic energy of the leapfrog,
+// 1/2 m v(n-1/2) . v(n+1/2) = 1/2 m (|v(n)|^2 - |dv|^2) with dv this half-kick: central differences
+// conserve it exactly for a linear elastic system (1/2 m |v(n)|^2 carries an O((omega dt)^2)
+// oscillation of the fastest modes).
+void Solver::kick(double half_dt, bool second_half) {
   Nodes &nd = m_.nodes;
+  double provider = 0.0, friction = 0.0;
+  for (std::uint32_t a : nd.loaded) {
+    const double vx = nd.vx[a] + half_dt * nd.fx[a] * inv_mass_[a];
+    const double vy = nd.vy[a] + half_dt * nd.fy[a] * inv_mass_[a];
+    const double mean_vx = 0.5 * (nd.vx[a] + vx), mean_vy = 0.5 * (nd.vy[a] + vy);
+    provider += nd.fx_ext[a] * mean_vx + nd.fy_ext[a] * mean_vy;
+    friction += nd.fx_friction[a] * mean_vx + nd.fy_friction[a] * mean_vy;
+  }
+  provider_work_ += half_dt * provider;
+  friction_work_ += half_dt * friction;
   const double gx = s_.gravity_x, gy = s_.gravity_y;
+  const bool gravity = gx != 0.0 || gy != 0.0;
   const long blocks = static_cast<long>(node_ranges_.size());
 #pragma omp parallel for schedule(static) if (blocks > 1)
   for (long i = 0; i < blocks; ++i) {
-    // Work over this half step, force . mean velocity: providers', its frictional part, gravity's.
-    double provider = 0.0, friction = 0.0, gravity = 0.0;
+    double gravity_work = 0.0, kinetic = 0.0;
     for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
-      const double vx = nd.vx[a] + half_dt * nd.fx[a] * inv_mass_[a];
-      const double vy = nd.vy[a] + half_dt * nd.fy[a] * inv_mass_[a];
-      const double mean_vx = 0.5 * (nd.vx[a] + vx), mean_vy = 0.5 * (nd.vy[a] + vy);
-      provider += nd.fx_ext[a] * mean_vx + nd.fy_ext[a] * mean_vy;
-      friction += nd.fx_friction[a] * mean_vx + nd.fy_friction[a] * mean_vy;
-      gravity += nd.mass[a] * (gx * mean_vx + gy * mean_vy);
-      kick_dvx_[a] = vx - nd.vx[a], kick_dvy_[a] = vy - nd.vy[a];
+      const double dvx = half_dt * nd.fx[a] * inv_mass_[a], dvy = half_dt * nd.fy[a] * inv_mass_[a];
+      const double vx = nd.vx[a] + dvx, vy = nd.vy[a] + dvy;
+      if (gravity)
+        gravity_work += nd.mass[a] * (gx * (nd.vx[a] + 0.5 * dvx) + gy * (nd.vy[a] + 0.5 * dvy));
+      if (second_half)
+        kinetic += 0.5 * nd.mass[a] * (vx * vx + vy * vy - dvx * dvx - dvy * dvy);
       nd.vx[a] = vx, nd.vy[a] = vy;
     }
-    node_sums_[3 * i] = half_dt * provider;
-    node_sums_[3 * i + 1] = half_dt * friction;
-    node_sums_[3 * i + 2] = half_dt * gravity;
+    node_sums_[2 * i] = half_dt * gravity_work;
+    node_sums_[2 * i + 1] = kinetic;
   }
+  if (second_half)
+    kinetic_ = 0.0;
   for (long i = 0; i < blocks; ++i) {
-    provider_work_ += node_sums_[3 * i];
-    friction_work_ += node_sums_[3 * i + 1];
-    kick_work_ += node_sums_[3 * i + 2];
+    kick_work_ += node_sums_[2 * i];
+    kinetic_ += node_sums_[2 * i + 1];
   }
-  applyConstraints(half_dt);
+  applyConstraints(half_dt, second_half);
 }
 
 // Imposed velocities; the reactions' work, impulse . mean velocity, is external work. The kick
-// took the work of the other external forces at the velocity before the constraint: corrected.
-void Solver::applyConstraints(double half_dt) {
+// took the work of the other external forces, and the kinetic energy, at the velocity before the
+// constraint: corrected.
+void Solver::applyConstraints(double half_dt, bool second_half) {
   Nodes &nd = m_.nodes;
-  auto impose = [&](std::uint32_t a, double &v, double &dv, double target, double f, double f_ext,
+  auto impose = [&](std::uint32_t a, double &v, double target, double f, double f_ext,
                     double f_friction, double gravity) {
     const double before = v - half_dt * f * inv_mass_[a];
     kick_work_ += nd.mass[a] * (target - v) * 0.5 * (before + target);
@@ -224,7 +244,9 @@ void Solver::applyConstraints(double half_dt) {
     provider_work_ += f_ext * shift;
     friction_work_ += f_friction * shift;
     kick_work_ += nd.mass[a] * gravity * shift;
-    dv = target - before;
+    if (second_half)
+      kinetic_ += 0.5 * nd.mass[a] *
+                  (target * target - sq(target - before) - v * v + sq(v - before));
     v = target;
   };
   for (const auto &c : m_.constraints)
@@ -232,11 +254,9 @@ void Solver::applyConstraints(double half_dt) {
       if (m_.bodies[nd.body[a]].at_rest)
         continue;
       if (c.constrain_x)
-        impose(a, nd.vx[a], kick_dvx_[a], c.vx, nd.fx[a], nd.fx_ext[a], nd.fx_friction[a],
-               s_.gravity_x);
+        impose(a, nd.vx[a], c.vx, nd.fx[a], nd.fx_ext[a], nd.fx_friction[a], s_.gravity_x);
       if (c.constrain_y)
-        impose(a, nd.vy[a], kick_dvy_[a], c.vy, nd.fy[a], nd.fy_ext[a], nd.fy_friction[a],
-               s_.gravity_y);
+        impose(a, nd.vy[a], c.vy, nd.fy[a], nd.fy_ext[a], nd.fy_friction[a], s_.gravity_y);
     }
 }
 
@@ -248,16 +268,16 @@ void Solver::drift(double dt) {
     for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
       nd.x[a] += dt * nd.vx[a];
       nd.y[a] += dt * nd.vy[a];
-      nd.fx_ext[a] = nd.fy_ext[a] = 0.0; // providers add this step's external forces
-      nd.fx_friction[a] = nd.fy_friction[a] = 0.0;
     }
 }
 
 // Unit by unit (whole bodies, so that a unit's nodes and elements stay in cache between the
-// nodal volumes and the element pass): the external forces first, the elements add theirs.
+// nodal volumes and the element pass): gravity first, the elements add theirs; then the external
+// forces at the loaded nodes.
 void Solver::internalForces(double dt) {
   Nodes &nd = m_.nodes;
   const double gx = s_.gravity_x, gy = s_.gravity_y;
+  const bool gravity = gx != 0.0 || gy != 0.0;
   const long units = static_cast<long>(units_.size());
 #pragma omp parallel if (units > 1)
   {
@@ -274,7 +294,7 @@ void Solver::internalForces(double dt) {
       for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
         for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
           state[a - base] = {nd.x[a], nd.y[a], nd.vx[a], nd.vy[a]};
-          force[a - base] = {nd.fx_ext[a] + nd.mass[a] * gx, nd.fy_ext[a] + nd.mass[a] * gy};
+          force[a - base] = gravity ? NodeForce{nd.mass[a] * gx, nd.mass[a] * gy} : NodeForce{0.0, 0.0};
         }
       const UnitNodes nodes{state.data(), force.data(), jacobian.data(), base};
       if (unit.averaged_volume)
@@ -286,6 +306,8 @@ void Solver::internalForces(double dt) {
           nd.fx[a] = force[a - base].x, nd.fy[a] = force[a - base].y;
     }
   }
+  for (std::uint32_t a : nd.loaded)
+    nd.fx[a] += nd.fx_ext[a], nd.fy[a] += nd.fy_ext[a];
   const long n = static_cast<long>(chunks_.size());
   double dt_min = std::numeric_limits<double>::infinity();
   for (long i = 0; i < n; ++i) {
@@ -456,15 +478,7 @@ void Solver::accountEnergy() {
     plastic += sums_[i].plastic;
     viscous += sums_[i].viscous;
   }
-  // Kinetic energy of the leapfrog, 1/2 m v(n-1/2) . v(n+1/2) = 1/2 m (|v(n)|^2 - |dv|^2) with dv
-  // the last half-kick: central differences conserve it exactly for a linear elastic system
-  // (1/2 m |v(n)|^2 carries an O((omega dt)^2) oscillation of the fastest modes).
-  const Nodes &nd = m_.nodes;
-  double kinetic = 0.0;
-  for (const Range &r : node_ranges_)
-    for (std::size_t a = r.begin; a < r.end; ++a)
-      kinetic += 0.5 * nd.mass[a] * (nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a] -
-                                     kick_dvx_[a] * kick_dvx_[a] - kick_dvy_[a] * kick_dvy_[a]);
+  const double kinetic = kinetic_;
   energy_.kinetic = kinetic;
   energy_.internal = internal;
   energy_.plastic += plastic;

@@ -37,8 +37,7 @@ struct Energy {
 };
 
 // Something that adds external nodal forces at x(n+1) before the second half-kick (contact,
-// coupling): into Nodes::fx_ext, fy_ext, and their frictional part also into fx_friction,
-// fy_friction. It must wake every body it loads. `dt` is the step being taken.
+// coupling) by Nodes::addExternal, with their frictional part. It must wake every body it loads. `dt` is the step being taken.
 class ForceProvider {
 public:
   virtual ~ForceProvider() = default;
@@ -105,11 +104,11 @@ private:
   };
 
   void updateActivity();
-  void kick(double half_dt);
+  void kick(double half_dt, bool second_half);
   void drift(double dt);
   void nodalVolumes(const Unit &unit, const UnitNodes &nodes);
   void elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums);
-  void applyConstraints(double half_dt);
+  void applyConstraints(double half_dt, bool second_half);
   void accountEnergy();
 
   Model &m_;
@@ -122,7 +121,6 @@ private:
   std::vector<ChunkSums> sums_;
   std::vector<double> node_sums_;
   std::vector<double> inv_mass_;
-  std::vector<double> kick_dvx_, kick_dvy_; // velocity change of the last half-kick
   std::vector<char> body_active_seen_;
   std::size_t active_elements_ = 0;
   double time_ = 0.0, dt_ = 0.0, next_dt_ = 0.0;
@@ -130,6 +128,7 @@ private:
   Energy energy_;
   // Work of this step: constraints and gravity; providers' forces; their frictional part.
   double kick_work_ = 0.0, provider_work_ = 0.0, friction_work_ = 0.0;
+  double kinetic_ = 0.0; // the kinetic energy at the end of the step (see kick)
 };
 
 } // namespace mesopen::fem
