@@ -16,8 +16,8 @@ constexpr double touching = 1e-6; // penetration (this fraction of an element) t
 constexpr double deep = 0.5;        // penetration beyond this fraction of an element counts as deep
 constexpr double check_depth = 0.05; // penetration from which a contact is checked by crossings
 constexpr std::size_t max_cells = 1u << 22;
-constexpr double margin_fraction = 0.5; // a pair list's margin / the smaller body's element size
-constexpr std::size_t forget_after = 1024; // steps after which an unused pair list goes
+constexpr double list_margin = 0.5;   // a pair's lists: margin / the smaller body's element size
+constexpr double search_margin = 1.0; // pairs of bodies: margin / the median element size
 
 bool overlap(double a0, double a1, double b0, double b1) { return a0 <= b1 && b0 <= a1; }
 double sq(double x) { return x * x; }
@@ -40,9 +40,8 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
       segment_ends_.push_back(static_cast<std::uint32_t>(
           nodes_.size() + (std::lower_bound(nodes.begin(), nodes.end(), p) - nodes.begin())));
     nodes_.insert(nodes_.end(), nodes.begin(), nodes.end());
-    segments_.insert(segments_.end(), body.boundary.begin(), body.boundary.end());
     node_begin_.push_back(nodes_.size());
-    segment_begin_.push_back(segments_.size() / 2);
+    segment_begin_.push_back(segment_ends_.size() / 2);
     double longest = 0.0;
     for (std::size_t k = 0; k + 1 < body.boundary.size(); k += 2) {
       const std::uint32_t a = body.boundary[k], b = body.boundary[k + 1];
@@ -54,6 +53,8 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
   node_y_.resize(nodes_.size());
   boxes_.resize(n_bodies);
   travel_.assign(n_bodies, 0.0);
+  travel_searched_.assign(n_bodies, 0.0);
+  listed_.assign(n_bodies, 0);
   for (std::size_t k = 0; k < nodes_.size(); ++k)
     node_x_[k] = nd.x[nodes_[k]], node_y_[k] = nd.y[nodes_[k]];
   for (std::size_t b = 0; b < n_bodies; ++b)
@@ -67,13 +68,23 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
     std::nth_element(extents.begin(), extents.begin() + extents.size() / 2, extents.end());
     cell_ = 2.0 * extents[extents.size() / 2];
   }
+  std::vector<double> sizes;
+  for (double h : size_)
+    if (h > 0.0)
+      sizes.push_back(h);
+  if (!sizes.empty()) {
+    std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());
+    search_margin_ = search_margin * sizes[sizes.size() / 2];
+  }
   // The bodies at rest now, in a grid that stays: a body at rest does not move.
   std::vector<std::uint32_t> resting;
   for (std::size_t b = 0; b < n_bodies; ++b)
     if (model.bodies[b].at_rest && node_begin_[b] < node_begin_[b + 1])
       resting.push_back(static_cast<std::uint32_t>(b));
   rest_grid_.build(boxes_, resting, cell_);
-  thread_hits_.resize(static_cast<std::size_t>(omp_get_max_threads()));
+  const std::size_t threads = static_cast<std::size_t>(omp_get_max_threads());
+  thread_hits_.resize(threads);
+  arenas_.resize(threads);
 }
 
 void Contact::addForces(Model &model, double, double dt) {
@@ -83,60 +94,66 @@ void Contact::addForces(Model &model, double, double dt) {
     if (!model.bodies[b].at_rest && node_begin_[b] < node_begin_[b + 1])
       moving_.push_back(static_cast<std::uint32_t>(b));
   const long n_moving = static_cast<long>(moving_.size());
-#pragma omp parallel for schedule(static) if (n_moving > 64)
-  for (long i = 0; i < n_moving; ++i)
+  double farthest = 0.0; // the largest travel since the last search for pairs
+#pragma omp parallel for schedule(static) reduction(max : farthest) if (n_moving > 64)
+  for (long i = 0; i < n_moving; ++i) {
     measure(model, moving_[i]);
-  findPairs(model);
-
-  // Each pair's list of nodes and segments near the overlap (lists not used for a while go).
-  ++step_;
-  const std::size_t n_pairs = pairs_.size();
-  pair_lists_.resize(n_pairs);
-  for (std::size_t i = 0; i < n_pairs; ++i) {
-    PairList &list = lists_[std::uint64_t{pairs_[i].first} << 32 | pairs_[i].second];
-    list.used = step_;
-    pair_lists_[i] = &list;
+    farthest = std::max(farthest, travel_[moving_[i]] - travel_searched_[moving_[i]]);
   }
-  if (step_ % forget_after == 0)
-    std::erase_if(lists_, [&](const auto &entry) { return entry.second.used + forget_after < step_; });
-
-  // Narrow phase: each thread takes a contiguous run of pairs, so that the hits, taken thread by
-  // thread, come in pair order whatever the number of threads.
+  // The pairs of bodies: all anew when a body may have closed half the margin, else those of the
+  // bodies that woke since the last step.
   const int threads = omp_get_max_threads();
-  if (thread_hits_.size() < static_cast<std::size_t>(threads))
-    thread_hits_.resize(threads);
+  if (thread_pairs_.size() != static_cast<std::size_t>(threads) + 1 ||
+      2.0 * farthest > search_margin_)
+    findPairs();
+  else
+    addPairsOfWoken(model);
+
+  // Narrow phase: each thread takes its run of pairs, so that the hits, taken thread by thread,
+  // come in pair order whatever the number of threads.
   for (auto &hits : thread_hits_)
     hits.clear();
+  const std::size_t n_pairs = pairs_.size();
 #pragma omp parallel num_threads(threads) if (n_pairs > 64)
   {
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
     const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
     std::vector<Hit> &hits = thread_hits_[t];
+    std::vector<std::uint32_t> scratch, near_ends;
     std::vector<Segment> near;
-    std::vector<std::uint32_t> near_index;
     std::size_t refreshed = 0;
-    for (std::size_t i = n_pairs * t / T; i < n_pairs * (t + 1) / T; ++i) {
-      const std::uint32_t a = pairs_[i].first, b = pairs_[i].second;
-      PairList &list = *pair_lists_[i];
-      // Each boundary node has moved by at most the travel since the list was built: the overlap
-      // by as much as either body, a node by its body's, a segment's box by its body's.
-      if (2.0 * ((travel_[a] - list.travel_a) + (travel_[b] - list.travel_b)) > list.margin)
-        refresh(a, b, list), ++refreshed;
-      const std::uint32_t *items = list.items.data();
-      touch(model, a, b, items, items + list.end[0], items + list.end[0], items + list.end[1], dt,
-            hits, near, near_index);
-      touch(model, b, a, items + list.end[1], items + list.end[2], items + list.end[2],
-            items + list.items.size(), dt, hits, near, near_index);
+    // Run r of the pairs keeps its lists in arena r; one thread alone takes every run.
+    for (std::size_t r = T == 1 ? 0 : t; r < (T == 1 ? arenas_.size() : t + 1); ++r) {
+      std::vector<std::uint32_t> &arena = arenas_[r];
+      for (std::size_t i = thread_pairs_[r]; i < thread_pairs_[r + 1]; ++i) {
+        Pair &pair = pairs_[i];
+        const Box &A = boxes_[pair.a], &B = boxes_[pair.b];
+        if (!overlap(A.x0, A.x1, B.x0, B.x1) || !overlap(A.y0, A.y1, B.y0, B.y1))
+          continue;
+        // Each boundary node has moved by at most its body's travel since the lists were
+        // taken; the overlap by as much as either body; a segment's box by its body's.
+        if (2.0 * ((travel_[pair.a] - pair.travel_a) + (travel_[pair.b] - pair.travel_b)) >
+            pair.margin)
+          refresh(pair, arena, scratch), ++refreshed;
+        const std::uint32_t *items = arena.data() + pair.begin;
+        touch(model, pair.a, pair.b, items, items + pair.end[0], items + pair.end[0],
+              items + pair.end[1], dt, hits, near, near_ends);
+        touch(model, pair.b, pair.a, items + pair.end[1], items + pair.end[2],
+              items + pair.end[2], items + pair.end[3], dt, hits, near, near_ends);
+      }
     }
 #pragma omp atomic
     stats_.refreshed += refreshed;
-    if (t + 1 == T)
-      walls(model, dt, hits);
   }
+  walls(model, dt, thread_hits_.back());
 
   // Into the nodes, in order; every body loaded takes part in the step.
   Nodes &nd = model.nodes;
-  stats_.pairs = n_pairs;
+  stats_.pairs = 0;
+  for (const Pair &pair : pairs_) {
+    const Box &A = boxes_[pair.a], &B = boxes_[pair.b];
+    stats_.pairs += overlap(A.x0, A.x1, B.x0, B.x1) && overlap(A.y0, A.y1, B.y0, B.y1);
+  }
   stats_.contacts = 0;
   stats_.depth = 0.0;
   for (const auto &hits : thread_hits_)
@@ -173,18 +190,22 @@ void Contact::measure(const Model &model, std::size_t b) {
   travel_[b] += moved;
 }
 
-// The nodes of a and b inside the overlap of their boxes widened by the margin, and the segments
-// whose boxes come within the margin plus the reach of the narrow phase (see touch).
-void Contact::refresh(std::size_t a, std::size_t b, PairList &list) const {
+// A pair's lists: the nodes of a and b inside the overlap of their boxes widened by the margin,
+// and the segments whose boxes come within the margin plus the reach of the narrow phase (see
+// touch); in place in the arena if they fit, else at its end with room to grow.
+void Contact::refresh(Pair &pair, std::vector<std::uint32_t> &arena,
+                      std::vector<std::uint32_t> &items) const {
+  const std::size_t a = pair.a, b = pair.b;
   const Box &A = boxes_[a], &B = boxes_[b];
-  const double margin = margin_fraction * std::min(size_[a], size_[b]);
+  const double margin = list_margin * std::min(size_[a], size_[b]);
   const double rx0 = std::max(A.x0, B.x0) - margin, rx1 = std::min(A.x1, B.x1) + margin;
   const double ry0 = std::max(A.y0, B.y0) - margin, ry1 = std::min(A.y1, B.y1) + margin;
-  list.items.clear();
+  items.clear();
   auto nodes = [&](std::size_t body) {
     for (std::size_t k = node_begin_[body]; k < node_begin_[body + 1]; ++k)
       if (node_x_[k] >= rx0 && node_x_[k] <= rx1 && node_y_[k] >= ry0 && node_y_[k] <= ry1)
-        list.items.push_back(static_cast<std::uint32_t>(k));
+        items.push_back(static_cast<std::uint32_t>(k));
+    return static_cast<std::uint32_t>(items.size());
   };
   auto segments = [&](std::size_t body) {
     const double reach = check_depth * size_[body];
@@ -194,17 +215,21 @@ void Contact::refresh(std::size_t a, std::size_t b, PairList &list) const {
           std::min(node_x_[p], node_x_[q]) <= rx1 + reach &&
           std::max(node_y_[p], node_y_[q]) >= ry0 - reach &&
           std::min(node_y_[p], node_y_[q]) <= ry1 + reach)
-        list.items.push_back(static_cast<std::uint32_t>(k));
+        items.push_back(p), items.push_back(q);
     }
+    return static_cast<std::uint32_t>(items.size());
   };
-  nodes(a);
-  list.end[0] = static_cast<std::uint32_t>(list.items.size());
-  segments(b);
-  list.end[1] = static_cast<std::uint32_t>(list.items.size());
-  nodes(b);
-  list.end[2] = static_cast<std::uint32_t>(list.items.size());
-  segments(a);
-  list.travel_a = travel_[a], list.travel_b = travel_[b], list.margin = margin;
+  pair.end[0] = nodes(a);
+  pair.end[1] = segments(b);
+  pair.end[2] = nodes(b);
+  pair.end[3] = segments(a);
+  if (items.size() > pair.capacity) {
+    pair.begin = static_cast<std::uint32_t>(arena.size());
+    pair.capacity = static_cast<std::uint32_t>(items.size() + items.size() / 2 + 8);
+    arena.resize(arena.size() + pair.capacity);
+  }
+  std::copy(items.begin(), items.end(), arena.begin() + pair.begin);
+  pair.travel_a = travel_[a], pair.travel_b = travel_[b], pair.margin = margin;
 }
 
 std::size_t Contact::Grid::ix(double x) const {
@@ -250,50 +275,97 @@ void Contact::Grid::build(const std::vector<Box> &boxes, const std::vector<std::
         bodies[fill[j * nx + i]++] = b;
 }
 
-// Broad phase: pairs of bodies whose boxes overlap, at least one of them moving; each pair taken
-// once, in the cell that holds the lower-left corner of the overlap. Moving bodies meet each other
-// in a grid built every step, and the bodies at rest in the grid built at the start.
-void Contact::findPairs(const Model &model) {
+// Broad phase: the pairs of bodies whose boxes come closer than the search margin, at least one
+// of them moving, in the order of their numbers; each pair found once, in the cell that holds
+// the lower-left corner of the overlap. Moving bodies meet each other in a grid of their boxes
+// widened by half the margin, built here; the bodies at rest in the grid built at the start.
+// The runs of pairs are shared evenly among the threads; their lists are taken when first needed.
+void Contact::findPairs() {
+  ++stats_.searches;
   pairs_.clear();
-  auto overlapping = [&](std::uint32_t a, std::uint32_t b) {
-    const Box &A = boxes_[a], &B = boxes_[b];
-    return overlap(A.x0, A.x1, B.x0, B.x1) && overlap(A.y0, A.y1, B.y0, B.y1);
+  const double half = 0.5 * search_margin_;
+  std::vector<Box> wide(boxes_.size());
+  for (std::uint32_t b : moving_) {
+    wide[b] = {boxes_[b].x0 - half, boxes_[b].y0 - half, boxes_[b].x1 + half, boxes_[b].y1 + half};
+    travel_searched_[b] = travel_[b];
+    listed_[b] = 1;
+  }
+  auto add = [&](std::uint32_t a, std::uint32_t b) {
+    Pair pair;
+    pair.a = std::min(a, b), pair.b = std::max(a, b);
+    pairs_.push_back(pair);
   };
-  moving_grid_.build(boxes_, moving_, cell_);
+  moving_grid_.build(wide, moving_, cell_);
   const Grid &g = moving_grid_;
   for (std::size_t c = 0; c < g.nx * g.ny; ++c)
     for (std::size_t i = g.start[c]; i < g.start[c + 1]; ++i)
       for (std::size_t j = i + 1; j < g.start[c + 1]; ++j) {
-        const std::uint32_t a = g.bodies[i], b = g.bodies[j];
-        if (overlapping(a, b) &&
-            g.iy(std::max(boxes_[a].y0, boxes_[b].y0)) * g.nx +
-                    g.ix(std::max(boxes_[a].x0, boxes_[b].x0)) == c)
-          pairs_.emplace_back(a, b);
+        const Box &A = wide[g.bodies[i]], &B = wide[g.bodies[j]];
+        if (overlap(A.x0, A.x1, B.x0, B.x1) && overlap(A.y0, A.y1, B.y0, B.y1) &&
+            g.iy(std::max(A.y0, B.y0)) * g.nx + g.ix(std::max(A.x0, B.x0)) == c)
+          add(g.bodies[i], g.bodies[j]);
       }
+  for (std::uint32_t a : moving_)
+    restNeighbours(a, search_margin_, [&](std::uint32_t b) { return !listed_[b]; }, add);
+  std::sort(pairs_.begin(), pairs_.end(),
+            [](const Pair &p, const Pair &q) { return std::tie(p.a, p.b) < std::tie(q.a, q.b); });
+  const std::size_t runs = arenas_.size();
+  thread_pairs_.resize(runs + 1);
+  for (std::size_t r = 0; r <= runs; ++r)
+    thread_pairs_[r] = pairs_.size() * r / runs;
+  for (auto &arena : arenas_)
+    arena.clear();
+}
+
+// The pairs of the bodies that woke since the last step with the bodies at rest (or woken now):
+// they were not searched while both rested. Added to the last run of pairs.
+void Contact::addPairsOfWoken(const Model &model) {
+  woken_.clear();
+  for (std::uint32_t b : moving_)
+    if (!listed_[b])
+      woken_.push_back(b);
+  if (woken_.empty())
+    return;
+  for (std::uint32_t a : woken_)
+    restNeighbours(a, search_margin_,
+                   [&](std::uint32_t b) { return !listed_[b] && (model.bodies[b].at_rest || a < b); },
+                   [&](std::uint32_t a, std::uint32_t b) {
+                     Pair pair;
+                     pair.a = std::min(a, b), pair.b = std::max(a, b);
+                     pairs_.push_back(pair);
+                   });
+  for (std::uint32_t a : woken_)
+    listed_[a] = 1;
+  thread_pairs_.back() = pairs_.size();
+}
+
+// The bodies of the grid of bodies at rest whose boxes come closer to body a's than `margin` and
+// that `wanted` accepts, each once: add(a, b).
+template <class Wanted, class Add>
+void Contact::restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add add) const {
   const Grid &r = rest_grid_;
   if (r.nx == 0)
     return;
-  for (std::uint32_t a : moving_) {
-    const Box &A = boxes_[a];
-    for (std::size_t j = r.iy(A.y0); j <= r.iy(A.y1); ++j)
-      for (std::size_t i = r.ix(A.x0); i <= r.ix(A.x1); ++i)
-        for (std::size_t k = r.start[j * r.nx + i]; k < r.start[j * r.nx + i + 1]; ++k) {
-          const std::uint32_t b = r.bodies[k];
-          if (model.bodies[b].at_rest && overlapping(a, b) &&
-              r.iy(std::max(A.y0, boxes_[b].y0)) == j && r.ix(std::max(A.x0, boxes_[b].x0)) == i)
-            pairs_.emplace_back(a, b);
-        }
-  }
+  const Box A{boxes_[a].x0 - margin, boxes_[a].y0 - margin, boxes_[a].x1 + margin,
+              boxes_[a].y1 + margin};
+  for (std::size_t j = r.iy(A.y0); j <= r.iy(A.y1); ++j)
+    for (std::size_t i = r.ix(A.x0); i <= r.ix(A.x1); ++i)
+      for (std::size_t k = r.start[j * r.nx + i]; k < r.start[j * r.nx + i + 1]; ++k) {
+        const std::uint32_t b = r.bodies[k];
+        const Box &B = boxes_[b];
+        if (b != a && overlap(A.x0, A.x1, B.x0, B.x1) && overlap(A.y0, A.y1, B.y0, B.y1) &&
+            r.iy(std::max(A.y0, B.y0)) == j && r.ix(std::max(A.x0, B.x0)) == i && wanted(b))
+          add(a, b);
+      }
 }
 
 // The boundary nodes of body A that are inside body B, among A's `nodes` and B's `segments` (from
 // the pair's list). A node inside B is in the overlap of the two boxes; the segment that decides
 // is the closest to it.
 void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
-                    const std::uint32_t *nodes_end, const std::uint32_t *segments,
-                    const std::uint32_t *segments_end, double dt, std::vector<Hit> &hits,
-                    std::vector<Segment> &near, std::vector<std::uint32_t> &near_index) const {
-  const Nodes &nd = model.nodes;
+                    const std::uint32_t *nodes_end, const std::uint32_t *ends,
+                    const std::uint32_t *ends_end, double dt, std::vector<Hit> &hits,
+                    std::vector<Segment> &near, std::vector<std::uint32_t> &near_ends) const {
   const Box &a = boxes_[A], &b = boxes_[B];
   const double rx0 = std::max(a.x0, b.x0), rx1 = std::min(a.x1, b.x1);
   const double ry0 = std::max(a.y0, b.y0), ry1 = std::min(a.y1, b.y1);
@@ -301,9 +373,9 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
   // its closest segment among them; deeper contacts are checked by the crossing count.
   const double h = size_[B], reach = check_depth * h;
   near.clear();
-  near_index.clear();
-  for (const std::uint32_t *k = segments; k != segments_end; ++k) {
-    const std::uint32_t p = segment_ends_[2 * *k], q = segment_ends_[2 * *k + 1];
+  near_ends.clear();
+  for (const std::uint32_t *k = ends; k != ends_end; k += 2) {
+    const std::uint32_t p = k[0], q = k[1];
     const double ax = node_x_[p], ay = node_y_[p], dx = node_x_[q] - ax, dy = node_y_[q] - ay;
     if (std::max(ax, ax + dx) >= rx0 - reach && std::min(ax, ax + dx) <= rx1 + reach &&
         std::max(ay, ay + dy) >= ry0 - reach && std::min(ay, ay + dy) <= ry1 + reach) {
@@ -313,7 +385,7 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
       // outward normal: the tangent turned right (the boundary runs counter-clockwise)
       const double inv = 1.0 / length;
       near.push_back({ax, ay, dx * inv, dy * inv, length, dy * inv, -dx * inv});
-      near_index.push_back(*k);
+      near_ends.push_back(p), near_ends.push_back(q);
     }
   }
   if (near.empty())
@@ -347,27 +419,26 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
       w2 = along < 0.0 ? 0.0 : 1.0;
       const double vx = s.ax + w2 * s.length * s.tx - px, vy = s.ay + w2 * s.length * s.ty - py;
       depth = std::sqrt(vx * vx + vy * vy);
-      if (!(depth > check_depth * h) || !inside(nd, B, px, py)) // clear of the boundary
+      if (!(depth > check_depth * h) || !inside(B, px, py)) // clear of the boundary
         continue;
       nx = vx / depth, ny = vy / depth;
-    } else if (depth <= touching * h || (depth > check_depth * h && !inside(nd, B, px, py))) {
+    } else if (depth <= touching * h || (depth > check_depth * h && !inside(B, px, py))) {
       // touching only; or deeper than a few percent of an element, where a dented grain can put
       // a node outside it behind one of its segments: the crossing count decides
       continue;
     }
-    const std::uint32_t segment = near_index[closest];
-    hit(model, p, segments_[2 * segment], segments_[2 * segment + 1], w2, nx, ny, depth, h, mu, dt,
-        hits);
+    hit(model, p, nodes_[near_ends[2 * closest]], nodes_[near_ends[2 * closest + 1]], w2, nx, ny,
+        depth, h, mu, dt, hits);
   }
 }
 
 // Whether (px, py) lies inside body B's boundary polygon: the number of boundary segments a ray
 // in +x crosses is odd.
-bool Contact::inside(const Nodes &nd, std::size_t B, double px, double py) const {
+bool Contact::inside(std::size_t B, double px, double py) const {
   bool in = false;
   for (std::size_t k = segment_begin_[B]; k < segment_begin_[B + 1]; ++k) {
-    const std::uint32_t a = segments_[2 * k], b = segments_[2 * k + 1];
-    const double ax = nd.x[a], ay = nd.y[a], bx = nd.x[b], by = nd.y[b];
+    const std::uint32_t a = segment_ends_[2 * k], b = segment_ends_[2 * k + 1];
+    const double ax = node_x_[a], ay = node_y_[a], bx = node_x_[b], by = node_y_[b];
     if ((ay > py) != (by > py) && px < ax + (py - ay) * (bx - ax) / (by - ay))
       in = !in;
   }

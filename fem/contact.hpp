@@ -19,18 +19,20 @@
 // Forces go into the nodes by Nodes::addExternal (with their frictional part),
 // so that the solver accounts their work as contact and friction energy. Bodies that are loaded
 // are woken; pairs of bodies that both rest are not searched.
-// Each pair keeps the lists of its boundary nodes and segments near the overlap of the two boxes,
-// taken with a margin and refreshed only when the two bodies may have moved by a quarter of that
-// margin (a bound on the displacement of every boundary node, summed step by step): a step then
-// looks at a handful of nodes and segments per pair, and finds exactly what a search of the whole
-// boundaries would.
+// The pairs of bodies are kept from step to step (a Verlet list of bodies): found with the boxes
+// widened by a margin, and found anew only when some body may have moved by half of it; a body
+// that wakes in between adds its pairs with bodies at rest. Each pair keeps the lists of its
+// boundary nodes and segments near the overlap of the two boxes, taken with a margin of its own
+// and refreshed when the two bodies may have moved by a quarter of that (a bound on the
+// displacement of every boundary node, summed step by step): a step looks at a handful of nodes
+// and segments per pair, in one stream of memory per thread, and finds exactly what a search of
+// the whole boundaries would.
 #pragma once
 
 #include "solver.hpp"
 
 #include <cstdint>
 #include <limits>
-#include <unordered_map>
 #include <vector>
 
 namespace mesopen::fem {
@@ -54,6 +56,7 @@ struct ContactStatistics {
   double max_depth = 0.0;                // the same, over the run
   std::size_t deep = 0;                  // over the run: node-steps deeper than half an element
   std::size_t refreshed = 0;             // over the run: pair lists (re)built
+  std::size_t searches = 0;              // over the run: searches for pairs of bodies
   double seconds = 0.0;                  // wall time spent in contact, over the run
 };
 
@@ -77,14 +80,15 @@ private:
   struct Segment {
     double ax, ay, tx, ty, length, nx, ny; // start, unit tangent, length, outward normal
   };
-  // What a pair of bodies (a, b), a < b, looks at: a's boundary nodes (indices into nodes_), b's
-  // segments, b's nodes, a's segments (indices into the segment lists), near the boxes' overlap.
-  struct PairList {
-    double travel_a = -std::numeric_limits<double>::infinity(), travel_b = 0.0; // the bodies' travel_ when it was built
+  // A pair of bodies (a, b) whose boxes widened by the margin overlapped, and what it looks at:
+  // a's boundary nodes (indices into nodes_), b's segments (their two nodes, as indices into
+  // nodes_), b's nodes, a's segments, near the boxes' overlap; in its thread's arena from `begin`.
+  struct Pair {
+    std::uint32_t a, b;
+    std::uint32_t begin = 0, capacity = 0;
+    std::uint32_t end[4] = {}; // ends of the four parts, from `begin`
+    double travel_a = -std::numeric_limits<double>::infinity(), travel_b = 0.0; // when listed
     double margin = 0.0;
-    std::size_t used = 0;                        // the last step that used it
-    std::uint32_t end[3] = {};                   // ends of the first three parts of `items`
-    std::vector<std::uint32_t> items;
   };
   // Bodies in a uniform grid of cells (cell lists), for the broad phase.
   struct Grid {
@@ -97,13 +101,16 @@ private:
   };
 
   void measure(const Model &model, std::size_t body);
-  void findPairs(const Model &model);
-  void refresh(std::size_t a, std::size_t b, PairList &list) const;
+  void findPairs();
+  void addPairsOfWoken(const Model &model);
+  template <class Wanted, class Add>
+  void restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add add) const;
+  void refresh(Pair &pair, std::vector<std::uint32_t> &arena, std::vector<std::uint32_t> &scratch) const;
   void touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
-             const std::uint32_t *nodes_end, const std::uint32_t *segments,
-             const std::uint32_t *segments_end, double dt, std::vector<Hit> &hits,
-             std::vector<Segment> &near, std::vector<std::uint32_t> &near_index) const;
-  bool inside(const Nodes &nodes, std::size_t B, double px, double py) const;
+             const std::uint32_t *nodes_end, const std::uint32_t *ends, const std::uint32_t *ends_end,
+             double dt, std::vector<Hit> &hits, std::vector<Segment> &near,
+             std::vector<std::uint32_t> &near_ends) const;
+  bool inside(std::size_t B, double px, double py) const;
   void walls(const Model &model, double dt, std::vector<Hit> &hits) const;
   void hit(const Model &model, std::uint32_t node, std::uint32_t s1, std::uint32_t s2, double w2,
            double nx, double ny, double depth, double h, double mu, double dt,
@@ -114,18 +121,20 @@ private:
   std::vector<std::size_t> node_begin_, segment_begin_; // per body, into nodes_ and segments_
   std::vector<std::uint32_t> nodes_;                    // boundary nodes, body by body
   std::vector<double> node_x_, node_y_;                 // their positions, this step
-  std::vector<std::uint32_t> segments_;                 // boundary edges (node pairs, ccw)
-  std::vector<std::uint32_t> segment_ends_;             // the same as indices into nodes_
+  std::vector<std::uint32_t> segment_ends_; // boundary edges (ccw), their nodes as indices into nodes_
   std::vector<double> size_;                            // per body: longest boundary edge [m]
   std::vector<Box> boxes_;                              // per body, this step
   std::vector<double> travel_; // per body: sum over steps of its boundary nodes' largest move
+  std::vector<double> travel_searched_;    // per body: travel_ at the last search for pairs
+  std::vector<char> listed_;               // per body: its pairs are in pairs_ (it moved then)
+  std::vector<std::uint32_t> woken_;       // bodies moving since this step
   std::vector<std::uint32_t> moving_;                   // bodies not at rest, this step
   double cell_ = 0.0;
   Grid rest_grid_, moving_grid_;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs_;
-  std::unordered_map<std::uint64_t, PairList> lists_;  // per pair of bodies seen lately
-  std::vector<PairList *> pair_lists_;                  // of pairs_, this step
-  std::size_t step_ = 0;
+  double search_margin_ = 0.0;
+  std::vector<Pair> pairs_;
+  std::vector<std::size_t> thread_pairs_;                // pairs_ of thread t: [t], [t + 1]
+  std::vector<std::vector<std::uint32_t>> arenas_;       // per thread: its pairs' lists
   std::vector<std::vector<Hit>> thread_hits_;
   ContactStatistics stats_;
 };
