@@ -119,8 +119,7 @@ void Contact::addForces(Model &model, double, double dt) {
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
     const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
     std::vector<Hit> &hits = thread_hits_[t];
-    std::vector<std::uint32_t> scratch, near_ends;
-    std::vector<Segment> near;
+    Scratch scratch;
     std::size_t refreshed = 0;
     // Run r of the pairs keeps its lists in arena r; one thread alone takes every run.
     for (std::size_t r = T == 1 ? 0 : t; r < (T == 1 ? arenas_.size() : t + 1); ++r) {
@@ -137,9 +136,9 @@ void Contact::addForces(Model &model, double, double dt) {
           refresh(pair, arena, scratch), ++refreshed;
         const std::uint32_t *items = arena.data() + pair.begin;
         touch(model, pair.a, pair.b, items, items + pair.end[0], items + pair.end[0],
-              items + pair.end[1], dt, hits, near, near_ends);
+              items + pair.end[1], dt, hits, scratch);
         touch(model, pair.b, pair.a, items + pair.end[1], items + pair.end[2],
-              items + pair.end[2], items + pair.end[3], dt, hits, near, near_ends);
+              items + pair.end[2], items + pair.end[3], dt, hits, scratch);
       }
     }
 #pragma omp atomic
@@ -190,39 +189,22 @@ void Contact::measure(const Model &model, std::size_t b) {
   travel_[b] += moved;
 }
 
-// A pair's lists: the nodes of a and b inside the overlap of their boxes widened by the margin,
-// and the segments whose boxes come within the margin plus the reach of the narrow phase (see
-// touch); in place in the arena if they fit, else at its end with room to grow.
-void Contact::refresh(Pair &pair, std::vector<std::uint32_t> &arena,
-                      std::vector<std::uint32_t> &items) const {
+// A pair's lists, taken in the overlap of the two boxes widened by the margin: the nodes of each
+// body that are inside the other or closer to its boundary than the margin, and the segments that
+// may be the closest to one of them until the lists are taken again. In place in the arena if they
+// fit, else at its end with room to grow.
+void Contact::refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &scratch) const {
   const std::size_t a = pair.a, b = pair.b;
   const Box &A = boxes_[a], &B = boxes_[b];
   const double margin = list_margin * std::min(size_[a], size_[b]);
-  const double rx0 = std::max(A.x0, B.x0) - margin, rx1 = std::min(A.x1, B.x1) + margin;
-  const double ry0 = std::max(A.y0, B.y0) - margin, ry1 = std::min(A.y1, B.y1) + margin;
+  const double x0 = std::max(A.x0, B.x0) - margin, x1 = std::min(A.x1, B.x1) + margin;
+  const double y0 = std::max(A.y0, B.y0) - margin, y1 = std::min(A.y1, B.y1) + margin;
+  std::vector<std::uint32_t> &items = scratch.items;
   items.clear();
-  auto nodes = [&](std::size_t body) {
-    for (std::size_t k = node_begin_[body]; k < node_begin_[body + 1]; ++k)
-      if (node_x_[k] >= rx0 && node_x_[k] <= rx1 && node_y_[k] >= ry0 && node_y_[k] <= ry1)
-        items.push_back(static_cast<std::uint32_t>(k));
-    return static_cast<std::uint32_t>(items.size());
-  };
-  auto segments = [&](std::size_t body) {
-    const double reach = check_depth * size_[body];
-    for (std::size_t k = segment_begin_[body]; k < segment_begin_[body + 1]; ++k) {
-      const std::uint32_t p = segment_ends_[2 * k], q = segment_ends_[2 * k + 1];
-      if (std::max(node_x_[p], node_x_[q]) >= rx0 - reach &&
-          std::min(node_x_[p], node_x_[q]) <= rx1 + reach &&
-          std::max(node_y_[p], node_y_[q]) >= ry0 - reach &&
-          std::min(node_y_[p], node_y_[q]) <= ry1 + reach)
-        items.push_back(p), items.push_back(q);
-    }
-    return static_cast<std::uint32_t>(items.size());
-  };
-  pair.end[0] = nodes(a);
-  pair.end[1] = segments(b);
-  pair.end[2] = nodes(b);
-  pair.end[3] = segments(a);
+  pair.end[0] = listNear(a, b, x0, y0, x1, y1, margin, scratch);
+  pair.end[1] = static_cast<std::uint32_t>(items.size());
+  pair.end[2] = listNear(b, a, x0, y0, x1, y1, margin, scratch);
+  pair.end[3] = static_cast<std::uint32_t>(items.size());
   if (items.size() > pair.capacity) {
     pair.begin = static_cast<std::uint32_t>(arena.size());
     pair.capacity = static_cast<std::uint32_t>(items.size() + items.size() / 2 + 8);
@@ -230,6 +212,77 @@ void Contact::refresh(Pair &pair, std::vector<std::uint32_t> &arena,
   }
   std::copy(items.begin(), items.end(), arena.begin() + pair.begin);
   pair.travel_a = travel_[a], pair.travel_b = travel_[b], pair.margin = margin;
+}
+
+// Appends to scratch.items body A's nodes in the rectangle that are behind their closest segment
+// of body B or nearer to it than `margin`, then (as node pairs) B's segments that are nearer to
+// one of them than its closest segment plus `margin`. While the two bodies move by less than
+// margin / 2 together, these hold every node that can come into contact and its closest segment.
+// Returns the end of the nodes.
+std::uint32_t Contact::listNear(std::size_t A, std::size_t B, double x0, double y0, double x1,
+                                double y1, double margin, Scratch &scratch) const {
+  nearSegments(B, segment_ends_.data() + 2 * segment_begin_[B],
+               segment_ends_.data() + 2 * segment_begin_[B + 1], x0, y0, x1, y1, scratch);
+  const std::vector<Segment> &near = scratch.near;
+  std::vector<std::uint32_t> &items = scratch.items;
+  std::vector<double> &distance = scratch.distance;
+  distance.resize(near.size());
+  scratch.keep.assign(near.size(), 0);
+  for (std::size_t k = node_begin_[A]; k < node_begin_[A + 1] && !near.empty(); ++k) {
+    const double px = node_x_[k], py = node_y_[k];
+    if (px < x0 || px > x1 || py < y0 || py > y1)
+      continue;
+    double best = HUGE_VAL, g_best = 0.0;
+    for (std::size_t i = 0; i < near.size(); ++i) {
+      const Segment &s = near[i];
+      const double dx = px - s.ax, dy = py - s.ay;
+      const double t = dx * s.tx + dy * s.ty, g = dx * s.nx + dy * s.ny;
+      const double excess = t < 0.0 ? -t : (t > s.length ? t - s.length : 0.0);
+      distance[i] = excess * excess + g * g;
+      if (distance[i] < best)
+        best = distance[i], g_best = g;
+    }
+    const double clearance = std::sqrt(best);
+    if (clearance >= margin && g_best >= 0.0)
+      continue;
+    items.push_back(static_cast<std::uint32_t>(k));
+    const double reach = sq(clearance + margin);
+    for (std::size_t i = 0; i < near.size(); ++i)
+      scratch.keep[i] |= distance[i] < reach;
+  }
+  const auto nodes_end = static_cast<std::uint32_t>(items.size());
+  for (std::size_t i = 0; i < near.size(); ++i)
+    if (scratch.keep[i])
+      items.push_back(scratch.near_ends[2 * i]), items.push_back(scratch.near_ends[2 * i + 1]);
+  return nodes_end;
+}
+
+// The geometry of the boundary segment from p to q (indices into nodes_), at this step.
+Contact::Segment Contact::segment(std::uint32_t p, std::uint32_t q) const {
+  const double ax = node_x_[p], ay = node_y_[p], dx = node_x_[q] - ax, dy = node_y_[q] - ay;
+  const double length = std::sqrt(dx * dx + dy * dy), inv = length > 0.0 ? 1.0 / length : 0.0;
+  // outward normal: the tangent turned right (the boundary runs counter-clockwise)
+  return {ax, ay, dx * inv, dy * inv, length, dy * inv, -dx * inv};
+}
+
+// Of body `body`'s segments given by their ends, those of nonzero length whose boxes come within
+// its reach (see touch) of the rectangle: into scratch.near, their ends into scratch.near_ends.
+void Contact::nearSegments(std::size_t body, const std::uint32_t *ends,
+                           const std::uint32_t *ends_end, double x0, double y0, double x1,
+                           double y1, Scratch &scratch) const {
+  const double reach = check_depth * size_[body];
+  scratch.near.clear();
+  scratch.near_ends.clear();
+  for (const std::uint32_t *k = ends; k != ends_end; k += 2) {
+    const std::uint32_t p = k[0], q = k[1];
+    const double ax = node_x_[p], ay = node_y_[p], bx = node_x_[q], by = node_y_[q];
+    if (std::max(ax, bx) >= x0 - reach && std::min(ax, bx) <= x1 + reach &&
+        std::max(ay, by) >= y0 - reach && std::min(ay, by) <= y1 + reach) {
+      const Segment s = segment(p, q);
+      if (s.length > 0.0)
+        scratch.near.push_back(s), scratch.near_ends.push_back(p), scratch.near_ends.push_back(q);
+    }
+  }
 }
 
 std::size_t Contact::Grid::ix(double x) const {
@@ -365,29 +418,15 @@ void Contact::restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add 
 void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
                     const std::uint32_t *nodes_end, const std::uint32_t *ends,
                     const std::uint32_t *ends_end, double dt, std::vector<Hit> &hits,
-                    std::vector<Segment> &near, std::vector<std::uint32_t> &near_ends) const {
+                    Scratch &scratch) const {
   const Box &a = boxes_[A], &b = boxes_[B];
   const double rx0 = std::max(a.x0, b.x0), rx1 = std::min(a.x1, b.x1);
   const double ry0 = std::max(a.y0, b.y0), ry1 = std::min(a.y1, b.y1);
   // Segments within `reach` of the overlap: a node behind one of them by less than `reach` finds
   // its closest segment among them; deeper contacts are checked by the crossing count.
-  const double h = size_[B], reach = check_depth * h;
-  near.clear();
-  near_ends.clear();
-  for (const std::uint32_t *k = ends; k != ends_end; k += 2) {
-    const std::uint32_t p = k[0], q = k[1];
-    const double ax = node_x_[p], ay = node_y_[p], dx = node_x_[q] - ax, dy = node_y_[q] - ay;
-    if (std::max(ax, ax + dx) >= rx0 - reach && std::min(ax, ax + dx) <= rx1 + reach &&
-        std::max(ay, ay + dy) >= ry0 - reach && std::min(ay, ay + dy) <= ry1 + reach) {
-      const double length = std::sqrt(dx * dx + dy * dy);
-      if (!(length > 0.0))
-        continue;
-      // outward normal: the tangent turned right (the boundary runs counter-clockwise)
-      const double inv = 1.0 / length;
-      near.push_back({ax, ay, dx * inv, dy * inv, length, dy * inv, -dx * inv});
-      near_ends.push_back(p), near_ends.push_back(q);
-    }
-  }
+  const double h = size_[B];
+  nearSegments(B, ends, ends_end, rx0, ry0, rx1, ry1, scratch);
+  const std::vector<Segment> &near = scratch.near;
   if (near.empty())
     return;
   const double mu = s_.friction[model.bodies[A].material * n_materials_ + model.bodies[B].material];
@@ -427,8 +466,8 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
       // a node outside it behind one of its segments: the crossing count decides
       continue;
     }
-    hit(model, p, nodes_[near_ends[2 * closest]], nodes_[near_ends[2 * closest + 1]], w2, nx, ny,
-        depth, h, mu, dt, hits);
+    hit(model, p, nodes_[scratch.near_ends[2 * closest]], nodes_[scratch.near_ends[2 * closest + 1]],
+        w2, nx, ny, depth, h, mu, dt, hits);
   }
 }
 

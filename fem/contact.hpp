@@ -105,11 +105,22 @@ private:
   void addPairsOfWoken(const Model &model);
   template <class Wanted, class Add>
   void restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add add) const;
-  void refresh(Pair &pair, std::vector<std::uint32_t> &arena, std::vector<std::uint32_t> &scratch) const;
+  // A thread's working lists: segments near a node set (with their two nodes), distances.
+  struct Scratch {
+    std::vector<Segment> near;
+    std::vector<std::uint32_t> near_ends, items;
+    std::vector<double> distance;
+    std::vector<char> keep;
+  };
+  Segment segment(std::uint32_t p, std::uint32_t q) const;
+  void nearSegments(std::size_t body, const std::uint32_t *ends, const std::uint32_t *ends_end,
+                    double x0, double y0, double x1, double y1, Scratch &scratch) const;
+  void refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &scratch) const;
+  std::uint32_t listNear(std::size_t A, std::size_t B, double x0, double y0, double x1, double y1,
+                         double margin, Scratch &scratch) const;
   void touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
              const std::uint32_t *nodes_end, const std::uint32_t *ends, const std::uint32_t *ends_end,
-             double dt, std::vector<Hit> &hits, std::vector<Segment> &near,
-             std::vector<std::uint32_t> &near_ends) const;
+             double dt, std::vector<Hit> &hits, Scratch &scratch) const;
   bool inside(std::size_t B, double px, double py) const;
   void walls(const Model &model, double dt, std::vector<Hit> &hits) const;
   void hit(const Model &model, std::uint32_t node, std::uint32_t s1, std::uint32_t s2, double w2,
