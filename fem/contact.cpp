@@ -524,7 +524,10 @@ void Contact::hit(const Model &model, std::uint32_t p, std::uint32_t s1, std::ui
     vy -= w1 * nd.vy[s1] + w2 * nd.vy[s2];
   }
   const double vn = vx * nx + vy * ny; // > 0: separating
-  const double kappa = s_.stiffness, c = 2.0 * s_.damping * std::sqrt(kappa);
+  // Two nodes that meet are pushed apart by both passes, a wall contact by one: the walls take
+  // twice the stiffness (kappa 1 by default, the one-step constraint).
+  const double kappa = s1 == no_node ? 2.0 * s_.stiffness : s_.stiffness;
+  const double c = 2.0 * s_.damping * std::sqrt(kappa);
   const double fn = std::max(0.0, m_eff / dt * (kappa * (depth - touching * h) / dt - c * vn));
   const double tx = vx - vn * nx, ty = vy - vn * ny, slip = std::sqrt(tx * tx + ty * ty);
   const double ft = slip > 0.0 ? std::min(mu * fn, m_eff * slip / dt) / slip : 0.0;

@@ -12,7 +12,8 @@
 //     in one step the penetration two free nodes would reach at the next step (a kinematic
 //     constraint). Two nodes that meet are pushed apart by both passes, which doubles the
 //     stiffness: a head-on impact stays stable up to kappa = 0.5 and breaks its mirror symmetry
-//     from 0.7 (tests/verification/contact.cpp); the default is 0.5;
+//     from 0.7 (tests/verification/contact.cpp); the default is 0.5. A rigid wall is found by one
+//     pass only and takes 2 kappa (1: the one-step constraint);
 //   - Coulomb friction against the relative tangential velocity v_t:
 //       f_t = min(mu f_n, m_eff |v_t| / dt)
 //     (sliding at mu f_n; the second term is the force that stops the slip in one step: sticking).
@@ -42,7 +43,7 @@ struct ContactSettings {
   // single value applies to every pair.
   std::vector<double> friction{0.3};
   double wall_friction = 0.3;
-  double stiffness = 0.5; // kappa: penalty k = kappa m_eff / dt^2
+  double stiffness = 0.5; // kappa: penalty k = kappa m_eff / dt^2 (2 kappa at the walls)
   double damping = 0.5;   // zeta: fraction of the contact spring's critical damping
   // Rigid walls, each a half-plane the nodes stay on the inside of (NaN: no wall).
   double wall_left = std::numeric_limits<double>::quiet_NaN();   // x >= wall_left
