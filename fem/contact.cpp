@@ -114,13 +114,14 @@ void Contact::addForces(Model &model, double, double dt) {
   for (auto &hits : thread_hits_)
     hits.clear();
   const std::size_t n_pairs = pairs_.size();
+  stats_.pairs = 0;
 #pragma omp parallel num_threads(threads) if (n_pairs > 64)
   {
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
     const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
     std::vector<Hit> &hits = thread_hits_[t];
     Scratch scratch;
-    std::size_t refreshed = 0;
+    std::size_t refreshed = 0, overlapping = 0;
     // Run r of the pairs keeps its lists in arena r; one thread alone takes every run.
     for (std::size_t r = T == 1 ? 0 : t; r < (T == 1 ? arenas_.size() : t + 1); ++r) {
       std::vector<std::uint32_t> &arena = arenas_[r];
@@ -129,6 +130,7 @@ void Contact::addForces(Model &model, double, double dt) {
         const Box &A = boxes_[pair.a], &B = boxes_[pair.b];
         if (!overlap(A.x0, A.x1, B.x0, B.x1) || !overlap(A.y0, A.y1, B.y0, B.y1))
           continue;
+        ++overlapping;
         // Each boundary node has moved by at most its body's travel since the lists were
         // taken; the overlap by as much as either body; a segment's box by its body's.
         if (2.0 * ((travel_[pair.a] - pair.travel_a) + (travel_[pair.b] - pair.travel_b)) >
@@ -143,16 +145,13 @@ void Contact::addForces(Model &model, double, double dt) {
     }
 #pragma omp atomic
     stats_.refreshed += refreshed;
+#pragma omp atomic
+    stats_.pairs += overlapping;
   }
   walls(model, dt, thread_hits_.back());
 
   // Into the nodes, in order; every body loaded takes part in the step.
   Nodes &nd = model.nodes;
-  stats_.pairs = 0;
-  for (const Pair &pair : pairs_) {
-    const Box &A = boxes_[pair.a], &B = boxes_[pair.b];
-    stats_.pairs += overlap(A.x0, A.x1, B.x0, B.x1) && overlap(A.y0, A.y1, B.y0, B.y1);
-  }
   stats_.contacts = 0;
   stats_.depth = 0.0;
   for (const auto &hits : thread_hits_)
