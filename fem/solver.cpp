@@ -14,7 +14,6 @@ double sq(double x) { return x * x; }
 constexpr std::size_t max_chunk = 256;   // elements per material batch (scratch on the stack)
 constexpr std::size_t node_block = 4096; // nodes per block of the node loops
 constexpr std::size_t unit_target = 4096; // elements per work unit of the element pass
-constexpr double refine_margin = 1.05; // refine the steps below this times the last shortest
 
 // Appends the range `piece` to `ranges` in pieces of at most `limit`, first filling up the last
 // range (if it is at index `first` or later, ends where `piece` begins and `joinable` says so).
@@ -33,37 +32,6 @@ void appendInPieces(std::vector<R> &ranges, std::size_t first, R piece, std::siz
       piece.begin = piece.end;
     }
   }
-}
-
-// How much longer than L_s / c the critical step of a constant-strain triangle with lumped masses
-// is, for any elastic constants (Flanagan & Belytschko 1981 bound the element's highest frequency;
-// this is its exact value, maximised over the materials): with b, c the shape function gradients
-// (gx, gy over 2A), S = B B^T and the elasticity M Dhat(g), M = rho c^2, g = G / M in [0, 3/4],
-//   omega_max^2 = 3 c^2 lambda_max(S Dhat(g)),
-// and lambda_max is convex in g (S Dhat is similar to a symmetric matrix affine in g), so the larger
-// of its values at g = 0 (Dhat = u u^T, u = (1, 1, 0): P + Q) and g = 3/4 bounds it. The gain is
-// 1 for an equilateral triangle and up to sqrt(2) for slivers, the elements that set the step.
-double criticalStepGain(const double gx[3], const double gy[3], double area, double ls) {
-  const double inv = 1.0 / (2.0 * area);
-  double P = 0.0, Q = 0.0, R = 0.0;
-  for (int k = 0; k < 3; ++k)
-    P += sq(gx[k] * inv), Q += sq(gy[k] * inv), R += gx[k] * gy[k] * inv * inv;
-  // g = 3/4: T = L^T S L with Dhat = L L^T, L = [1 0 0; -1/2 s 0; 0 0 s], s^2 = 3/4.
-  const double s = 0.5 * std::sqrt(3.0);
-  const double t00 = P + 0.25 * Q, t01 = -0.5 * s * Q, t02 = 0.5 * s * R;
-  const double t11 = 0.75 * Q, t12 = 0.75 * R, t22 = 0.75 * (P + Q);
-  // The largest eigenvalue of the symmetric T (trigonometric solution of the cubic).
-  const double off = t01 * t01 + t02 * t02 + t12 * t12, q = (t00 + t11 + t22) / 3.0;
-  double largest = q;
-  const double p2 = sq(t00 - q) + sq(t11 - q) + sq(t22 - q) + 2.0 * off;
-  if (p2 > 0.0) {
-    const double p = std::sqrt(p2 / 6.0), b00 = (t00 - q) / p, b11 = (t11 - q) / p,
-                 b22 = (t22 - q) / p, b01 = t01 / p, b02 = t02 / p, b12 = t12 / p;
-    const double r = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) +
-                            b02 * (b01 * b12 - b11 * b02));
-    largest = q + 2.0 * p * std::cos(std::acos(std::clamp(r, -1.0, 1.0)) / 3.0);
-  }
-  return (2.0 / ls) / std::sqrt(3.0 * std::max(P + Q, largest));
 }
 
 // Node values of a batch's elements are read by the two helpers below rather than inside the
@@ -356,7 +324,6 @@ void Solver::internalForces(double dt) {
     dt_min = std::min(dt_min, sums_[i].dt_min);
   }
   next_dt_ = s_.safety * dt_min;
-  refine_below_ = refine_margin * dt_min;
 }
 
 // Averaged nodal volume (Bonet & Burton 1998): J at a node is the area of its elements over their
@@ -467,7 +434,7 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   // and material, so that `safety` is a true margin (tests/unit/fem.cpp checks it).
   const double cl = s_.viscosity_linear, cq = s_.viscosity_quadratic;
   double internal = 0.0, viscous = 0.0, dt_min = HUGE_VAL;
-  alignas(64) double fx[3][max_chunk], fy[3][max_chunk], step[max_chunk];
+  alignas(64) double fx[3][max_chunk], fy[3][max_chunk];
   const double rho0 = chunk.material->density();
   const double *sxx_ = el.sxx.data() + e0, *syy_ = el.syy.data() + e0, *sxy_ = el.sxy.data() + e0;
   const double *pressure = el.pressure.data() + e0;
@@ -489,20 +456,7 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
       fy[k][i] = -0.5 * (sxy * gx[k][i] + syy * gy[k][i]);
     }
     const double ls = (2.0 / 3.0) * len[i], Q = cl * cs[i] + cq * ls * comp;
-    step[i] = ls / (Q + std::sqrt(Q * Q + cs[i] * cs[i]));
-    dt_min = std::min(dt_min, step[i]);
-  }
-  // The elements whose step is near the shortest of the last pass (refine_below_) take the exact
-  // element bound: L_s / c times criticalStepGain, the damping factor unchanged.
-  if (dt_min < refine_below_) {
-    dt_min = HUGE_VAL;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (step[i] < refine_below_) {
-        const double g_x[3] = {gx[0][i], gx[1][i], gx[2][i]}, g_y[3] = {gy[0][i], gy[1][i], gy[2][i]};
-        step[i] *= criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i]);
-      }
-      dt_min = std::min(dt_min, step[i]);
-    }
+    dt_min = std::min(dt_min, ls / (Q + std::sqrt(Q * Q + cs[i] * cs[i])));
   }
   // Into the unit's nodes, in element order.
   for (std::size_t i = 0; i < n; ++i)

@@ -124,7 +124,6 @@ private:
   std::vector<char> body_active_seen_;
   std::size_t active_elements_ = 0;
   double time_ = 0.0, dt_ = 0.0, next_dt_ = 0.0;
-  double refine_below_ = std::numeric_limits<double>::infinity(); // see elementPass
   std::size_t steps_ = 0;
   Energy energy_;
   // Work of this step: constraints and gravity; providers' forces; their frictional part.
