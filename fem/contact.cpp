@@ -19,9 +19,18 @@ constexpr std::size_t max_cells = 1u << 22;
 constexpr double list_margin = 0.5;   // a pair's lists: margin / the smaller body's element size
 constexpr double search_margin = 1.0; // pairs of bodies: margin / the median element size
 
-bool overlap(double a0, double a1, double b0, double b1) { return a0 <= b1 && b0 <= a1; }
 double sq(double x) { return x * x; }
 } // namespace
+
+bool Contact::Box::overlaps(const Box &o) const {
+  return x0 <= o.x1 && o.x0 <= x1 && y0 <= o.y1 && o.y0 <= y1;
+}
+Contact::Box Contact::Box::widened(double margin) const {
+  return {x0 - margin, y0 - margin, x1 + margin, y1 + margin};
+}
+Contact::Box Contact::Box::overlap(const Box &o) const {
+  return {std::max(x0, o.x0), std::max(y0, o.y0), std::min(x1, o.x1), std::min(y1, o.y1)};
+}
 
 Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(settings)) {
   n_materials_ = model.materials.size();
@@ -82,9 +91,9 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
     if (model.bodies[b].at_rest && node_begin_[b] < node_begin_[b + 1])
       resting.push_back(static_cast<std::uint32_t>(b));
   rest_grid_.build(boxes_, resting, cell_);
-  const std::size_t threads = static_cast<std::size_t>(omp_get_max_threads());
-  thread_hits_.resize(threads);
-  arenas_.resize(threads);
+  const std::size_t runs = static_cast<std::size_t>(omp_get_max_threads());
+  run_hits_.resize(runs);
+  arenas_.resize(runs);
 }
 
 void Contact::addForces(Model &model, double, double dt) {
@@ -102,33 +111,28 @@ void Contact::addForces(Model &model, double, double dt) {
   }
   // The pairs of bodies: all anew when a body may have closed half the margin, else those of the
   // bodies that woke since the last step.
-  const int threads = omp_get_max_threads();
-  if (thread_pairs_.size() != static_cast<std::size_t>(threads) + 1 ||
-      2.0 * farthest > search_margin_)
+  if (run_pairs_.empty() || 2.0 * farthest > search_margin_)
     findPairs();
   else
     addPairsOfWoken(model);
 
-  // Narrow phase: each thread takes its run of pairs, so that the hits, taken thread by thread,
-  // come in pair order whatever the number of threads.
-  for (auto &hits : thread_hits_)
-    hits.clear();
-  const std::size_t n_pairs = pairs_.size();
+  // Narrow phase over the runs of pairs, each with its lists and its hits: taken run by run, the
+  // hits come in pair order whatever the number of threads.
+  const std::size_t runs = arenas_.size();
   stats_.pairs = 0;
-#pragma omp parallel num_threads(threads) if (n_pairs > 64)
+#pragma omp parallel num_threads(static_cast<int>(runs)) if (pairs_.size() > 64)
   {
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
     const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
-    std::vector<Hit> &hits = thread_hits_[t];
     Scratch scratch;
     std::size_t refreshed = 0, overlapping = 0;
-    // Run r of the pairs keeps its lists in arena r; one thread alone takes every run.
-    for (std::size_t r = T == 1 ? 0 : t; r < (T == 1 ? arenas_.size() : t + 1); ++r) {
+    for (std::size_t r = t; r < runs; r += T) {
       std::vector<std::uint32_t> &arena = arenas_[r];
-      for (std::size_t i = thread_pairs_[r]; i < thread_pairs_[r + 1]; ++i) {
+      std::vector<Hit> &hits = run_hits_[r];
+      hits.clear();
+      for (std::size_t i = run_pairs_[r]; i < run_pairs_[r + 1]; ++i) {
         Pair &pair = pairs_[i];
-        const Box &A = boxes_[pair.a], &B = boxes_[pair.b];
-        if (!overlap(A.x0, A.x1, B.x0, B.x1) || !overlap(A.y0, A.y1, B.y0, B.y1))
+        if (!boxes_[pair.a].overlaps(boxes_[pair.b]))
           continue;
         ++overlapping;
         // Each boundary node has moved by at most its body's travel since the lists were
@@ -148,13 +152,13 @@ void Contact::addForces(Model &model, double, double dt) {
 #pragma omp atomic
     stats_.pairs += overlapping;
   }
-  walls(model, dt, thread_hits_.back());
+  walls(model, dt, run_hits_.back());
 
   // Into the nodes, in order; every body loaded takes part in the step.
   Nodes &nd = model.nodes;
   stats_.contacts = 0;
   stats_.depth = 0.0;
-  for (const auto &hits : thread_hits_)
+  for (const auto &hits : run_hits_)
     for (const Hit &h : hits) {
       nd.addExternal(h.node, h.fx, h.fy, h.friction_x, h.friction_y);
       model.wake(nd.body[h.node]);
@@ -194,15 +198,13 @@ void Contact::measure(const Model &model, std::size_t b) {
 // fit, else at its end with room to grow.
 void Contact::refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &scratch) const {
   const std::size_t a = pair.a, b = pair.b;
-  const Box &A = boxes_[a], &B = boxes_[b];
   const double margin = list_margin * std::min(size_[a], size_[b]);
-  const double x0 = std::max(A.x0, B.x0) - margin, x1 = std::min(A.x1, B.x1) + margin;
-  const double y0 = std::max(A.y0, B.y0) - margin, y1 = std::min(A.y1, B.y1) + margin;
+  const Box region = boxes_[a].overlap(boxes_[b]).widened(margin);
   std::vector<std::uint32_t> &items = scratch.items;
   items.clear();
-  pair.end[0] = listNear(a, b, x0, y0, x1, y1, margin, scratch);
+  pair.end[0] = listNear(a, b, region, margin, scratch);
   pair.end[1] = static_cast<std::uint32_t>(items.size());
-  pair.end[2] = listNear(b, a, x0, y0, x1, y1, margin, scratch);
+  pair.end[2] = listNear(b, a, region, margin, scratch);
   pair.end[3] = static_cast<std::uint32_t>(items.size());
   if (items.size() > pair.capacity) {
     pair.begin = static_cast<std::uint32_t>(arena.size());
@@ -218,10 +220,10 @@ void Contact::refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &sc
 // one of them than its closest segment plus `margin`. While the two bodies move by less than
 // margin / 2 together, these hold every node that can come into contact and its closest segment.
 // Returns the end of the nodes.
-std::uint32_t Contact::listNear(std::size_t A, std::size_t B, double x0, double y0, double x1,
-                                double y1, double margin, Scratch &scratch) const {
+std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region, double margin,
+                                Scratch &scratch) const {
   nearSegments(B, segment_ends_.data() + 2 * segment_begin_[B],
-               segment_ends_.data() + 2 * segment_begin_[B + 1], x0, y0, x1, y1, scratch);
+               segment_ends_.data() + 2 * segment_begin_[B + 1], region, scratch);
   const std::vector<Segment> &near = scratch.near;
   std::vector<std::uint32_t> &items = scratch.items;
   std::vector<double> &distance = scratch.distance;
@@ -229,20 +231,11 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, double x0, double 
   scratch.keep.assign(near.size(), 0);
   for (std::size_t k = node_begin_[A]; k < node_begin_[A + 1] && !near.empty(); ++k) {
     const double px = node_x_[k], py = node_y_[k];
-    if (px < x0 || px > x1 || py < y0 || py > y1)
+    if (!region.contains(px, py))
       continue;
-    double best = HUGE_VAL, g_best = 0.0;
-    for (std::size_t i = 0; i < near.size(); ++i) {
-      const Segment &s = near[i];
-      const double dx = px - s.ax, dy = py - s.ay;
-      const double t = dx * s.tx + dy * s.ty, g = dx * s.nx + dy * s.ny;
-      const double excess = t < 0.0 ? -t : (t > s.length ? t - s.length : 0.0);
-      distance[i] = excess * excess + g * g;
-      if (distance[i] < best)
-        best = distance[i], g_best = g;
-    }
-    const double clearance = std::sqrt(best);
-    if (clearance >= margin && g_best >= 0.0)
+    const Closest c = closest(near, px, py, distance.data());
+    const double clearance = std::sqrt(c.distance);
+    if (clearance >= margin && c.g >= 0.0)
       continue;
     items.push_back(static_cast<std::uint32_t>(k));
     const double reach = sq(clearance + margin);
@@ -264,19 +257,37 @@ Contact::Segment Contact::segment(std::uint32_t p, std::uint32_t q) const {
   return {ax, ay, dx * inv, dy * inv, length, dy * inv, -dx * inv};
 }
 
+// The segment of `near` closest to (px, py), the first of equals; with `distances`, every
+// segment's squared distance goes there.
+Contact::Closest Contact::closest(const std::vector<Segment> &near, double px, double py,
+                                  double *distances) {
+  Closest c;
+  for (std::uint32_t i = 0; i < near.size(); ++i) {
+    const Segment &s = near[i];
+    const double dx = px - s.ax, dy = py - s.ay;
+    const double t = dx * s.tx + dy * s.ty, g = dx * s.nx + dy * s.ny;
+    const double excess = t < 0.0 ? -t : (t > s.length ? t - s.length : 0.0);
+    const double distance = excess * excess + g * g;
+    if (distances)
+      distances[i] = distance;
+    if (distance < c.distance)
+      c = {i, distance, g, t, excess > 0.0};
+  }
+  return c;
+}
+
 // Of body `body`'s segments given by their ends, those of nonzero length whose boxes come within
 // its reach (see touch) of the rectangle: into scratch.near, their ends into scratch.near_ends.
 void Contact::nearSegments(std::size_t body, const std::uint32_t *ends,
-                           const std::uint32_t *ends_end, double x0, double y0, double x1,
-                           double y1, Scratch &scratch) const {
-  const double reach = check_depth * size_[body];
+                           const std::uint32_t *ends_end, const Box &region,
+                           Scratch &scratch) const {
+  const Box wide = region.widened(check_depth * size_[body]);
   scratch.near.clear();
   scratch.near_ends.clear();
   for (const std::uint32_t *k = ends; k != ends_end; k += 2) {
     const std::uint32_t p = k[0], q = k[1];
     const double ax = node_x_[p], ay = node_y_[p], bx = node_x_[q], by = node_y_[q];
-    if (std::max(ax, bx) >= x0 - reach && std::min(ax, bx) <= x1 + reach &&
-        std::max(ay, by) >= y0 - reach && std::min(ay, by) <= y1 + reach) {
+    if (wide.overlaps({std::min(ax, bx), std::min(ay, by), std::max(ax, bx), std::max(ay, by)})) {
       const Segment s = segment(p, q);
       if (s.length > 0.0)
         scratch.near.push_back(s), scratch.near_ends.push_back(p), scratch.near_ends.push_back(q);
@@ -335,26 +346,20 @@ void Contact::Grid::build(const std::vector<Box> &boxes, const std::vector<std::
 void Contact::findPairs() {
   ++stats_.searches;
   pairs_.clear();
-  const double half = 0.5 * search_margin_;
   std::vector<Box> wide(boxes_.size());
   for (std::uint32_t b : moving_) {
-    wide[b] = {boxes_[b].x0 - half, boxes_[b].y0 - half, boxes_[b].x1 + half, boxes_[b].y1 + half};
+    wide[b] = boxes_[b].widened(0.5 * search_margin_);
     travel_searched_[b] = travel_[b];
     listed_[b] = 1;
   }
-  auto add = [&](std::uint32_t a, std::uint32_t b) {
-    Pair pair;
-    pair.a = std::min(a, b), pair.b = std::max(a, b);
-    pairs_.push_back(pair);
-  };
+  auto add = [&](std::uint32_t a, std::uint32_t b) { pairs_.emplace_back(a, b); };
   moving_grid_.build(wide, moving_, cell_);
   const Grid &g = moving_grid_;
   for (std::size_t c = 0; c < g.nx * g.ny; ++c)
     for (std::size_t i = g.start[c]; i < g.start[c + 1]; ++i)
       for (std::size_t j = i + 1; j < g.start[c + 1]; ++j) {
         const Box &A = wide[g.bodies[i]], &B = wide[g.bodies[j]];
-        if (overlap(A.x0, A.x1, B.x0, B.x1) && overlap(A.y0, A.y1, B.y0, B.y1) &&
-            g.iy(std::max(A.y0, B.y0)) * g.nx + g.ix(std::max(A.x0, B.x0)) == c)
+        if (A.overlaps(B) && g.iy(std::max(A.y0, B.y0)) * g.nx + g.ix(std::max(A.x0, B.x0)) == c)
           add(g.bodies[i], g.bodies[j]);
       }
   for (std::uint32_t a : moving_)
@@ -362,9 +367,9 @@ void Contact::findPairs() {
   std::sort(pairs_.begin(), pairs_.end(),
             [](const Pair &p, const Pair &q) { return std::tie(p.a, p.b) < std::tie(q.a, q.b); });
   const std::size_t runs = arenas_.size();
-  thread_pairs_.resize(runs + 1);
+  run_pairs_.resize(runs + 1);
   for (std::size_t r = 0; r <= runs; ++r)
-    thread_pairs_[r] = pairs_.size() * r / runs;
+    run_pairs_[r] = pairs_.size() * r / runs;
   for (auto &arena : arenas_)
     arena.clear();
 }
@@ -381,14 +386,10 @@ void Contact::addPairsOfWoken(const Model &model) {
   for (std::uint32_t a : woken_)
     restNeighbours(a, search_margin_,
                    [&](std::uint32_t b) { return !listed_[b] && (model.bodies[b].at_rest || a < b); },
-                   [&](std::uint32_t a, std::uint32_t b) {
-                     Pair pair;
-                     pair.a = std::min(a, b), pair.b = std::max(a, b);
-                     pairs_.push_back(pair);
-                   });
+                   [&](std::uint32_t a, std::uint32_t b) { pairs_.emplace_back(a, b); });
   for (std::uint32_t a : woken_)
     listed_[a] = 1;
-  thread_pairs_.back() = pairs_.size();
+  run_pairs_.back() = pairs_.size();
 }
 
 // The bodies of the grid of bodies at rest whose boxes come closer to body a's than `margin` and
@@ -398,15 +399,13 @@ void Contact::restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add 
   const Grid &r = rest_grid_;
   if (r.nx == 0)
     return;
-  const Box A{boxes_[a].x0 - margin, boxes_[a].y0 - margin, boxes_[a].x1 + margin,
-              boxes_[a].y1 + margin};
+  const Box A = boxes_[a].widened(margin);
   for (std::size_t j = r.iy(A.y0); j <= r.iy(A.y1); ++j)
     for (std::size_t i = r.ix(A.x0); i <= r.ix(A.x1); ++i)
       for (std::size_t k = r.start[j * r.nx + i]; k < r.start[j * r.nx + i + 1]; ++k) {
         const std::uint32_t b = r.bodies[k];
         const Box &B = boxes_[b];
-        if (b != a && overlap(A.x0, A.x1, B.x0, B.x1) && overlap(A.y0, A.y1, B.y0, B.y1) &&
-            r.iy(std::max(A.y0, B.y0)) == j && r.ix(std::max(A.x0, B.x0)) == i && wanted(b))
+        if (b != a && A.overlaps(B) && r.iy(std::max(A.y0, B.y0)) == j && r.ix(std::max(A.x0, B.x0)) == i && wanted(b))
           add(a, b);
       }
 }
@@ -418,43 +417,30 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
                     const std::uint32_t *nodes_end, const std::uint32_t *ends,
                     const std::uint32_t *ends_end, double dt, std::vector<Hit> &hits,
                     Scratch &scratch) const {
-  const Box &a = boxes_[A], &b = boxes_[B];
-  const double rx0 = std::max(a.x0, b.x0), rx1 = std::min(a.x1, b.x1);
-  const double ry0 = std::max(a.y0, b.y0), ry1 = std::min(a.y1, b.y1);
+  const Box region = boxes_[A].overlap(boxes_[B]);
   // Segments within `reach` of the overlap: a node behind one of them by less than `reach` finds
   // its closest segment among them; deeper contacts are checked by the crossing count.
   const double h = size_[B];
-  nearSegments(B, ends, ends_end, rx0, ry0, rx1, ry1, scratch);
+  nearSegments(B, ends, ends_end, region, scratch);
   const std::vector<Segment> &near = scratch.near;
   if (near.empty())
     return;
   const double mu = s_.friction[model.bodies[A].material * n_materials_ + model.bodies[B].material];
   for (const std::uint32_t *k = nodes; k != nodes_end; ++k) {
     const double px = node_x_[*k], py = node_y_[*k];
-    if (px < rx0 || px > rx1 || py < ry0 || py > ry1)
+    if (!region.contains(px, py))
       continue;
     const std::uint32_t p = nodes_[*k];
     // The closest point of B's boundary: on a segment's inside (the node is in contact when behind
     // it) or at a corner. Near a convex corner the node is then outside; behind the closest
     // segment's line it may be inside a dented corner, which the crossing count decides.
-    double best = HUGE_VAL, g_best = 0.0, along = 0.0;
-    std::uint32_t closest = no_node;
-    bool corner = false;
-    for (std::uint32_t i = 0; i < near.size(); ++i) {
-      const Segment &s = near[i];
-      const double dx = px - s.ax, dy = py - s.ay;
-      const double t = dx * s.tx + dy * s.ty, g = dx * s.nx + dy * s.ny;
-      const double excess = t < 0.0 ? -t : (t > s.length ? t - s.length : 0.0);
-      const double distance = excess * excess + g * g;
-      if (distance < best)
-        best = distance, closest = i, corner = excess > 0.0, g_best = g, along = t;
-    }
-    if (closest == no_node || g_best >= 0.0)
+    const Closest c = closest(near, px, py, nullptr);
+    if (c.segment == no_node || c.g >= 0.0)
       continue;
-    const Segment &s = near[closest];
-    double depth = -g_best, nx = s.nx, ny = s.ny, w2 = along / s.length;
-    if (corner) { // pushed out toward the corner
-      w2 = along < 0.0 ? 0.0 : 1.0;
+    const Segment &s = near[c.segment];
+    double depth = -c.g, nx = s.nx, ny = s.ny, w2 = c.along / s.length;
+    if (c.corner) { // pushed out toward the corner
+      w2 = c.along < 0.0 ? 0.0 : 1.0;
       const double vx = s.ax + w2 * s.length * s.tx - px, vy = s.ay + w2 * s.length * s.ty - py;
       depth = std::sqrt(vx * vx + vy * vy);
       if (!(depth > check_depth * h) || !inside(B, px, py)) // clear of the boundary
@@ -465,8 +451,8 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
       // a node outside it behind one of its segments: the crossing count decides
       continue;
     }
-    hit(model, p, nodes_[scratch.near_ends[2 * closest]], nodes_[scratch.near_ends[2 * closest + 1]],
-        w2, nx, ny, depth, h, mu, dt, hits);
+    hit(model, p, nodes_[scratch.near_ends[2 * c.segment]],
+        nodes_[scratch.near_ends[2 * c.segment + 1]], w2, nx, ny, depth, h, mu, dt, hits);
   }
 }
 

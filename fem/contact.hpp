@@ -26,12 +26,13 @@
 // boundary nodes and segments near the overlap of the two boxes, taken with a margin of its own
 // and refreshed when the two bodies may have moved by a quarter of that (a bound on the
 // displacement of every boundary node, summed step by step): a step looks at a handful of nodes
-// and segments per pair, in one stream of memory per thread, and finds exactly what a search of
+// and segments per pair, in one stream of memory per run of pairs, and finds exactly what a search of
 // the whole boundaries would.
 #pragma once
 
 #include "solver.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -77,14 +78,19 @@ public:
 private:
   struct Box {
     double x0, y0, x1, y1;
+    bool overlaps(const Box &other) const;
+    bool contains(double x, double y) const { return x >= x0 && x <= x1 && y >= y0 && y <= y1; }
+    Box widened(double margin) const;
+    Box overlap(const Box &other) const; // the intersection (empty if x0 > x1 or y0 > y1)
   };
   struct Segment {
     double ax, ay, tx, ty, length, nx, ny; // start, unit tangent, length, outward normal
   };
   // A pair of bodies (a, b) whose boxes widened by the margin overlapped, and what it looks at:
   // a's boundary nodes (indices into nodes_), b's segments (their two nodes, as indices into
-  // nodes_), b's nodes, a's segments, near the boxes' overlap; in its thread's arena from `begin`.
+  // nodes_), b's nodes, a's segments, near the boxes' overlap; in its run's arena from `begin`.
   struct Pair {
+    Pair(std::uint32_t p, std::uint32_t q) : a(std::min(p, q)), b(std::max(p, q)) {}
     std::uint32_t a, b;
     std::uint32_t begin = 0, capacity = 0;
     std::uint32_t end[4] = {}; // ends of the four parts, from `begin`
@@ -106,6 +112,13 @@ private:
   void addPairsOfWoken(const Model &model);
   template <class Wanted, class Add>
   void restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add add) const;
+  // The closest segment of a list to a point: its index (no_node: none), squared distance, signed
+  // distance from its line (negative behind it), position along it, whether a corner is closest.
+  struct Closest {
+    std::uint32_t segment = 0xffffffffu;
+    double distance = std::numeric_limits<double>::infinity(), g = 0.0, along = 0.0;
+    bool corner = false;
+  };
   // A thread's working lists: segments near a node set (with their two nodes), distances.
   struct Scratch {
     std::vector<Segment> near;
@@ -114,11 +127,12 @@ private:
     std::vector<char> keep;
   };
   Segment segment(std::uint32_t p, std::uint32_t q) const;
+  static Closest closest(const std::vector<Segment> &near, double px, double py, double *distances);
   void nearSegments(std::size_t body, const std::uint32_t *ends, const std::uint32_t *ends_end,
-                    double x0, double y0, double x1, double y1, Scratch &scratch) const;
+                    const Box &region, Scratch &scratch) const;
   void refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &scratch) const;
-  std::uint32_t listNear(std::size_t A, std::size_t B, double x0, double y0, double x1, double y1,
-                         double margin, Scratch &scratch) const;
+  std::uint32_t listNear(std::size_t A, std::size_t B, const Box &region, double margin,
+                         Scratch &scratch) const;
   void touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
              const std::uint32_t *nodes_end, const std::uint32_t *ends, const std::uint32_t *ends_end,
              double dt, std::vector<Hit> &hits, Scratch &scratch) const;
@@ -130,7 +144,7 @@ private:
 
   ContactSettings s_;
   std::size_t n_materials_;
-  std::vector<std::size_t> node_begin_, segment_begin_; // per body, into nodes_ and segments_
+  std::vector<std::size_t> node_begin_, segment_begin_; // per body, into nodes_ and segment_ends_ / 2
   std::vector<std::uint32_t> nodes_;                    // boundary nodes, body by body
   std::vector<double> node_x_, node_y_;                 // their positions, this step
   std::vector<std::uint32_t> segment_ends_; // boundary edges (ccw), their nodes as indices into nodes_
@@ -145,9 +159,11 @@ private:
   Grid rest_grid_, moving_grid_;
   double search_margin_ = 0.0;
   std::vector<Pair> pairs_;
-  std::vector<std::size_t> thread_pairs_;                // pairs_ of thread t: [t], [t + 1]
-  std::vector<std::vector<std::uint32_t>> arenas_;       // per thread: its pairs' lists
-  std::vector<std::vector<Hit>> thread_hits_;
+  // The pairs in runs, one per thread at the start: run r holds pairs_ [run_pairs_[r],
+  // run_pairs_[r + 1]) (the last also those added since the search), their lists, their hits.
+  std::vector<std::size_t> run_pairs_;
+  std::vector<std::vector<std::uint32_t>> arenas_;
+  std::vector<std::vector<Hit>> run_hits_;
   ContactStatistics stats_;
 };
 

@@ -111,7 +111,7 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
   dt_ = std::min(next_dt_, s_.max_dt);
   for (const Range &r : node_ranges_)
     for (std::size_t a = r.begin; a < r.end; ++a)
-      kinetic_ += 0.5 * nd.mass[a] * (nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a]);
+      energy_.kinetic += 0.5 * nd.mass[a] * (nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a]);
   accountEnergy();
   energy_.initial = energy_.kinetic + energy_.internal;
   energy_.balance_error = 0.0;
@@ -223,10 +223,10 @@ void Solver::kick(double half_dt, bool second_half) {
     node_sums_[2 * i + 1] = kinetic;
   }
   if (second_half)
-    kinetic_ = 0.0;
+    energy_.kinetic = 0.0;
   for (long i = 0; i < blocks; ++i) {
     kick_work_ += node_sums_[2 * i];
-    kinetic_ += node_sums_[2 * i + 1];
+    energy_.kinetic += node_sums_[2 * i + 1];
   }
   applyConstraints(half_dt, second_half);
 }
@@ -245,7 +245,7 @@ void Solver::applyConstraints(double half_dt, bool second_half) {
     friction_work_ += f_friction * shift;
     kick_work_ += nd.mass[a] * gravity * shift;
     if (second_half)
-      kinetic_ += 0.5 * nd.mass[a] *
+      energy_.kinetic += 0.5 * nd.mass[a] *
                   (target * target - sq(target - before) - v * v + sq(v - before));
     v = target;
   };
@@ -478,15 +478,13 @@ void Solver::accountEnergy() {
     plastic += sums_[i].plastic;
     viscous += sums_[i].viscous;
   }
-  const double kinetic = kinetic_;
-  energy_.kinetic = kinetic;
   energy_.internal = internal;
   energy_.plastic += plastic;
   energy_.viscous += viscous;
   energy_.friction -= friction_work_;
   energy_.contact -= provider_work_ - friction_work_;
   energy_.external += kick_work_;
-  const double total = kinetic + internal + energy_.friction + energy_.contact;
+  const double total = energy_.kinetic + internal + energy_.friction + energy_.contact;
   const double scale = std::max({std::abs(total), std::abs(energy_.initial), std::abs(energy_.external)});
   energy_.balance_error = scale > 0.0 ? (total - energy_.initial - energy_.external) / scale : 0.0;
 }

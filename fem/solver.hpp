@@ -128,7 +128,6 @@ private:
   Energy energy_;
   // Work of this step: constraints and gravity; providers' forces; their frictional part.
   double kick_work_ = 0.0, provider_work_ = 0.0, friction_work_ = 0.0;
-  double kinetic_ = 0.0; // the kinetic energy at the end of the step (see kick)
 };
 
 } // namespace mesopen::fem
