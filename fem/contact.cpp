@@ -180,8 +180,8 @@ void Contact::addHits(Model &model) {
         return false;
       if (!nd.is_loaded[a])
         nd.is_loaded[a] = 1, block_loaded_[k].push_back(a);
-      nd.fx_ext[a] += fx, nd.fy_ext[a] += fy;
-      nd.fx_friction[a] += friction_x, nd.fy_friction[a] += friction_y;
+      Nodes::External &e = nd.external[a];
+      e.fx += fx, e.fy += fy, e.friction_x += friction_x, e.friction_y += friction_y;
       model.wake(nd.body[a]);
       return true;
     };
