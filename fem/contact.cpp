@@ -473,11 +473,16 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
     // it) or at a corner. Near a convex corner the node is then outside; behind the closest
     // segment's line it may be inside a dented corner, which the crossing count decides.
     const Closest c = closest(near, px, py, nullptr);
-    if (c.segment == no_node || c.g >= 0.0)
+    if (c.segment == no_node)
       continue;
     const Segment &s = near[c.segment];
     double depth = -c.g, nx = s.nx, ny = s.ny, w2 = c.along / s.length;
-    if (c.corner) { // pushed out toward the corner
+    if (vertexTie(scratch, c, px, py, depth, nx, ny, w2)) { // a node meeting a node
+      if (depth <= touching * h || (depth > check_depth * h && !inside(B, px, py)))
+        continue;
+    } else if (c.g >= 0.0) {
+      continue;
+    } else if (c.corner) { // pushed out toward the corner
       w2 = c.along < 0.0 ? 0.0 : 1.0;
       const double vx = s.ax + w2 * s.length * s.tx - px, vy = s.ay + w2 * s.length * s.ty - py;
       depth = std::sqrt(vx * vx + vy * vy);
@@ -492,6 +497,42 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
     hit(model, p, nodes_[scratch.near_ends[2 * c.segment]],
         nodes_[scratch.near_ends[2 * c.segment + 1]], w2, nx, ny, depth, h, mu, dt, hits);
   }
+}
+
+// A node as close to both segments that meet at a vertex, its closest point the vertex itself (a
+// node meeting a node of a conforming face): the vertex normal, the mean of the two segments'
+// normals, the depth along it, the reaction on the vertex alone. Taking the first of the two
+// segments instead (and, by round-off, its inside or its corner) would depend on the order of the
+// list, and the two passes of a mirror-symmetric impact would differ. False when the closest point
+// is not such a vertex.
+bool Contact::vertexTie(const Scratch &scratch, const Closest &c, double px, double py,
+                        double &depth, double &nx, double &ny, double &w2) const {
+  constexpr double tie = 1e-9; // relative: the same distance but for round-off
+  const std::vector<Segment> &near = scratch.near;
+  const Segment &s = near[c.segment];
+  const bool at_start = std::abs(c.along) <= tie * s.length;
+  const bool at_end = std::abs(c.along - s.length) <= tie * s.length;
+  if (at_start == at_end)
+    return false;
+  const std::uint32_t vertex = scratch.near_ends[2 * c.segment + (at_start ? 0 : 1)];
+  for (std::uint32_t j = 0; j < near.size(); ++j) {
+    if (j == c.segment || scratch.near_ends[2 * j + (at_start ? 1 : 0)] != vertex)
+      continue;
+    const Segment &o = near[j];
+    const double dx = px - o.ax, dy = py - o.ay;
+    const double t = dx * o.tx + dy * o.ty, g = dx * o.nx + dy * o.ny;
+    const double excess = t < 0.0 ? -t : (t > o.length ? t - o.length : 0.0);
+    if (std::abs(excess * excess + g * g - c.distance) > tie * c.distance)
+      return false;
+    const double mx = s.nx + o.nx, my = s.ny + o.ny, norm = std::sqrt(mx * mx + my * my);
+    if (!(norm > 0.0))
+      return false;
+    nx = mx / norm, ny = my / norm;
+    depth = -((px - node_x_[vertex]) * nx + (py - node_y_[vertex]) * ny);
+    w2 = at_start ? 0.0 : 1.0;
+    return true;
+  }
+  return false;
 }
 
 // Whether (px, py) lies inside body B's boundary polygon: the number of boundary segments a ray

@@ -140,6 +140,8 @@ private:
   void touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
              const std::uint32_t *nodes_end, const std::uint32_t *ends, const std::uint32_t *ends_end,
              double dt, std::vector<Hit> &hits, Scratch &scratch) const;
+  bool vertexTie(const Scratch &scratch, const Closest &c, double px, double py, double &depth,
+                 double &nx, double &ny, double &w2) const;
   bool inside(std::size_t B, double px, double py) const;
   void walls(const Model &model, double dt, std::vector<Hit> &hits) const;
   void hit(const Model &model, std::uint32_t node, std::uint32_t s1, std::uint32_t s2, double w2,

@@ -37,6 +37,7 @@ struct StressState {
 
 struct MaterialOutput {
   double *sound_speed;              // current sound speed sqrt((K_s + 4G/3) / rho) [m/s]
+  double *shear_share;              // G / (K_s + 4G/3), in [0, 3/4] (for the stable step)
   double plastic_work = 0.0;        // plastic work of this batch over the step [J/m]
 };
 

@@ -35,35 +35,46 @@ void appendInPieces(std::vector<R> &ranges, std::size_t first, R piece, std::siz
   }
 }
 
-// How much longer than L_s / c the critical step of a constant-strain triangle with lumped masses
-// is, for any elastic constants (Flanagan & Belytschko 1981 bound the element's highest frequency;
-// this is its exact value, maximised over the materials): with b, c the shape function gradients
-// (gx, gy over 2A), S = B B^T and the elasticity M Dhat(g), M = rho c^2, g = G / M in [0, 3/4],
-//   omega_max^2 = 3 c^2 lambda_max(S Dhat(g)),
-// and lambda_max is convex in g (S Dhat is similar to a symmetric matrix affine in g), so the larger
-// of its values at g = 0 (Dhat = u u^T, u = (1, 1, 0): P + Q) and g = 3/4 bounds it. The gain is
-// 1 for an equilateral triangle and up to sqrt(2) for slivers, the elements that set the step.
-double criticalStepGain(const double gx[3], const double gy[3], double area, double ls) {
-  const double inv = 1.0 / (2.0 * area);
-  double P = 0.0, Q = 0.0, R = 0.0;
-  for (int k = 0; k < 3; ++k)
-    P += sq(gx[k] * inv), Q += sq(gy[k] * inv), R += gx[k] * gy[k] * inv * inv;
-  // g = 3/4: T = L^T S L with Dhat = L L^T, L = [1 0 0; -1/2 s 0; 0 0 s], s^2 = 3/4.
-  const double s = 0.5 * std::sqrt(3.0);
-  const double t00 = P + 0.25 * Q, t01 = -0.5 * s * Q, t02 = 0.5 * s * R;
-  const double t11 = 0.75 * Q, t12 = 0.75 * R, t22 = 0.75 * (P + Q);
-  // The largest eigenvalue of the symmetric T (trigonometric solution of the cubic).
+// The largest eigenvalue of S Dhat(g) for a constant-strain triangle: S = B B^T from the shape
+// function gradients (gx, gy over 2A, engineering shear), Dhat(g) = C / M the plane-strain
+// elasticity over the longitudinal modulus M = K + 4G/3, g = G / M in [0, 3/4]:
+//   S = [P 0 R; 0 Q R; R R P+Q],  Dhat = [1 1-2g 0; 1-2g 1 0; 0 0 g] = L L^T,
+//   L = [1 0 0; 1-2g s 0; 0 0 sqrt g],  s = 2 sqrt(g (1 - g)),
+// S Dhat is similar to the symmetric T = L^T S L (its eigenvalues by the trigonometric solution of
+// the cubic). g = 0 is the rank-one limit u u^T, u = (1, 1, 0): P + Q.
+double shapeStiffness(double P, double Q, double R, double g) {
+  const double d = 1.0 - 2.0 * g, s = 2.0 * std::sqrt(g * (1.0 - g)), r = std::sqrt(g);
+  const double t00 = P + d * d * Q, t01 = s * d * Q, t02 = r * (1.0 + d) * R;
+  const double t11 = s * s * Q, t12 = s * r * R, t22 = g * (P + Q);
   const double off = t01 * t01 + t02 * t02 + t12 * t12, q = (t00 + t11 + t22) / 3.0;
   double largest = q;
   const double p2 = sq(t00 - q) + sq(t11 - q) + sq(t22 - q) + 2.0 * off;
   if (p2 > 0.0) {
     const double p = std::sqrt(p2 / 6.0), b00 = (t00 - q) / p, b11 = (t11 - q) / p,
                  b22 = (t22 - q) / p, b01 = t01 / p, b02 = t02 / p, b12 = t12 / p;
-    const double r = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) +
-                            b02 * (b01 * b12 - b11 * b02));
-    largest = q + 2.0 * p * std::cos(std::acos(std::clamp(r, -1.0, 1.0)) / 3.0);
+    const double det = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) +
+                              b02 * (b01 * b12 - b11 * b02));
+    largest = q + 2.0 * p * std::cos(std::acos(std::clamp(det, -1.0, 1.0)) / 3.0);
   }
-  return (2.0 / ls) / std::sqrt(3.0 * std::max(P + Q, largest));
+  return std::max(largest, g == 0.0 ? P + Q : 0.0);
+}
+
+// How much longer than L_s / c the critical step 2 / omega_max of a constant-strain triangle with
+// lumped masses is (Flanagan & Belytschko 1981 bound the element's highest frequency; this is its
+// exact value): omega_max^2 = 3 c^2 lambda_max(S Dhat(g)), c^2 = M / rho. For the element's own
+// shear share g; when that is not known (outside [0, 3/4]), for the worst material: lambda_max is
+// convex in g (T is affine in g after a change of basis), so the larger of its values at g = 0 and
+// g = 3/4 bounds it. About 1.34 for an equilateral quartz triangle (1.19 steel, 1 at g = 0) and up
+// to sqrt(2) for slivers, the elements that set the step.
+double criticalStepGain(const double gx[3], const double gy[3], double area, double ls, double g) {
+  const double inv = 1.0 / (2.0 * area);
+  double P = 0.0, Q = 0.0, R = 0.0;
+  for (int k = 0; k < 3; ++k)
+    P += sq(gx[k] * inv), Q += sq(gy[k] * inv), R += gx[k] * gy[k] * inv * inv;
+  const double largest = g >= 0.0 && g <= 0.75
+                             ? shapeStiffness(P, Q, R, g)
+                             : std::max(shapeStiffness(P, Q, R, 0.0), shapeStiffness(P, Q, R, 0.75));
+  return (2.0 / ls) / std::sqrt(3.0 * largest);
 }
 
 // Node values of a batch's elements are read by the two helpers below rather than inside the
@@ -172,7 +183,7 @@ void Solver::step() {
   applyConstraints(0.5 * dt, true); // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m, the imposed velocities
   time_ += dt;
   ++steps_;
-  dt_ = std::min(next_dt_, s_.max_dt);
+  dt_ = std::min({next_dt_, s_.max_dt, s_.max_dt_growth * dt});
   accountEnergy();
 }
 
@@ -476,7 +487,8 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   const StrainBatch in{n, dt, dxx, dyy, dxy, spin, jac, dvol, vmid, el.area0.data() + e0};
   StressState state{el.sxx.data() + e0,     el.syy.data() + e0,    el.sxy.data() + e0,
                     el.pressure.data() + e0, el.energy.data() + e0, el.plastic_strain.data() + e0};
-  MaterialOutput out{cs};
+  alignas(64) double shear_share[max_chunk];
+  MaterialOutput out{cs, shear_share};
   chunk.material->update(in, state, out);
 
   // Artificial viscosity (Wilkins 1980), compression only:
@@ -514,13 +526,14 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
     dt_min = std::min(dt_min, step[i]);
   }
   // The elements whose step is near the shortest of the last pass (refine_below_) take the exact
-  // element bound: L_s / c times criticalStepGain, the damping factor unchanged.
+  // element bound for their material's state: L_s / c times criticalStepGain, the damping factor
+  // unchanged.
   if (dt_min < refine_below_) {
     dt_min = HUGE_VAL;
     for (std::size_t i = 0; i < n; ++i) {
       if (step[i] < refine_below_) {
         const double g_x[3] = {gx[0][i], gx[1][i], gx[2][i]}, g_y[3] = {gy[0][i], gy[1][i], gy[2][i]};
-        step[i] *= criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i]);
+        step[i] *= criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i], shear_share[i]);
       }
       dt_min = std::min(dt_min, step[i]);
     }

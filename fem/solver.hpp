@@ -20,6 +20,10 @@ struct SolverSettings {
   double viscosity_quadratic = 4.0; // C_Q (thesis Table 3.1)
   bool anti_locking = true;         // averaged nodal volume in bodies with plastic flow
   double max_dt = std::numeric_limits<double>::infinity();
+  // The step may grow by at most this factor from one step to the next (it falls at once). A
+  // penalty tied to the step (contact, k ~ m / dt^2) otherwise changes its stiffness tenfold
+  // between steps when a crushed element makes the stable step oscillate, and puts energy in.
+  double max_dt_growth = 1.1;
   double gravity_x = 0.0, gravity_y = 0.0; // body force per unit mass [m/s^2]
   std::size_t chunk = 256;          // elements per material batch
 };

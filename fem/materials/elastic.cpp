@@ -19,6 +19,7 @@ public:
 
   void update(const StrainBatch &in, StressState &s, MaterialOutput &out) const override {
     const double dt = in.dt, two_g_dt = 2.0 * G_ * dt, c2 = (K_ + 4.0 / 3.0 * G_) / rho0_;
+    const double shear_share = G_ / (K_ + 4.0 / 3.0 * G_);
 #pragma omp simd
     for (std::size_t i = 0; i < in.n; ++i) {
       double sxx = s.sxx[i], syy = s.syy[i], sxy = s.sxy[i];
@@ -31,6 +32,7 @@ public:
       energyEquation(-K_ * std::log(in.jacobian[i]), 0.0, -HUGE_VAL, in.volume_change[i], w_dev,
                      s.energy[i], s.pressure[i]);
       out.sound_speed[i] = std::sqrt(c2 * in.jacobian[i]); // rho = rho0 / J
+      out.shear_share[i] = shear_share;
     }
   }
 

@@ -42,7 +42,7 @@ private:
     const double *dxx = in.dxx, *dyy = in.dyy, *dxy = in.dxy, *spin = in.spin, *jac = in.jacobian;
     const double *dvol = in.volume_change, *vmid = in.volume_mid, *vol0 = in.volume0;
     double *sxx_ = s.sxx, *syy_ = s.syy, *sxy_ = s.sxy, *pressure = s.pressure, *energy = s.energy;
-    double *eps = s.plastic_strain, *cs = out.sound_speed;
+    double *eps = s.plastic_strain, *cs = out.sound_speed, *shear_share = out.shear_share;
     double plastic_work = 0.0;
 #pragma omp simd reduction(+ : plastic_work)
     for (std::size_t i = 0; i < in.n; ++i) {
@@ -73,6 +73,7 @@ private:
       energyEquation(a, b, p_min, dvol[i], w_dev, energy[i], pressure[i]);
       const double bulk = eos_.bulkModulus(mu, pressure[i]);
       cs[i] = std::sqrt((bulk + 4.0 / 3.0 * G) * jac[i] / rho0_);
+      shear_share[i] = G / (bulk + 4.0 / 3.0 * G);
     }
     out.plastic_work = plastic_work;
   }

@@ -13,7 +13,7 @@ namespace {
 // One element driven through a prescribed rate of deformation: J follows tr(D) exactly.
 struct MaterialPoint {
   std::unique_ptr<fem::Material> material;
-  double sxx = 0, syy = 0, sxy = 0, p = 0, energy = 0, eps_p = 0, c = 0, J = 1, V0 = 1e-10;
+  double sxx = 0, syy = 0, sxy = 0, p = 0, energy = 0, eps_p = 0, c = 0, g = 0, J = 1, V0 = 1e-10;
   double plastic_work = 0;
 
   explicit MaterialPoint(std::unique_ptr<fem::Material> m) : material(std::move(m)) {}
@@ -22,7 +22,7 @@ struct MaterialPoint {
     const double dv = V0 * (J_new - J), vmid = 0.5 * V0 * (J + J_new), spin = 0.0;
     const fem::StrainBatch in{1, dt, &dxx, &dyy, &dxy, &spin, &J_new, &dv, &vmid, &V0};
     fem::StressState s{&sxx, &syy, &sxy, &p, &energy, &eps_p};
-    fem::MaterialOutput out{&c};
+    fem::MaterialOutput out{&c, &g};
     material->update(in, s, out);
     plastic_work += out.plastic_work;
     J = J_new;
