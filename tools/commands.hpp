@@ -29,6 +29,15 @@ struct RunOptions : SceneOptions {
 
 int runCommand(const RunOptions &options);
 
+struct ModalOptions {
+  std::string input;                   // scene (.toml), target.h5 or run.h5
+  std::string out_dir;
+  std::optional<int> modes;            // overrides modal.modes
+  std::optional<int> threads;
+};
+
+int modalCommand(const ModalOptions &options);
+
 // Where the program's data files are (build/share/mesopen beside build/bin/mesopen).
 std::string shareDirectory();
 
