@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace mesopen {
 
@@ -37,6 +38,14 @@ struct ModalOptions {
 };
 
 int modalCommand(const ModalOptions &options);
+
+struct AnalyzeOptions {
+  std::vector<std::string> dirs;       // run directories (each with run.h5)
+  std::string out_dir;                 // plots; empty: the first run's directory
+  bool no_plot = false;
+};
+
+int analyzeCommand(const AnalyzeOptions &options);
 
 // Where the program's data files are (build/share/mesopen beside build/bin/mesopen).
 std::string shareDirectory();

@@ -36,6 +36,15 @@ int main(int argc, char **argv) {
       sceneCommand(app, "run", "run a scene: the projectile and the grains as finite elements", run);
   run_cmd->add_flag("--quiet", run.quiet, "no progress line");
 
+  mesopen::AnalyzeOptions analyze;
+  auto *analyze_cmd = app.add_subcommand(
+      "analyze", "measures of instability from runs' run.h5: instability.json in each, plots of "
+                 "every run overlaid");
+  analyze_cmd->add_option("dirs", analyze.dirs, "run directories (each with run.h5)")->required();
+  analyze_cmd->add_option("-o,--output", analyze.out_dir,
+                          "directory for the plots (default: the first run's)");
+  analyze_cmd->add_flag("--no-plot", analyze.no_plot, "no PNG plots");
+
   mesopen::ModalOptions modal;
   auto *modal_cmd = app.add_subcommand(
       "modal", "free vibration modes of the projectile or a beam (scene's [modal] table), or of "
@@ -61,6 +70,8 @@ int main(int argc, char **argv) {
   }
   if (*run_cmd)
     return mesopen::runCommand(run);
+  if (*analyze_cmd)
+    return mesopen::analyzeCommand(analyze);
   if (*modal_cmd)
     return mesopen::modalCommand(modal);
   return mesopen::targetCommand(target);
