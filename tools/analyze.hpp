@@ -22,7 +22,8 @@ struct RunSeries {
   double velocity = 0.0;                   // initial speed [m/s]
 };
 
-// Reads /series and /mesh of run.h5 (the projectile's length is its initial extent along y).
+// Reads /series and /mesh of run.h5: the projectile's length is the root attribute
+// projectile_length, or (in files without it) the initial extent of body 0 along y.
 // Throws std::runtime_error naming the file and what is missing.
 RunSeries readRunSeries(const std::string &path);
 
