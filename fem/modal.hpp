@@ -48,8 +48,10 @@ struct ElasticSolid {
 
 struct ModalSettings {
   int modes = 10;  // elastic modes wanted (lowest)
-  int lanczos = 0; // Lanczos basis size (Spectra's ncv); 0: modes + 4 (fewest solves, measured)
-  double tolerance = 1e-10; // relative accuracy of the eigenvalues
+  int lanczos = 0; // Lanczos basis size (Spectra's ncv); 0: 2 modes + 1 (Spectra's advice)
+  // Relative residual of the Ritz pairs, |A y - theta y| <= tol |theta|: the eigenvalues are then
+  // accurate to about tol^2 (Rayleigh quotient), the shapes to about tol.
+  double tolerance = 1e-6;
 };
 
 struct ModalResult {

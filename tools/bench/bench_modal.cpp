@@ -2,7 +2,7 @@
 // projectile (thesis run 6) meshed at about 20,000 nodes, and of the run's 10 um mesh; assembly,
 // factorisation and Lanczos times, median of several repetitions (the machine may be shared).
 // The goal: 20,000 nodes in at most 0.5 s. Prints a table and writes the figures as JSON.
-//     mesopen_bench_modal [--out DIR] [--repeats 7] [--nodes 20000]
+//     mesopen_bench_modal [--out DIR] [--repeats 7] [--nodes 20000] [--lanczos N] [--tolerance T]
 #include "modal.hpp"
 #include "projectile.hpp"
 
@@ -49,6 +49,8 @@ int main(int argc, char **argv) {
   std::string out = "bench";
   int repeats = 7;
   double target_nodes = 20000;
+  fem::ModalSettings settings;
+  settings.modes = 10;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--out"))
       out = argv[i + 1];
@@ -56,6 +58,10 @@ int main(int argc, char **argv) {
       repeats = std::max(1, std::atoi(argv[i + 1]));
     else if (!std::strcmp(argv[i], "--nodes"))
       target_nodes = std::atof(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--lanczos"))
+      settings.lanczos = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--tolerance"))
+      settings.tolerance = std::atof(argv[i + 1]);
   }
   const double goal_seconds = 0.5;
   nlohmann::json cases = nlohmann::json::array();
@@ -64,8 +70,6 @@ int main(int argc, char **argv) {
   for (const double size : {sizeForNodes(target_nodes), 10e-6}) {
     const fem::ModalMesh mesh = projectileAt(size);
     const fem::ElasticSolid steel; // thesis Table 3.2, plane strain
-    fem::ModalSettings settings;
-    settings.modes = 10;
     std::vector<double> assemble, factor, solve, total;
     fem::ModalResult r;
     for (int k = 0; k < repeats; ++k) {
