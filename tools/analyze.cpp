@@ -154,6 +154,7 @@ Spectrum dominantPeriod(const std::vector<double> &x, const std::vector<double> 
   const double median = sorted[sorted.size() / 2];
   s.period = 1.0 / f_peak;
   s.peak_over_median = median > 0.0 ? s.power[peak] / median : 0.0;
+  s.peak_over_largest = s.power[peak] / *std::max_element(s.power.begin(), s.power.end());
   return s;
 }
 

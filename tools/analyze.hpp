@@ -46,6 +46,7 @@ struct Spectrum {
   std::vector<double> frequency, power; // cycles per unit x; arbitrary units
   double period = 0.0;                  // 1 / the peak frequency [unit of x per cycle]; 0: none
   double peak_over_median = 0.0;        // the peak's power over the median power
+  double peak_over_largest = 0.0;       // over the band's largest (1: the peak is the largest)
   double x_begin = 0.0, x_end = 0.0;    // the record used
 };
 Spectrum dominantPeriod(const std::vector<double> &x, const std::vector<double> &y,

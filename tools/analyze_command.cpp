@@ -59,6 +59,7 @@ nlohmann::json spectrumJson(const Spectrum &s, const std::string &unit) {
           {"period_unit", unit},
           {"frequency", s.period > 0 ? 1.0 / s.period : 0.0},
           {"peak_over_median_power", s.peak_over_median},
+          {"peak_over_largest_power", s.peak_over_largest},
           {"record", {s.x_begin, s.x_end}},
           {"method",
            "H resampled uniformly, least-squares quadratic removed, Hann window, power "
