@@ -18,6 +18,8 @@ constexpr double check_depth = 0.05; // penetration from which a contact is chec
 constexpr std::size_t max_cells = 1u << 22;
 constexpr double list_margin = 0.5;   // a pair's lists: margin / the smaller body's element size
 constexpr double search_margin = 1.0; // pairs of bodies: margin / the median element size
+constexpr std::size_t runs_per_thread = 4; // runs of pairs: a thread takes the next one free
+constexpr std::size_t owner_blocks = 16;   // blocks of bodies, each adding its nodes' forces
 
 double sq(double x) { return x * x; }
 } // namespace
@@ -91,9 +93,12 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
     if (model.bodies[b].at_rest && node_begin_[b] < node_begin_[b + 1])
       resting.push_back(static_cast<std::uint32_t>(b));
   rest_grid_.build(boxes_, resting, cell_);
-  const std::size_t runs = static_cast<std::size_t>(omp_get_max_threads());
+  const std::size_t runs = runs_per_thread * static_cast<std::size_t>(omp_get_max_threads());
   run_hits_.resize(runs);
   arenas_.resize(runs);
+  block_loaded_.resize(owner_blocks);
+  for (std::size_t b = 0; b < n_bodies; ++b)
+    block_.push_back(static_cast<std::uint8_t>(b * owner_blocks / n_bodies));
 }
 
 void Contact::addForces(Model &model, double, double dt) {
@@ -118,15 +123,13 @@ void Contact::addForces(Model &model, double, double dt) {
 
   // Narrow phase over the runs of pairs, each with its lists and its hits: taken run by run, the
   // hits come in pair order whatever the number of threads.
-  const std::size_t runs = arenas_.size();
-  stats_.pairs = 0;
-#pragma omp parallel num_threads(static_cast<int>(runs)) if (pairs_.size() > 64)
+  const long runs = static_cast<long>(arenas_.size());
+  std::size_t refreshed = 0, overlapping = 0;
+#pragma omp parallel if (pairs_.size() > 64) reduction(+ : refreshed, overlapping)
   {
-    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
-    const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
     Scratch scratch;
-    std::size_t refreshed = 0, overlapping = 0;
-    for (std::size_t r = t; r < runs; r += T) {
+#pragma omp for schedule(dynamic, 1)
+    for (long r = 0; r < runs; ++r) {
       std::vector<std::uint32_t> &arena = arenas_[r];
       std::vector<Hit> &hits = run_hits_[r];
       hits.clear();
@@ -147,32 +150,60 @@ void Contact::addForces(Model &model, double, double dt) {
               items + pair.end[2], items + pair.end[3], dt, hits, scratch);
       }
     }
-#pragma omp atomic
-    stats_.refreshed += refreshed;
-#pragma omp atomic
-    stats_.pairs += overlapping;
   }
+  stats_.refreshed += refreshed;
+  stats_.pairs = overlapping;
   walls(model, dt, run_hits_.back());
-
-  // Into the nodes, in order; every body loaded takes part in the step.
-  Nodes &nd = model.nodes;
-  stats_.contacts = 0;
-  stats_.depth = 0.0;
-  for (const auto &hits : run_hits_)
-    for (const Hit &h : hits) {
-      nd.addExternal(h.node, h.fx, h.fy, h.friction_x, h.friction_y);
-      model.wake(nd.body[h.node]);
-      if (h.s1 != no_node) {
-        for (auto [s, w] : {std::pair{h.s1, 1.0 - h.w2}, {h.s2, h.w2}})
-          nd.addExternal(s, -w * h.fx, -w * h.fy, -w * h.friction_x, -w * h.friction_y);
-        model.wake(nd.body[h.s1]);
-      }
-      ++stats_.contacts;
-      stats_.depth = std::max(stats_.depth, h.depth);
-      stats_.deep += h.depth > deep;
-    }
+  addHits(model);
   stats_.max_depth = std::max(stats_.max_depth, stats_.depth);
   stats_.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// The hits into the nodes, in their order, every body loaded woken. Each block of bodies (fixed,
+// whatever the number of threads) is one thread's: it adds the forces on its nodes and lists its
+// newly loaded nodes, so that every node sums its forces in the same order, and the loaded nodes
+// come block by block, for any number of threads.
+void Contact::addHits(Model &model) {
+  Nodes &nd = model.nodes;
+  std::size_t n_hits = 0;
+  for (const auto &hits : run_hits_)
+    n_hits += hits.size();
+  std::size_t contacts = 0, deep_steps = 0;
+  double deepest = 0.0;
+#pragma omp parallel if (n_hits > 512) reduction(+ : contacts, deep_steps) reduction(max : deepest)
+  {
+    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+    const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
+    auto load = [&](std::uint32_t a, double fx, double fy, double friction_x, double friction_y) {
+      const std::size_t k = block_[nd.body[a]];
+      if (k % T != t)
+        return false;
+      if (!nd.is_loaded[a])
+        nd.is_loaded[a] = 1, block_loaded_[k].push_back(a);
+      nd.fx_ext[a] += fx, nd.fy_ext[a] += fy;
+      nd.fx_friction[a] += friction_x, nd.fy_friction[a] += friction_y;
+      model.wake(nd.body[a]);
+      return true;
+    };
+    for (const auto &hits : run_hits_)
+      for (const Hit &h : hits) {
+        if (load(h.node, h.fx, h.fy, h.friction_x, h.friction_y)) {
+          ++contacts;
+          deepest = std::max(deepest, h.depth);
+          deep_steps += h.depth > deep;
+        }
+        if (h.s1 != no_node)
+          for (auto [s, w] : {std::pair{h.s1, 1.0 - h.w2}, {h.s2, h.w2}})
+            load(s, -w * h.fx, -w * h.fy, -w * h.friction_x, -w * h.friction_y);
+      }
+  }
+  for (auto &loaded : block_loaded_) {
+    nd.loaded.insert(nd.loaded.end(), loaded.begin(), loaded.end());
+    loaded.clear();
+  }
+  stats_.contacts = contacts;
+  stats_.depth = deepest;
+  stats_.deep += deep_steps;
 }
 
 // A body's boundary node positions and bounding box now, and how far its nodes moved since the

@@ -66,6 +66,9 @@ class Contact final : public ForceProvider {
 public:
   Contact(const Model &model, ContactSettings settings);
   void addForces(Model &model, double time, double dt) override;
+  // A node meeting a node is pushed by both passes, a node at a wall by one with twice the
+  // stiffness: kappa_n = 2 kappa either way.
+  double stepStiffness() const override { return 2.0 * s_.stiffness; }
   const ContactStatistics &statistics() const { return stats_; }
 
   // One contact force: on `node`, and minus it on the segment's nodes by weights 1 - w2, w2 (no
@@ -108,6 +111,7 @@ private:
   };
 
   void measure(const Model &model, std::size_t body);
+  void addHits(Model &model);
   void findPairs();
   void addPairsOfWoken(const Model &model);
   template <class Wanted, class Add>
@@ -159,11 +163,13 @@ private:
   Grid rest_grid_, moving_grid_;
   double search_margin_ = 0.0;
   std::vector<Pair> pairs_;
-  // The pairs in runs, one per thread at the start: run r holds pairs_ [run_pairs_[r],
+  // The pairs in runs (a few per thread, taken in turn by free threads): run r holds pairs_ [run_pairs_[r],
   // run_pairs_[r + 1]) (the last also those added since the search), their lists, their hits.
   std::vector<std::size_t> run_pairs_;
   std::vector<std::vector<std::uint32_t>> arenas_;
   std::vector<std::vector<Hit>> run_hits_;
+  std::vector<std::uint8_t> block_;                      // per body: its block of bodies
+  std::vector<std::vector<std::uint32_t>> block_loaded_; // per block of bodies: nodes it loaded
   ContactStatistics stats_;
 };
 

@@ -14,6 +14,7 @@ double sq(double x) { return x * x; }
 constexpr std::size_t max_chunk = 256;   // elements per material batch (scratch on the stack)
 constexpr std::size_t node_block = 4096; // nodes per block of the node loops
 constexpr std::size_t unit_target = 4096; // elements per work unit of the element pass
+constexpr double refine_margin = 1.05; // refine the steps below this times the last shortest
 
 // Appends the range `piece` to `ranges` in pieces of at most `limit`, first filling up the last
 // range (if it is at index `first` or later, ends where `piece` begins and `joinable` says so).
@@ -32,6 +33,37 @@ void appendInPieces(std::vector<R> &ranges, std::size_t first, R piece, std::siz
       piece.begin = piece.end;
     }
   }
+}
+
+// How much longer than L_s / c the critical step of a constant-strain triangle with lumped masses
+// is, for any elastic constants (Flanagan & Belytschko 1981 bound the element's highest frequency;
+// this is its exact value, maximised over the materials): with b, c the shape function gradients
+// (gx, gy over 2A), S = B B^T and the elasticity M Dhat(g), M = rho c^2, g = G / M in [0, 3/4],
+//   omega_max^2 = 3 c^2 lambda_max(S Dhat(g)),
+// and lambda_max is convex in g (S Dhat is similar to a symmetric matrix affine in g), so the larger
+// of its values at g = 0 (Dhat = u u^T, u = (1, 1, 0): P + Q) and g = 3/4 bounds it. The gain is
+// 1 for an equilateral triangle and up to sqrt(2) for slivers, the elements that set the step.
+double criticalStepGain(const double gx[3], const double gy[3], double area, double ls) {
+  const double inv = 1.0 / (2.0 * area);
+  double P = 0.0, Q = 0.0, R = 0.0;
+  for (int k = 0; k < 3; ++k)
+    P += sq(gx[k] * inv), Q += sq(gy[k] * inv), R += gx[k] * gy[k] * inv * inv;
+  // g = 3/4: T = L^T S L with Dhat = L L^T, L = [1 0 0; -1/2 s 0; 0 0 s], s^2 = 3/4.
+  const double s = 0.5 * std::sqrt(3.0);
+  const double t00 = P + 0.25 * Q, t01 = -0.5 * s * Q, t02 = 0.5 * s * R;
+  const double t11 = 0.75 * Q, t12 = 0.75 * R, t22 = 0.75 * (P + Q);
+  // The largest eigenvalue of the symmetric T (trigonometric solution of the cubic).
+  const double off = t01 * t01 + t02 * t02 + t12 * t12, q = (t00 + t11 + t22) / 3.0;
+  double largest = q;
+  const double p2 = sq(t00 - q) + sq(t11 - q) + sq(t22 - q) + 2.0 * off;
+  if (p2 > 0.0) {
+    const double p = std::sqrt(p2 / 6.0), b00 = (t00 - q) / p, b11 = (t11 - q) / p,
+                 b22 = (t22 - q) / p, b01 = t01 / p, b02 = t02 / p, b12 = t12 / p;
+    const double r = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) +
+                            b02 * (b01 * b12 - b11 * b02));
+    largest = q + 2.0 * p * std::cos(std::acos(std::clamp(r, -1.0, 1.0)) / 3.0);
+  }
+  return (2.0 / ls) / std::sqrt(3.0 * std::max(P + Q, largest));
 }
 
 // Node values of a batch's elements are read by the two helpers below rather than inside the
@@ -117,18 +149,27 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
   energy_.balance_error = 0.0;
 }
 
+void Solver::addForceProvider(ForceProvider *provider) {
+  providers_.push_back(provider);
+  const double scale = std::sqrt(std::max(0.0, 1.0 - 0.25 * provider->stepStiffness()));
+  if (scale < step_scale_) { // the step already taken from the elements, scaled
+    next_dt_ *= scale / step_scale_;
+    dt_ = std::min(next_dt_, s_.max_dt);
+    step_scale_ = scale;
+  }
+}
+
 // The time loop's step: each line one stage of the central-difference scheme.
 void Solver::step() {
   const double dt = dt_;
   kick_work_ = provider_work_ = friction_work_ = 0.0;
-  kick(0.5 * dt, false); // v(n+1/2) = v(n) + dt/2 f(n) / m, then the imposed velocities
-  drift(dt);             // x(n+1) = x(n) + dt v(n+1/2)
+  kickAndDrift(dt); // v(n+1/2) = v(n) + dt/2 f(n) / m, the imposed velocities; x(n+1) = x(n) + dt v(n+1/2)
   m_.nodes.clearExternal();
   for (auto *provider : providers_) // external forces at x(n+1): contact, coupling
     provider->addForces(m_, time_ + dt, dt);
-  updateActivity();      // bodies the providers woke take part
-  internalForces(dt);    // stresses at n+1, f(n+1), the next stable step
-  kick(0.5 * dt, true);  // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
+  updateActivity();         // bodies the providers woke take part
+  forces(dt, true);         // stresses at n+1, f(n+1), the next stable step; then, unit by unit,
+  applyConstraints(0.5 * dt, true); // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m, the imposed velocities
   time_ += dt;
   ++steps_;
   dt_ = std::min(next_dt_, s_.max_dt);
@@ -183,52 +224,57 @@ void Solver::updateActivity() {
     unit.averaged_volume = unit.averaged_volume || averaged;
   }
   sums_.resize(chunks_.size());
-  node_sums_.resize(2 * node_ranges_.size());
 }
 
-// A half-kick of the active nodes. The work of the external forces over it, force . mean velocity,
-// is summed over the loaded nodes alone (with the kick's own arithmetic), gravity's over every
-// node when there is gravity. After the second half, the kinetic energy of the leapfrog,
+// A half-kick of node a from velocity (vx, vy) under the force (fx, fy). The work of the external
+// forces over it, force . mean velocity, is summed over the loaded nodes alone (the kick's own
+// arithmetic), gravity's over every node when there is gravity (both still to be multiplied by
+// half_dt). After the second half, the kinetic energy of the leapfrog,
 // 1/2 m v(n-1/2) . v(n+1/2) = 1/2 m (|v(n)|^2 - |dv|^2) with dv this half-kick: central differences
 // conserve it exactly for a linear elastic system (1/2 m |v(n)|^2 carries an O((omega dt)^2)
 // oscillation of the fastest modes).
-void Solver::kick(double half_dt, bool second_half) {
-  Nodes &nd = m_.nodes;
-  double provider = 0.0, friction = 0.0;
-  for (std::uint32_t a : nd.loaded) {
-    const double vx = nd.vx[a] + half_dt * nd.fx[a] * inv_mass_[a];
-    const double vy = nd.vy[a] + half_dt * nd.fy[a] * inv_mass_[a];
-    const double mean_vx = 0.5 * (nd.vx[a] + vx), mean_vy = 0.5 * (nd.vy[a] + vy);
-    provider += nd.fx_ext[a] * mean_vx + nd.fy_ext[a] * mean_vy;
-    friction += nd.fx_friction[a] * mean_vx + nd.fy_friction[a] * mean_vy;
+void Solver::halfKick(std::size_t a, double half_dt, double fx, double fy, bool second_half,
+                      double &vx, double &vy, KickSums &sums) const {
+  const Nodes &nd = m_.nodes;
+  const double dvx = half_dt * fx * inv_mass_[a], dvy = half_dt * fy * inv_mass_[a];
+  const double mean_vx = vx + 0.5 * dvx, mean_vy = vy + 0.5 * dvy;
+  if (nd.is_loaded[a]) {
+    sums.provider += nd.fx_ext[a] * mean_vx + nd.fy_ext[a] * mean_vy;
+    sums.friction += nd.fx_friction[a] * mean_vx + nd.fy_friction[a] * mean_vy;
   }
-  provider_work_ += half_dt * provider;
-  friction_work_ += half_dt * friction;
-  const double gx = s_.gravity_x, gy = s_.gravity_y;
-  const bool gravity = gx != 0.0 || gy != 0.0;
-  const long blocks = static_cast<long>(node_ranges_.size());
-#pragma omp parallel for schedule(static) if (blocks > 1)
-  for (long i = 0; i < blocks; ++i) {
-    double gravity_work = 0.0, kinetic = 0.0;
-    for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
-      const double dvx = half_dt * nd.fx[a] * inv_mass_[a], dvy = half_dt * nd.fy[a] * inv_mass_[a];
-      const double vx = nd.vx[a] + dvx, vy = nd.vy[a] + dvy;
-      if (gravity)
-        gravity_work += nd.mass[a] * (gx * (nd.vx[a] + 0.5 * dvx) + gy * (nd.vy[a] + 0.5 * dvy));
-      if (second_half)
-        kinetic += 0.5 * nd.mass[a] * (vx * vx + vy * vy - dvx * dvx - dvy * dvy);
-      nd.vx[a] = vx, nd.vy[a] = vy;
-    }
-    node_sums_[2 * i] = half_dt * gravity_work;
-    node_sums_[2 * i + 1] = kinetic;
-  }
+  if (s_.gravity_x != 0.0 || s_.gravity_y != 0.0)
+    sums.gravity += nd.mass[a] * (s_.gravity_x * mean_vx + s_.gravity_y * mean_vy);
+  vx += dvx, vy += dvy;
   if (second_half)
-    energy_.kinetic = 0.0;
-  for (long i = 0; i < blocks; ++i) {
-    kick_work_ += node_sums_[2 * i];
-    energy_.kinetic += node_sums_[2 * i + 1];
+    sums.kinetic += 0.5 * nd.mass[a] * (vx * vx + vy * vy - dvx * dvx - dvy * dvy);
+}
+
+// Sums of the half-kicks of blocks or units, in their order (the same for any thread count).
+void Solver::addKickSums(const std::vector<KickSums> &sums, double half_dt) {
+  for (const KickSums &k : sums) {
+    kick_work_ += half_dt * k.gravity;
+    provider_work_ += half_dt * k.provider;
+    friction_work_ += half_dt * k.friction;
+    energy_.kinetic += k.kinetic;
   }
-  applyConstraints(half_dt, second_half);
+}
+
+// The first half-kick and the drift of the active nodes in one pass; the imposed velocities, and
+// the positions of their nodes, corrected after.
+void Solver::kickAndDrift(double dt) {
+  Nodes &nd = m_.nodes;
+  const double half_dt = 0.5 * dt;
+  const long blocks = static_cast<long>(node_ranges_.size());
+  kick_sums_.assign(blocks, KickSums{});
+#pragma omp parallel for schedule(static) if (blocks > 1)
+  for (long i = 0; i < blocks; ++i)
+    for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
+      halfKick(a, half_dt, nd.fx[a], nd.fy[a], false, nd.vx[a], nd.vy[a], kick_sums_[i]);
+      nd.x[a] += dt * nd.vx[a];
+      nd.y[a] += dt * nd.vy[a];
+    }
+  addKickSums(kick_sums_, half_dt);
+  applyConstraints(half_dt, false);
 }
 
 // Imposed velocities; the reactions' work, impulse . mean velocity, is external work. The kick
@@ -236,8 +282,9 @@ void Solver::kick(double half_dt, bool second_half) {
 // constraint: corrected.
 void Solver::applyConstraints(double half_dt, bool second_half) {
   Nodes &nd = m_.nodes;
-  auto impose = [&](std::uint32_t a, double &v, double target, double f, double f_ext,
-                    double f_friction, double gravity) {
+  // After the first half the node has drifted with v: by 2 half_dt (target - v) more with the target.
+  auto impose = [&](std::uint32_t a, double &v, double &position, double target, double f,
+                    double f_ext, double f_friction, double gravity) {
     const double before = v - half_dt * f * inv_mass_[a];
     kick_work_ += nd.mass[a] * (target - v) * 0.5 * (before + target);
     const double shift = 0.5 * half_dt * (target - v); // mean velocity change x half_dt
@@ -247,6 +294,8 @@ void Solver::applyConstraints(double half_dt, bool second_half) {
     if (second_half)
       energy_.kinetic += 0.5 * nd.mass[a] *
                   (target * target - sq(target - before) - v * v + sq(v - before));
+    else
+      position += 2.0 * half_dt * (target - v);
     v = target;
   };
   for (const auto &c : m_.constraints)
@@ -254,31 +303,23 @@ void Solver::applyConstraints(double half_dt, bool second_half) {
       if (m_.bodies[nd.body[a]].at_rest)
         continue;
       if (c.constrain_x)
-        impose(a, nd.vx[a], c.vx, nd.fx[a], nd.fx_ext[a], nd.fx_friction[a], s_.gravity_x);
+        impose(a, nd.vx[a], nd.x[a], c.vx, nd.fx[a], nd.fx_ext[a], nd.fx_friction[a], s_.gravity_x);
       if (c.constrain_y)
-        impose(a, nd.vy[a], c.vy, nd.fy[a], nd.fy_ext[a], nd.fy_friction[a], s_.gravity_y);
+        impose(a, nd.vy[a], nd.y[a], c.vy, nd.fy[a], nd.fy_ext[a], nd.fy_friction[a], s_.gravity_y);
     }
 }
 
-void Solver::drift(double dt) {
-  Nodes &nd = m_.nodes;
-  const long blocks = static_cast<long>(node_ranges_.size());
-#pragma omp parallel for schedule(static) if (blocks > 1)
-  for (long i = 0; i < blocks; ++i)
-    for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
-      nd.x[a] += dt * nd.vx[a];
-      nd.y[a] += dt * nd.vy[a];
-    }
-}
+void Solver::internalForces(double dt) { forces(dt, false); }
 
 // Unit by unit (whole bodies, so that a unit's nodes and elements stay in cache between the
-// nodal volumes and the element pass): gravity first, the elements add theirs; then the external
-// forces at the loaded nodes.
-void Solver::internalForces(double dt) {
+// nodal volumes, the element pass and the kick): gravity first, the elements add theirs, the
+// external forces at the loaded nodes; with `kick`, the second half-kick of the unit's nodes.
+void Solver::forces(double dt, bool kick) {
   Nodes &nd = m_.nodes;
   const double gx = s_.gravity_x, gy = s_.gravity_y;
   const bool gravity = gx != 0.0 || gy != 0.0;
   const long units = static_cast<long>(units_.size());
+  kick_sums_.assign(kick ? units : 0, KickSums{});
 #pragma omp parallel if (units > 1)
   {
     std::vector<NodeState> state; // this thread's copies of a unit's nodes (cache-resident)
@@ -302,12 +343,23 @@ void Solver::internalForces(double dt) {
       for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
         elementPass(chunks_[i], dt, nodes, sums_[i]);
       for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
-        for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a)
-          nd.fx[a] = force[a - base].x, nd.fy[a] = force[a - base].y;
+        for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
+          double fx = force[a - base].x, fy = force[a - base].y;
+          if (nd.is_loaded[a])
+            fx += nd.fx_ext[a], fy += nd.fy_ext[a];
+          nd.fx[a] = fx, nd.fy[a] = fy;
+          if (kick) {
+            double vx = state[a - base].vx, vy = state[a - base].vy;
+            halfKick(a, 0.5 * dt, fx, fy, true, vx, vy, kick_sums_[u]);
+            nd.vx[a] = vx, nd.vy[a] = vy;
+          }
+        }
     }
   }
-  for (std::uint32_t a : nd.loaded)
-    nd.fx[a] += nd.fx_ext[a], nd.fy[a] += nd.fy_ext[a];
+  if (kick) {
+    energy_.kinetic = 0.0;
+    addKickSums(kick_sums_, 0.5 * dt);
+  }
   const long n = static_cast<long>(chunks_.size());
   double dt_min = std::numeric_limits<double>::infinity();
   for (long i = 0; i < n; ++i) {
@@ -323,7 +375,8 @@ void Solver::internalForces(double dt) {
     }
     dt_min = std::min(dt_min, sums_[i].dt_min);
   }
-  next_dt_ = s_.safety * dt_min;
+  next_dt_ = s_.safety * step_scale_ * dt_min;
+  refine_below_ = refine_margin * dt_min;
 }
 
 // Averaged nodal volume (Bonet & Burton 1998): J at a node is the area of its elements over their
@@ -434,7 +487,7 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   // and material, so that `safety` is a true margin (tests/unit/fem.cpp checks it).
   const double cl = s_.viscosity_linear, cq = s_.viscosity_quadratic;
   double internal = 0.0, viscous = 0.0, dt_min = HUGE_VAL;
-  alignas(64) double fx[3][max_chunk], fy[3][max_chunk];
+  alignas(64) double fx[3][max_chunk], fy[3][max_chunk], step[max_chunk];
   const double rho0 = chunk.material->density();
   const double *sxx_ = el.sxx.data() + e0, *syy_ = el.syy.data() + e0, *sxy_ = el.sxy.data() + e0;
   const double *pressure = el.pressure.data() + e0;
@@ -456,7 +509,20 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
       fy[k][i] = -0.5 * (sxy * gx[k][i] + syy * gy[k][i]);
     }
     const double ls = (2.0 / 3.0) * len[i], Q = cl * cs[i] + cq * ls * comp;
-    dt_min = std::min(dt_min, ls / (Q + std::sqrt(Q * Q + cs[i] * cs[i])));
+    step[i] = ls / (Q + std::sqrt(Q * Q + cs[i] * cs[i]));
+    dt_min = std::min(dt_min, step[i]);
+  }
+  // The elements whose step is near the shortest of the last pass (refine_below_) take the exact
+  // element bound: L_s / c times criticalStepGain, the damping factor unchanged.
+  if (dt_min < refine_below_) {
+    dt_min = HUGE_VAL;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (step[i] < refine_below_) {
+        const double g_x[3] = {gx[0][i], gx[1][i], gx[2][i]}, g_y[3] = {gy[0][i], gy[1][i], gy[2][i]};
+        step[i] *= criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i]);
+      }
+      dt_min = std::min(dt_min, step[i]);
+    }
   }
   // Into the unit's nodes, in element order.
   for (std::size_t i = 0; i < n; ++i)

@@ -42,6 +42,11 @@ class ForceProvider {
 public:
   virtual ~ForceProvider() = default;
   virtual void addForces(Model &model, double time, double dt) = 0;
+  // The largest stiffness it adds at a node, as a multiple kappa_n of m / dt^2 (a penalty tied to
+  // the step). Central differences are stable while omega dt <= 2; with the provider's spring at a
+  // node, (omega_e dt)^2 + kappa_n <= 4, so the solver scales the elements' step by
+  // sqrt(1 - kappa_n / 4).
+  virtual double stepStiffness() const { return 0.0; }
 };
 
 // A run that cannot go on (an inverted element); the message says which element and when.
@@ -61,7 +66,7 @@ public:
   std::size_t steps() const { return steps_; }
   double dt() const { return dt_; }              // the step the next step() takes
   const Energy &energy() const { return energy_; }
-  void addForceProvider(ForceProvider *provider) { providers_.push_back(provider); }
+  void addForceProvider(ForceProvider *provider);
   // Elements updated in the last step (bodies at rest are skipped).
   std::size_t activeElements() const { return active_elements_; }
 
@@ -104,8 +109,14 @@ private:
   };
 
   void updateActivity();
-  void kick(double half_dt, bool second_half);
-  void drift(double dt);
+  struct KickSums {
+    double gravity = 0.0, kinetic = 0.0, provider = 0.0, friction = 0.0;
+  };
+  void halfKick(std::size_t a, double half_dt, double fx, double fy, bool second_half, double &vx,
+                double &vy, KickSums &sums) const;
+  void addKickSums(const std::vector<KickSums> &sums, double half_dt);
+  void kickAndDrift(double dt);
+  void forces(double dt, bool kick);
   void nodalVolumes(const Unit &unit, const UnitNodes &nodes);
   void elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums);
   void applyConstraints(double half_dt, bool second_half);
@@ -119,11 +130,13 @@ private:
   std::vector<Range> unit_nodes_;  // node ranges of the units
   std::vector<Range> node_ranges_; // active nodes, in blocks
   std::vector<ChunkSums> sums_;
-  std::vector<double> node_sums_;
+  std::vector<KickSums> kick_sums_; // per node block (first half-kick) or unit (second)
   std::vector<double> inv_mass_;
   std::vector<char> body_active_seen_;
   std::size_t active_elements_ = 0;
   double time_ = 0.0, dt_ = 0.0, next_dt_ = 0.0;
+  double step_scale_ = 1.0; // sqrt(1 - kappa_n / 4) for the providers' stiffness kappa_n
+  double refine_below_ = std::numeric_limits<double>::infinity(); // see elementPass
   std::size_t steps_ = 0;
   Energy energy_;
   // Work of this step: constraints and gravity; providers' forces; their frictional part.
