@@ -180,8 +180,8 @@ void Contact::addHits(Model &model) {
         return false;
       if (!nd.is_loaded[a])
         nd.is_loaded[a] = 1, block_loaded_[k].push_back(a);
-      nd.fx_ext[a] += fx, nd.fy_ext[a] += fy;
-      nd.fx_friction[a] += friction_x, nd.fy_friction[a] += friction_y;
+      Nodes::External &e = nd.external[a];
+      e.fx += fx, e.fy += fy, e.friction_x += friction_x, e.friction_y += friction_y;
       model.wake(nd.body[a]);
       return true;
     };
@@ -448,20 +448,27 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
                     const std::uint32_t *nodes_end, const std::uint32_t *ends,
                     const std::uint32_t *ends_end, double dt, std::vector<Hit> &hits,
                     Scratch &scratch) const {
+  // A node inside B is in the overlap of the two boxes: the listed nodes there, if any, are
+  // checked against the segments within `reach` of the overlap (a node behind one of them by less
+  // than `reach` finds its closest segment among them; deeper contacts are checked by the crossing
+  // count).
   const Box region = boxes_[A].overlap(boxes_[B]);
-  // Segments within `reach` of the overlap: a node behind one of them by less than `reach` finds
-  // its closest segment among them; deeper contacts are checked by the crossing count.
+  std::vector<std::uint32_t> &candidates = scratch.candidates;
+  candidates.clear();
+  for (const std::uint32_t *k = nodes; k != nodes_end; ++k)
+    if (region.contains(node_x_[*k], node_y_[*k]))
+      candidates.push_back(*k);
+  if (candidates.empty())
+    return;
   const double h = size_[B];
   nearSegments(B, ends, ends_end, region, scratch);
   const std::vector<Segment> &near = scratch.near;
   if (near.empty())
     return;
   const double mu = s_.friction[model.bodies[A].material * n_materials_ + model.bodies[B].material];
-  for (const std::uint32_t *k = nodes; k != nodes_end; ++k) {
-    const double px = node_x_[*k], py = node_y_[*k];
-    if (!region.contains(px, py))
-      continue;
-    const std::uint32_t p = nodes_[*k];
+  for (const std::uint32_t k : candidates) {
+    const double px = node_x_[k], py = node_y_[k];
+    const std::uint32_t p = nodes_[k];
     // The closest point of B's boundary: on a segment's inside (the node is in contact when behind
     // it) or at a corner. Near a convex corner the node is then outside; behind the closest
     // segment's line it may be inside a dented corner, which the crossing count decides.

@@ -126,7 +126,7 @@ private:
   // A thread's working lists: segments near a node set (with their two nodes), distances.
   struct Scratch {
     std::vector<Segment> near;
-    std::vector<std::uint32_t> near_ends, items;
+    std::vector<std::uint32_t> near_ends, items, candidates;
     std::vector<double> distance;
     std::vector<char> keep;
   };

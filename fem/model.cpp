@@ -21,8 +21,8 @@ Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> ma
   const std::size_t n_nodes = mesh.x.size(), n_elements = mesh.tri.size() / 3;
   Nodes &nd = model.nodes;
   nd.x = mesh.x, nd.y = mesh.y, nd.x0 = mesh.x, nd.y0 = mesh.y;
-  for (auto *v : {&nd.vx, &nd.vy, &nd.fx, &nd.fy, &nd.fx_ext, &nd.fy_ext, &nd.fx_friction,
-                  &nd.fy_friction, &nd.mass, &nd.area0})
+  nd.external.assign(n_nodes, {});
+  for (auto *v : {&nd.vx, &nd.vy, &nd.fx, &nd.fy, &nd.mass, &nd.area0})
     v->assign(n_nodes, 0.0);
   nd.body.assign(n_nodes, 0);
   nd.is_loaded.assign(n_nodes, 0);

@@ -22,8 +22,12 @@ struct Nodes {
   std::vector<std::uint32_t> body;
   // External forces of this step (contact, coupling) [N/m] and their frictional part, nonzero only
   // at the nodes listed in `loaded` (each once): few nodes carry them, and the node loops of the
-  // time step then stream four arrays fewer.
-  std::vector<double> fx_ext, fy_ext, fx_friction, fy_friction;
+  // time step then stream four arrays fewer. The four side by side: they are added to together, at
+  // scattered nodes (one cache line a node).
+  struct External {
+    double fx, fy, friction_x, friction_y;
+  };
+  std::vector<External> external;
   std::vector<std::uint32_t> loaded;
   std::vector<std::uint8_t> is_loaded;
   std::size_t size() const { return x.size(); }
@@ -31,12 +35,13 @@ struct Nodes {
   void addExternal(std::uint32_t a, double fx, double fy, double friction_x, double friction_y) {
     if (!is_loaded[a])
       is_loaded[a] = 1, loaded.push_back(a);
-    fx_ext[a] += fx, fy_ext[a] += fy, fx_friction[a] += friction_x, fy_friction[a] += friction_y;
+    External &e = external[a];
+    e.fx += fx, e.fy += fy, e.friction_x += friction_x, e.friction_y += friction_y;
   }
   // No external force on any node (the solver calls this before the providers add theirs).
   void clearExternal() {
     for (std::uint32_t a : loaded)
-      fx_ext[a] = fy_ext[a] = fx_friction[a] = fy_friction[a] = 0.0, is_loaded[a] = 0;
+      external[a] = {}, is_loaded[a] = 0;
     loaded.clear();
     is_loaded.resize(x.size(), 0);
   }

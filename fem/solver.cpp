@@ -239,8 +239,9 @@ void Solver::halfKick(std::size_t a, double half_dt, double fx, double fy, bool 
   const double dvx = half_dt * fx * inv_mass_[a], dvy = half_dt * fy * inv_mass_[a];
   const double mean_vx = vx + 0.5 * dvx, mean_vy = vy + 0.5 * dvy;
   if (nd.is_loaded[a]) {
-    sums.provider += nd.fx_ext[a] * mean_vx + nd.fy_ext[a] * mean_vy;
-    sums.friction += nd.fx_friction[a] * mean_vx + nd.fy_friction[a] * mean_vy;
+    const Nodes::External &e = nd.external[a];
+    sums.provider += e.fx * mean_vx + e.fy * mean_vy;
+    sums.friction += e.friction_x * mean_vx + e.friction_y * mean_vy;
   }
   if (s_.gravity_x != 0.0 || s_.gravity_y != 0.0)
     sums.gravity += nd.mass[a] * (s_.gravity_x * mean_vx + s_.gravity_y * mean_vy);
@@ -303,9 +304,9 @@ void Solver::applyConstraints(double half_dt, bool second_half) {
       if (m_.bodies[nd.body[a]].at_rest)
         continue;
       if (c.constrain_x)
-        impose(a, nd.vx[a], nd.x[a], c.vx, nd.fx[a], nd.fx_ext[a], nd.fx_friction[a], s_.gravity_x);
+        impose(a, nd.vx[a], nd.x[a], c.vx, nd.fx[a], nd.external[a].fx, nd.external[a].friction_x, s_.gravity_x);
       if (c.constrain_y)
-        impose(a, nd.vy[a], nd.y[a], c.vy, nd.fy[a], nd.fy_ext[a], nd.fy_friction[a], s_.gravity_y);
+        impose(a, nd.vy[a], nd.y[a], c.vy, nd.fy[a], nd.external[a].fy, nd.external[a].friction_y, s_.gravity_y);
     }
 }
 
@@ -346,7 +347,7 @@ void Solver::forces(double dt, bool kick) {
         for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
           double fx = force[a - base].x, fy = force[a - base].y;
           if (nd.is_loaded[a])
-            fx += nd.fx_ext[a], fy += nd.fy_ext[a];
+            fx += nd.external[a].fx, fy += nd.external[a].fy;
           nd.fx[a] = fx, nd.fy[a] = fy;
           if (kick) {
             double vx = state[a - base].vx, vy = state[a - base].vy;

@@ -12,6 +12,7 @@
 #include <omp.h>
 
 #include <chrono>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -154,16 +155,32 @@ private:
   Clock::time_point start_ = Clock::now(), last_ = Clock::now();
 };
 
+// SIGINT or SIGTERM during the time loop: the loop ends after its step and the files are written
+// as for a failure; a second signal ends the process at once.
+volatile std::sig_atomic_t stop_signal = 0;
+extern "C" void requestStop(int signal) {
+  stop_signal = signal;
+  std::signal(signal, SIG_DFL);
+}
+void catchStopSignals(bool on) {
+  if (on)
+    stop_signal = 0;
+  if (on || stop_signal == 0)
+    for (int s : {SIGINT, SIGTERM})
+      std::signal(s, on ? requestStop : SIG_DFL);
+}
+
 struct LoopResult {
   std::string failure; // empty when the run reached its end
+  bool interrupted = false; // by a signal
   std::string end;     // what ended it: end_time, end_depth or max_steps
   double element_steps = 0.0;
   double seconds = 0.0, solver_seconds = 0.0; // the whole loop; the steps alone
 };
 
 // The time loop: step, sample the series, take frames, show progress; until run.end_time,
-// run.end_depth or run.max_steps, or a failure (an inverted element, a frame that cannot be
-// written).
+// run.end_depth or run.max_steps, a failure (an inverted element, a frame that cannot be
+// written) or a signal to stop.
 LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &solver,
                     Series &series, Frames &frames, Progress &progress) {
   const RunSpec &run = scene.run;
@@ -185,6 +202,12 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
     series.sample(model, solver);
     frames.offer(model, solver, true);
     for (bool last = ended(); !last;) {
+      if (stop_signal != 0) {
+        result.interrupted = true;
+        result.failure = std::string("stopped by ") + (stop_signal == SIGINT ? "SIGINT" : "SIGTERM") +
+                         " at step " + std::to_string(solver.steps());
+        break;
+      }
       const auto step_start = Clock::now();
       solver.step();
       result.solver_seconds += secondsSince(step_start);
@@ -204,6 +227,10 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
   return result;
 }
 
+std::string runStatus(const LoopResult &loop) {
+  return loop.failure.empty() ? "completed" : loop.interrupted ? "interrupted" : "failed";
+}
+
 // summary.json: what ran, how it ended, its figures and files.
 nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const fem::Model &model,
                           const fem::Solver &solver, const Series &series, const Frames &frames,
@@ -213,7 +240,7 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
   j["command"] = "run";
   j["scene"] = fs::absolute(options.scene).lexically_normal().string();
   j["seed"] = scene.target.seed;
-  j["status"] = loop.failure.empty() ? "completed" : "failed";
+  j["status"] = runStatus(loop);
   if (!loop.failure.empty())
     j["failure"] = loop.failure;
   j["run"] = {{"end_time", scene.run.end_time},
@@ -290,18 +317,20 @@ int simulate(const Scene &scene, const RunOptions &options, Clock::time_point st
     solver.addForceProvider(contact.get());
   }
 
+  catchStopSignals(true); // from the moment run.h5.tmp exists to the end of the loop
   H5File h5 = H5File::create(h5_path + ".tmp");
   Series series(model);
   Frames frames(h5, model, run.frame_interval, run.vtk ? dir + "/vtk" : std::string());
   Progress progress(!options.quiet && isatty(STDERR_FILENO), run.end_time,
                     run.end_depth * scene.projectile.length);
   const LoopResult loop = timeLoop(scene, model, solver, series, frames, progress);
+  catchStopSignals(false);
 
   // Whatever happened, the files hold everything computed so far and are whole.
   series.write(h5);
   h5.attribute("/", "format", std::string("mesopen-run"));
   h5.attribute("/", "version", 1);
-  h5.attribute("/", "status", std::string(loop.failure.empty() ? "completed" : "failed"));
+  h5.attribute("/", "status", runStatus(loop));
   h5.attribute("/", "seed", static_cast<std::uint64_t>(scene.target.seed));
   for (auto [name, value] :
        {std::pair{"velocity", run.velocity},
@@ -316,6 +345,11 @@ int simulate(const Scene &scene, const RunOptions &options, Clock::time_point st
   writeJson(dir + "/summary.json",
             runSummary(scene, options, model, solver, series, frames, loop, contact.get(), wall));
 
+  if (loop.interrupted) {
+    std::cerr << "mesopen run: " << loop.failure << ", t = " << solver.time()
+              << " s\n  what was computed up to there is in " << dir << " (run.h5, summary.json)\n";
+    return 128 + static_cast<int>(stop_signal);
+  }
   if (!loop.failure.empty()) {
     std::cerr << "mesopen run: failed at t = " << solver.time() << " s, step " << solver.steps()
               << ": " << loop.failure << "\n  what was computed up to there is in " << dir

@@ -171,7 +171,7 @@ void Series::sample(const fem::Model &model, const fem::Solver &solver) {
   // Forces from outside the projectile (contact); zero while nothing touches it.
   double fx = 0.0, fy = 0.0, cross = 0.0, dot = 0.0, lowest = HUGE_VAL;
   for (std::size_t a = p.node_begin, i = 0; a < p.node_end; ++a, ++i) {
-    fx += nd.fx_ext[a], fy += nd.fy_ext[a];
+    fx += nd.external[a].fx, fy += nd.external[a].fy;
     // Least-squares rigid rotation from the initial shape: tilt = atan2(sum m X' x x', sum m X'.x')
     // with X' and x' the initial and current positions relative to the centre of mass.
     const double x = nd.x[a] - m.com_x, y = nd.y[a] - m.com_y;

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <csignal>
 #include <cmath>
 #include <filesystem>
 
@@ -142,6 +143,39 @@ TEST(Run, FailureKeepsWhatWasComputed) {
   EXPECT_EQ(summary["frames"], 1);
   EXPECT_NE(test::readFile(dir / "out/vtk/run.pvd").find("frame_000000.vtu"), std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(dir / "out/run.h5.tmp"));
+}
+
+// SIGTERM in the time loop: the loop ends after its step, run.h5 and summary.json are written
+// whole with status "interrupted", and the exit code is 128 + 15.
+TEST(Run, SignalEndsTheLoopAndKeepsTheFiles) {
+  ScratchDir dir("run-signal");
+  std::string text = tinyScene("frame_interval = 0\n");
+  text.replace(text.find("end_time = 2e-8"), 15, "end_time = 1e-3"); // far: minutes of steps
+  test::writeFile(dir / "scene.toml", text);
+  const std::string scene = dir / "scene.toml", out = dir / "out";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::execl(MESOPEN_BINARY, MESOPEN_BINARY, "run", scene.c_str(), "-o", out.c_str(), "--quiet",
+            "--threads", "1", static_cast<char *>(nullptr));
+    ::_exit(127);
+  }
+  // The loop runs once run.h5.tmp exists (it is opened just before); then a little longer.
+  for (int i = 0; i < 600 && !std::filesystem::exists(dir / "out/run.h5.tmp"); ++i)
+    ::usleep(50000);
+  ::usleep(300000);
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGTERM);
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/run.h5.tmp"));
+  H5File h5 = H5File::open(dir / "out/run.h5");
+  EXPECT_EQ(h5.readStringAttribute("/", "status"), "interrupted");
+  EXPECT_GT(h5.shape("/series/time")[0], 1u);
+  const auto summary = nlohmann::json::parse(test::readFile(dir / "out/summary.json"));
+  EXPECT_EQ(summary["status"], "interrupted");
+  EXPECT_NE(summary["failure"].get<std::string>().find("SIGTERM"), std::string::npos);
 }
 
 // The projectile alone, spinning: the series must keep its momentum and H (round-off). No frames,
