@@ -189,14 +189,19 @@ double exactCentroidY(const ProjectileShape &s) {
   return (facet + nose + shank) / exactArea(s);
 }
 
+TriangleMesh projectileMesh(const ProjectileShape &shape, const ProjectileSpec &spec, double edge,
+                            std::vector<double> &outline_x, std::vector<double> &outline_y) {
+  projectileOutline(shape, edge, outline_x, outline_y);
+  return qualityMesh(outline_x.data(), outline_y.data(), outline_x.size(), edge, spec.min_angle);
+}
+
 PlacedProjectile placeProjectile(const ProjectileSpec &spec, double default_mesh_size,
                                  const TargetSpec &target, const Polygons &grains) {
   PlacedProjectile p;
   p.shape = projectileShape(spec);
   const double h = spec.mesh_size > 0.0 ? spec.mesh_size : default_mesh_size;
   std::vector<double> bx, by;
-  projectileOutline(p.shape, h, bx, by);
-  p.mesh = qualityMesh(bx.data(), by.data(), bx.size(), h, spec.min_angle);
+  p.mesh = projectileMesh(p.shape, spec, h, bx, by);
 
   // Start with the blunted tip at (W/2, H); then lower by the smallest vertical gap between the
   // projectile and any grain below it (both convex: the gap's minimum over a common abscissa

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace mesopen {
 
@@ -28,6 +29,23 @@ struct RunOptions : SceneOptions {
 };
 
 int runCommand(const RunOptions &options);
+
+struct ModalOptions {
+  std::string input;                   // scene (.toml), target.h5 or run.h5
+  std::string out_dir;
+  std::optional<int> modes;            // overrides modal.modes
+  std::optional<int> threads;
+};
+
+int modalCommand(const ModalOptions &options);
+
+struct AnalyzeOptions {
+  std::vector<std::string> dirs;       // run directories (each with run.h5)
+  std::string out_dir;                 // plots; empty: the first run's directory
+  bool no_plot = false;
+};
+
+int analyzeCommand(const AnalyzeOptions &options);
 
 // Where the program's data files are (build/share/mesopen beside build/bin/mesopen).
 std::string shareDirectory();

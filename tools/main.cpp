@@ -36,6 +36,26 @@ int main(int argc, char **argv) {
       sceneCommand(app, "run", "run a scene: the projectile and the grains as finite elements", run);
   run_cmd->add_flag("--quiet", run.quiet, "no progress line");
 
+  mesopen::AnalyzeOptions analyze;
+  auto *analyze_cmd = app.add_subcommand(
+      "analyze", "measures of instability from runs' run.h5: instability.json in each, plots of "
+                 "every run overlaid");
+  analyze_cmd->add_option("dirs", analyze.dirs, "run directories (each with run.h5)")->required();
+  analyze_cmd->add_option("-o,--output", analyze.out_dir,
+                          "directory for the plots (default: the first run's)");
+  analyze_cmd->add_flag("--no-plot", analyze.no_plot, "no PNG plots");
+
+  mesopen::ModalOptions modal;
+  auto *modal_cmd = app.add_subcommand(
+      "modal", "free vibration modes of the projectile or a beam (scene's [modal] table), or of "
+               "the projectile's mesh in target.h5 or run.h5");
+  modal_cmd->add_option("input", modal.input, "scene (.toml), target.h5 or run.h5")->required();
+  modal_cmd->add_option("-o,--output", modal.out_dir, "output directory")->required();
+  modal_cmd->add_option("--modes", modal.modes, "elastic modes wanted (overrides modal.modes)")
+      ->check(CLI::Range(1, 200));
+  modal_cmd->add_option("--threads", modal.threads, "threads (default: all cores)")
+      ->check(CLI::Range(1, 1024));
+
   auto *keys = app.add_subcommand("keys", "print every scene key with its default and allowed range");
 
   try {
@@ -50,5 +70,9 @@ int main(int argc, char **argv) {
   }
   if (*run_cmd)
     return mesopen::runCommand(run);
+  if (*analyze_cmd)
+    return mesopen::analyzeCommand(analyze);
+  if (*modal_cmd)
+    return mesopen::modalCommand(modal);
   return mesopen::targetCommand(target);
 }

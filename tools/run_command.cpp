@@ -333,7 +333,10 @@ int simulate(const Scene &scene, const RunOptions &options, Clock::time_point st
   h5.attribute("/", "status", runStatus(loop));
   h5.attribute("/", "seed", static_cast<std::uint64_t>(scene.target.seed));
   for (auto [name, value] :
-       {std::pair{"velocity", run.velocity}, {"spin", run.spin}, {"end_time", run.end_time}})
+       {std::pair{"velocity", run.velocity},
+        {"spin", run.spin},
+        {"end_time", run.end_time},
+        {"projectile_length", scene.projectile.length}})
     h5.attribute("/", name, value);
   h5.close();
   fs::rename(h5_path + ".tmp", h5_path);

@@ -141,6 +141,7 @@ Series::Series(const fem::Model &model)
     : columns_(std::begin(series_columns), std::end(series_columns)) {
   const fem::Body &p = model.bodies[0];
   const fem::BodyMotion m = fem::bodyMotion(model, 0);
+  mass_ = m.mass;
   lowest0_ = HUGE_VAL;
   for (std::size_t a = p.node_begin; a < p.node_end; ++a) {
     x0_.push_back(model.nodes.x[a] - m.com_x);
@@ -212,6 +213,8 @@ void Series::write(H5File &h5) const {
   h5.write("/series/dt", dt_);
   h5.attribute("/series/time", "unit", std::string("s"));
   h5.attribute("/series/dt", "meaning", std::string("the step the solver takes next [s]"));
+  h5.attribute("/series/projectile", "mass", mass_);
+  h5.attribute("/series/projectile", "mass_unit", std::string("kg/m"));
   for (const auto &c : columns_) {
     const std::string name = "/series/" + c.name;
     h5.write(name, c.values);

@@ -1,10 +1,11 @@
 // What `mesopen run` writes: the series and frames of run.h5, the VTK frames with their ParaView
 // collection (vtk/run.pvd). Layout of run.h5 (SI units, per metre of depth):
 //   attributes of /: format = "mesopen-run", version, status ("completed", "failed" or "interrupted"), seed,
-//                    velocity, spin, end_time
+//                    velocity, spin, end_time, projectile_length (projectile.length)
 //   /series/{time, step, dt}                                   one value per sample
 //   /series/projectile/{com_x, com_y, vx, vy, rotational_momentum, lateral_force, axial_force,
 //                       tilt, depth}                           attributes unit, meaning
+//   /series/projectile                                         attribute mass [kg/m]
 //   /series/energy/{kinetic, internal, plastic, viscous, friction, contact, external,
 //                   balance_error}
 //   /mesh/{x, y (initial node positions), triangles (n x 3, uint32), element_body, node_body}
@@ -43,6 +44,7 @@ public:
 
 private:
   std::vector<double> x0_, y0_; // projectile nodes relative to the initial centre of mass [m]
+  double mass_ = 0.0;           // the projectile's mass [kg/m]
   double lowest0_ = 0.0;        // initial lowest point of the projectile [m]
   std::vector<double> time_, dt_;
   std::vector<std::uint64_t> step_;

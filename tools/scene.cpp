@@ -4,6 +4,7 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -176,6 +177,8 @@ const std::vector<Key> &keys() {
     auto r = &Scene::run;
     using C = ContactSpec;
     auto c = &Scene::contact;
+    using M = ModalSpec;
+    auto m = &Scene::modal;
     return std::vector<Key>{
         real("target", "width", t, &T::width, "m", 0, true, 10, "box width W"),
         real("target", "height", t, &T::height, "m", 0, true, 10, "box height H"),
@@ -261,6 +264,20 @@ const std::vector<Key> &keys() {
              "penalty kappa: normal stiffness kappa m_eff / dt^2 per node (stable up to about 0.6)"),
         real("contact", "damping", c, &C::damping, "", 0, false, 2,
              "damping of the contact spring, a fraction of its critical damping"),
+        choice("modal", "body", m, &M::body, modal_body_names,
+               "what `mesopen modal` analyses: the projectile above, or a rectangular beam "
+               "(thesis appendix B); both of the material of [materials.projectile]"),
+        real("modal", "length", m, &M::length, "m", 0, true, 1e3, "beam length, along x"),
+        real("modal", "height", m, &M::height, "m", 0, true, 1e3, "beam height, along y"),
+        real("modal", "mesh_size", m, &M::mesh_size, "m", 0, false, 1e3,
+             "triangle edge of the modal mesh; 0: the projectile's (as in a run), a beam's "
+             "height / 10"),
+        choice("modal", "support", m, &M::support, modal_support_names,
+               "free, or (a beam only) clamped at its left end x = 0"),
+        choice("modal", "plane", m, &M::plane, modal_plane_names,
+               "plane strain (as the runs) or plane stress (thesis appendix B's numbers)"),
+        integer("modal", "modes", m, &M::modes, 1, 200,
+                "elastic modes wanted, lowest first (rigid-body modes removed)"),
     };
   }();
   return all;
@@ -311,6 +328,20 @@ void checkTogether(const Scene &s) {
     if (triangles > 5.0e7)
       bad("projectile.mesh_size = " + show(s.projectile.mesh_size) + " gives about " + show(triangles) +
           " triangles; allowed: at most 5e7");
+  }
+  const ModalSpec &m = s.modal;
+  if (m.body == ModalBody::projectile && m.support == ModalSupport::clamped)
+    bad("modal.support = \"clamped\" holds a beam's left end; the projectile is free; allowed: "
+        "\"free\" with modal.body = \"projectile\"");
+  if (m.body == ModalBody::beam) {
+    const double size = m.mesh_size > 0 ? m.mesh_size : m.height / 10;
+    if (size > m.height || size > m.length)
+      bad("modal.mesh_size = " + show(size) + " is larger than the beam (" + show(m.length) +
+          " x " + show(m.height) + " m); allowed: mesh_size <= " + show(std::min(m.length, m.height)));
+    if (m.length * m.height / (0.43 * size * size) > 5.0e6)
+      bad("modal.mesh_size = " + show(size) + " gives about " +
+          show(m.length * m.height / (0.43 * size * size)) +
+          " triangles for the beam; allowed: at most 5e6");
   }
   if (s.projectile.enabled) {
     try {
@@ -456,7 +487,7 @@ Scene readScene(const std::string &path) {
     }
     if (knownIn(table).empty())
       throw InputError(path + ": unknown table [" + table +
-                       "]; known tables: target, projectile, run, contact, materials");
+                       "]; known tables: target, projectile, run, contact, modal, materials");
     const toml::table *tab = tnode.as_table();
     if (!tab)
       throw InputError(path + ": " + table + " must be a table ([" + table + "])");

@@ -40,6 +40,29 @@ struct ContactSpec {
   double damping = 0.5;             // fraction of the contact spring's critical damping
 };
 
+// What `mesopen modal` analyses (table [modal]): the scene's projectile, free, or a rectangular
+// beam (thesis appendix B), free or clamped at its left end x = 0; both of the material of
+// [materials.projectile].
+enum class ModalBody { projectile, beam };
+enum class ModalSupport { free, clamped };
+enum class ModalPlane { strain, stress };
+inline constexpr Named<ModalBody> modal_body_names[] = {{"projectile", ModalBody::projectile},
+                                                         {"beam", ModalBody::beam}};
+inline constexpr Named<ModalSupport> modal_support_names[] = {{"free", ModalSupport::free},
+                                                               {"clamped", ModalSupport::clamped}};
+inline constexpr Named<ModalPlane> modal_plane_names[] = {{"strain", ModalPlane::strain},
+                                                           {"stress", ModalPlane::stress}};
+
+struct ModalSpec {
+  ModalBody body = ModalBody::projectile;
+  double length = 5.0;             // beam length, along x [m]
+  double height = 0.1;             // beam height, along y [m]
+  double mesh_size = 0.0;          // triangle edge [m]; 0: the projectile's, or height / 10
+  ModalSupport support = ModalSupport::free;
+  ModalPlane plane = ModalPlane::strain;
+  std::int64_t modes = 10;         // elastic modes wanted
+};
+
 // A body group's material (tables [materials.projectile], [materials.grains]): a preset or a
 // type, and parameters by name.
 struct MaterialChoice {
@@ -53,6 +76,7 @@ struct Scene {
   ProjectileSpec projectile;
   RunSpec run;
   ContactSpec contact;
+  ModalSpec modal;
   MaterialChoice projectile_material{"steel", {}}, grain_material{"quartz", {}};
 };
 
