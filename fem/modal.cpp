@@ -275,17 +275,21 @@ ModalResult freeVibration(const ModalMesh &mesh, const ElasticSolid &solid,
   return result;
 }
 
-double directionShare(const ModalMesh &mesh, const ElasticSolid &solid,
-                      const std::vector<double> &shape, double angle) {
-  // Lumped nodal masses are the same up to the density for every direction: area / 3 per element.
+std::vector<double> lumpedMass(const ModalMesh &mesh, double density) {
   std::vector<double> mass(mesh.nodes(), 0.0);
   for (std::size_t e = 0; e < mesh.triangles(); ++e) {
     const std::uint32_t *v = &mesh.tri[3 * e];
     const double area = 0.5 * ((mesh.x[v[1]] - mesh.x[v[0]]) * (mesh.y[v[2]] - mesh.y[v[0]]) -
                                (mesh.x[v[2]] - mesh.x[v[0]]) * (mesh.y[v[1]] - mesh.y[v[0]]));
     for (int i = 0; i < 3; ++i)
-      mass[v[i]] += solid.density * area / 3.0;
+      mass[v[i]] += density * area / 3.0;
   }
+  return mass;
+}
+
+double directionShare(const ModalMesh &mesh, const ElasticSolid &solid,
+                      const std::vector<double> &shape, double angle) {
+  const std::vector<double> mass = lumpedMass(mesh, solid.density);
   const double ex = std::cos(angle), ey = std::sin(angle);
   double along = 0.0, all = 0.0;
   for (std::size_t a = 0; a < mesh.nodes(); ++a) {

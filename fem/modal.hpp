@@ -77,6 +77,9 @@ struct ModalResult {
 ModalResult freeVibration(const ModalMesh &mesh, const ElasticSolid &solid,
                           const ModalSettings &settings = {});
 
+// The lumped nodal masses [kg/m]: rho A / 3 of every triangle at each of its nodes.
+std::vector<double> lumpedMass(const ModalMesh &mesh, double density);
+
 // How much of mode k's kinetic energy moves along the direction (cos a, sin a): sum over nodes of
 // m (phi . e)^2 over sum m |phi|^2. With e along a beam's axis: near 1 for an axial mode, near 0
 // for a bending mode.

@@ -6,18 +6,12 @@
 #include "commands.hpp"
 #include "output.hpp"
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
-
-extern char **environ;
 
 namespace mesopen {
 
@@ -124,31 +118,16 @@ nlohmann::json instabilityJson(const std::string &dir, const RunSeries &s, const
 }
 
 // The plots, drawn by matplotlib from the instability.json files; a missing python3 or
-// matplotlib is reported but does not fail the analysis. Run without a shell (paths stay paths).
+// matplotlib is reported but does not fail the analysis.
 bool plot(const std::string &out_dir, const std::vector<std::string> &jsons,
           const std::vector<std::string> &labels) {
-  const std::string script = shareDirectory() + "/instability.py";
-  std::vector<std::string> args{"/usr/bin/python3", script, out_dir};
-  for (std::size_t i = 0; i < jsons.size(); ++i)
-    args.push_back(jsons[i]), args.push_back(labels[i]);
-  std::vector<char *> argv;
-  for (auto &a : args)
-    argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t quiet;
-  posix_spawn_file_actions_init(&quiet);
-  posix_spawn_file_actions_addopen(&quiet, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&quiet, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
-  pid_t pid;
-  int status = -1;
-  const bool started = posix_spawn(&pid, argv[0], &quiet, nullptr, argv.data(), environ) == 0;
-  posix_spawn_file_actions_destroy(&quiet);
-  if (started)
-    waitpid(pid, &status, 0);
-  if (started && WIFEXITED(status) && WEXITSTATUS(status) == 0)
+  std::vector<std::string> args{out_dir};
+  for (std::size_t k = 0; k < jsons.size(); ++k)
+    args.push_back(jsons[k]), args.push_back(labels[k]);
+  if (runPlotScript("instability.py", args))
     return true;
   std::cerr << "mesopen analyze: warning: no plots (needs /usr/bin/python3 with matplotlib, and "
-            << script << ")\n";
+            << shareDirectory() << "/instability.py)\n";
   return false;
 }
 

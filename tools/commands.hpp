@@ -50,4 +50,8 @@ int analyzeCommand(const AnalyzeOptions &options);
 // Where the program's data files are (build/share/mesopen beside build/bin/mesopen).
 std::string shareDirectory();
 
+// Runs /usr/bin/python3 with a plot script of shareDirectory() and its arguments, without a shell
+// (paths stay paths) and with its output discarded; true when it exits with 0.
+bool runPlotScript(const std::string &script, const std::vector<std::string> &args);
+
 } // namespace mesopen

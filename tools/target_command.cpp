@@ -34,21 +34,13 @@ std::string shareDirectory() {
   return ec ? std::string("share/mesopen") : (exe.parent_path().parent_path() / "share" / "mesopen").string();
 }
 
-namespace {
-
-double peakMemoryBytes() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return usage.ru_maxrss * 1024.0; // Linux reports kilobytes
-}
-
-// The grain-size histogram PNG, drawn by matplotlib from target.json; a missing python3 or
-// matplotlib is reported but does not fail the target. Run without a shell (paths stay paths).
-bool plotHistogram(const std::string &dir) {
-  const std::string script = shareDirectory() + "/grain_sizes.py";
-  const std::string json = dir + "/target.json", png = dir + "/grain-sizes.png";
-  std::vector<char *> argv{const_cast<char *>("/usr/bin/python3"), const_cast<char *>(script.c_str()),
-                           const_cast<char *>(json.c_str()), const_cast<char *>(png.c_str()), nullptr};
+bool runPlotScript(const std::string &script, const std::vector<std::string> &args) {
+  std::vector<std::string> words{"/usr/bin/python3", shareDirectory() + "/" + script};
+  words.insert(words.end(), args.begin(), args.end());
+  std::vector<char *> argv;
+  for (std::string &w : words)
+    argv.push_back(w.data());
+  argv.push_back(nullptr);
   posix_spawn_file_actions_t quiet;
   posix_spawn_file_actions_init(&quiet);
   posix_spawn_file_actions_addopen(&quiet, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
@@ -59,10 +51,24 @@ bool plotHistogram(const std::string &dir) {
   posix_spawn_file_actions_destroy(&quiet);
   if (started)
     waitpid(pid, &status, 0);
-  if (started && WIFEXITED(status) && WEXITSTATUS(status) == 0)
+  return started && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+}
+
+namespace {
+
+double peakMemoryBytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss * 1024.0; // Linux reports kilobytes
+}
+
+// The grain-size histogram PNG, drawn by matplotlib from target.json; a missing python3 or
+// matplotlib is reported but does not fail the target.
+bool plotHistogram(const std::string &dir) {
+  if (runPlotScript("grain_sizes.py", {dir + "/target.json", dir + "/grain-sizes.png"}))
     return true;
   std::cerr << "mesopen target: warning: no grain-size plot (needs /usr/bin/python3 with matplotlib, "
-               "and " << script << ")\n";
+               "and " << shareDirectory() << "/grain_sizes.py)\n";
   return false;
 }
 
