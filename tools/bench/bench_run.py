@@ -6,7 +6,7 @@ rest (element-steps computed over elements x steps). Each run is its own process
 one the table gives the median (min-max), since the machine may be shared.
 
     python3 tools/bench/bench_run.py [--mesopen build/bin/mesopen] [--out build/bench]
-        [--scene examples/baseline.toml] [--threads 2] [--runs 1]
+        [--scene examples/baseline.toml] [--threads 2] [--runs 1] [--omp-wait-policy ACTIVE|PASSIVE]
 """
 import argparse
 import json
@@ -46,6 +46,9 @@ def main():
     ap.add_argument("--scene", default=os.path.join(ROOT, "examples", "baseline.toml"))
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--runs", type=int, default=1)
+    # OpenMP's own waiting (spin, then sleep) unless given: PASSIVE sleeps at once, which costs
+    # run 6 about 45 % on two threads (86 s against 59 s), ACTIVE spins.
+    ap.add_argument("--omp-wait-policy", choices=["ACTIVE", "PASSIVE"])
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     with open(args.scene) as f:
@@ -57,20 +60,24 @@ def main():
         scene = os.path.join(tmp, "scene.toml")
         with open(scene, "w") as f:
             f.write(text)
+        env = dict(os.environ)
+        if args.omp_wait_policy:
+            env["OMP_WAIT_POLICY"] = args.omp_wait_policy
         for _ in range(args.runs):
             out = os.path.join(tmp, "out")
             subprocess.run([args.mesopen, "run", scene, "-o", out, "--threads", str(args.threads),
                             "--quiet"], check=True, stdout=subprocess.DEVNULL,
-                           env=dict(os.environ, OMP_WAIT_POLICY="PASSIVE"))
+                           env=env)
             with open(os.path.join(out, "summary.json")) as f:
                 s = json.load(f)
             s["length"] = length
             summaries.append(s)
 
-    print(f"mesopen run {os.path.relpath(args.scene, ROOT)}, {args.threads} threads, "
-          f"{args.runs} run(s), no frames; median (min-max)")
+    policy = env.get("OMP_WAIT_POLICY", "the runtime's default")
+    print(f"mesopen run {os.path.relpath(args.scene, ROOT)}, {args.threads} threads "
+          f"(OMP_WAIT_POLICY {policy}), {args.runs} run(s), no frames; median (min-max)")
     result = {"scene": os.path.relpath(args.scene, ROOT), "threads": args.threads,
-              "runs": args.runs, "elements": summaries[0]["model"]["elements"],
+              "runs": args.runs, "omp_wait_policy": policy, "elements": summaries[0]["model"]["elements"],
               "status": [s["status"] for s in summaries]}
     for key, label, get in FIGURES:
         values = [get(s) for s in summaries]
