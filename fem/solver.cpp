@@ -174,13 +174,15 @@ void Solver::addForceProvider(ForceProvider *provider) {
 void Solver::step() {
   const double dt = dt_;
   kick_work_ = provider_work_ = friction_work_ = 0.0;
-  kickAndDrift(dt); // v(n+1/2) = v(n) + dt/2 f(n) / m, the imposed velocities; x(n+1) = x(n) + dt v(n+1/2)
+  kickAndDrift(dt);         // v(n+1/2) = v(n) + dt/2 f(n) / m, the imposed velocities;
+                            // x(n+1) = x(n) + dt v(n+1/2)
   m_.nodes.clearExternal();
   for (auto *provider : providers_) // external forces at x(n+1): contact, coupling
     provider->addForces(m_, time_ + dt, dt);
   updateActivity();         // bodies the providers woke take part
-  forces(dt, true);         // stresses at n+1, f(n+1), the next stable step; then, unit by unit,
-  applyConstraints(0.5 * dt, true); // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m, the imposed velocities
+  forces(dt, true);         // stresses at n+1, f(n+1), the next stable step, and unit by unit
+                            // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
+  applyConstraints(0.5 * dt, true); // the imposed velocities at n+1
   time_ += dt;
   ++steps_;
   dt_ = std::min({next_dt_, s_.max_dt, s_.max_dt_growth * dt});
