@@ -185,7 +185,16 @@ void Solver::step() {
   applyConstraints(0.5 * dt, true); // the imposed velocities at n+1
   time_ += dt;
   ++steps_;
+  if (steps_ == 1)
+    first_dt_ = dt;
   dt_ = std::min({next_dt_, s_.max_dt, s_.max_dt_growth * dt});
+  if (next_dt_ < s_.min_dt_ratio * first_dt_) {
+    std::ostringstream msg;
+    msg << "the stable step fell to " << next_dt_ << " s, below " << s_.min_dt_ratio
+        << " of the first (" << first_dt_ << " s), at t = " << time_ << " s, step " << steps_
+        << "; the thinnest element: " << thinnestElement();
+    throw RunFailure(msg.str());
+  }
   accountEnergy();
 }
 
@@ -391,6 +400,31 @@ void Solver::forces(double dt, bool kick) {
   }
   next_dt_ = s_.safety * step_scale_ * dt_min;
   refine_below_ = refine_margin * dt_min;
+}
+
+// The active element with the shortest altitude, and what it has become: for the message of a
+// collapsed step.
+std::string Solver::thinnestElement() const {
+  const Nodes &nd = m_.nodes;
+  const Elements &el = m_.elements;
+  std::size_t thinnest = 0;
+  double altitude = HUGE_VAL, longest = 0.0;
+  for (const Chunk &c : chunks_)
+    for (std::size_t e = c.begin; e < c.end; ++e) {
+      const std::uint32_t *v = &el.node[3 * e];
+      double edge = 0.0;
+      for (int k = 0; k < 3; ++k)
+        edge = std::max(edge, std::hypot(nd.x[v[(k + 1) % 3]] - nd.x[v[k]], nd.y[v[(k + 1) % 3]] - nd.y[v[k]]));
+      if (2.0 * el.area[e] / edge < altitude)
+        thinnest = e, altitude = 2.0 * el.area[e] / edge, longest = edge;
+    }
+  const Body &body = m_.bodies[el.body[thinnest]];
+  std::ostringstream msg;
+  msg << "element " << thinnest << " of body " << body.name << " (material "
+      << m_.materials[body.material]->type() << "), altitude " << altitude << " m, longest edge "
+      << longest << " m, area " << el.area[thinnest] / el.area0[thinnest] << " of the initial, plastic strain "
+      << el.plastic_strain[thinnest] << ", pressure " << el.pressure[thinnest] << " Pa";
+  return msg.str();
 }
 
 // Averaged nodal volume (Bonet & Burton 1998): J at a node is the area of its elements over their

@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <limits>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace mesopen::fem {
@@ -24,6 +25,9 @@ struct SolverSettings {
   // penalty tied to the step (contact, k ~ m / dt^2) otherwise changes its stiffness tenfold
   // between steps when a crushed element makes the stable step oscillate, and puts energy in.
   double max_dt_growth = 1.1;
+  // A stable step below this fraction of the first ends the run (RunFailure naming the thinnest
+  // element): an element drawn into a sliver would otherwise stall it (0: never).
+  double min_dt_ratio = 1e-3;
   double gravity_x = 0.0, gravity_y = 0.0; // body force per unit mass [m/s^2]
   std::size_t chunk = 256;          // elements per material batch
 };
@@ -53,7 +57,8 @@ public:
   virtual double stepStiffness() const { return 0.0; }
 };
 
-// A run that cannot go on (an inverted element); the message says which element and when.
+// A run that cannot go on (an inverted element, a step collapsed by a sliver); the message says
+// which element and when.
 class RunFailure : public std::runtime_error {
 public:
   using std::runtime_error::runtime_error;
@@ -124,6 +129,7 @@ private:
   void nodalVolumes(const Unit &unit, const UnitNodes &nodes);
   void elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums);
   void applyConstraints(double half_dt, bool second_half);
+  std::string thinnestElement() const;
   void accountEnergy();
 
   Model &m_;
@@ -140,6 +146,7 @@ private:
   std::size_t active_elements_ = 0;
   double time_ = 0.0, dt_ = 0.0, next_dt_ = 0.0;
   double step_scale_ = 1.0; // sqrt(1 - kappa_n / 4) for the providers' stiffness kappa_n
+  double first_dt_ = 0.0;   // the first step (after the providers' scaling)
   double refine_below_ = std::numeric_limits<double>::infinity(); // see elementPass
   std::size_t steps_ = 0;
   Energy energy_;

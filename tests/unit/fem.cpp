@@ -138,6 +138,28 @@ TEST(StableStep, ScaledForAPenaltyTiedToTheStep) {
   }
 }
 
+// An element squashed flat: its stable step falls, and once below `min_dt_ratio` of the first
+// the step ends the run with a RunFailure that names the element (not a run that stalls).
+TEST(StableStep, CollapseEndsTheRunNamingTheElement) {
+  TestMesh mesh;
+  mesh.node_offset = {0, 3}, mesh.tri_offset = {0, 1}, mesh.tri = {0, 1, 2};
+  mesh.x = {0, 1e-5, 0.5e-5}, mesh.y = {0, 0, 0.5e-5 * std::sqrt(3.0)};
+  fem::Model model = mesh.model(test::oneMaterial("steel"));
+  model.nodes.vy[2] = -3000.0; // the apex driven at the base
+  fem::VelocityConstraint drive{"apex", {2}, true, true, 0.0, -3000.0};
+  model.constraints.push_back(drive);
+  fem::Solver solver(model, {.min_dt_ratio = 0.5});
+  std::string message;
+  try {
+    for (int i = 0; i < 100000; ++i)
+      solver.step();
+  } catch (const fem::RunFailure &e) {
+    message = e.what();
+  }
+  EXPECT_NE(message.find("the stable step fell"), std::string::npos) << message;
+  EXPECT_NE(message.find("element 0 of body"), std::string::npos) << message;
+}
+
 TEST(Materials, RegistryAndPresets) {
   for (const auto &preset : fem::materialPresets())
     EXPECT_NO_THROW(fem::makeMaterial(preset.name)) << preset.name;
