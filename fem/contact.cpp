@@ -178,10 +178,7 @@ void Contact::addHits(Model &model) {
       const std::size_t k = block_[nd.body[a]];
       if (k % T != t)
         return false;
-      if (!nd.is_loaded[a])
-        nd.is_loaded[a] = 1, block_loaded_[k].push_back(a);
-      Nodes::External &e = nd.external[a];
-      e.fx += fx, e.fy += fy, e.friction_x += friction_x, e.friction_y += friction_y;
+      nd.addExternal(a, fx, fy, friction_x, friction_y, block_loaded_[k]);
       model.wake(nd.body[a]);
       return true;
     };
@@ -294,15 +291,11 @@ Contact::Closest Contact::closest(const std::vector<Segment> &near, double px, d
                                   double *distances) {
   Closest c;
   for (std::uint32_t i = 0; i < near.size(); ++i) {
-    const Segment &s = near[i];
-    const double dx = px - s.ax, dy = py - s.ay;
-    const double t = dx * s.tx + dy * s.ty, g = dx * s.nx + dy * s.ny;
-    const double excess = t < 0.0 ? -t : (t > s.length ? t - s.length : 0.0);
-    const double distance = excess * excess + g * g;
+    const Segment::Foot f = near[i].foot(px, py);
     if (distances)
-      distances[i] = distance;
-    if (distance < c.distance)
-      c = {i, distance, g, t, excess > 0.0};
+      distances[i] = f.distance;
+    if (f.distance < c.distance)
+      c = {i, f.distance, f.g, f.t, f.excess > 0.0};
   }
   return c;
 }
@@ -519,10 +512,7 @@ bool Contact::vertexTie(const Scratch &scratch, const Closest &c, double px, dou
     if (j == c.segment || scratch.near_ends[2 * j + (at_start ? 1 : 0)] != vertex)
       continue;
     const Segment &o = near[j];
-    const double dx = px - o.ax, dy = py - o.ay;
-    const double t = dx * o.tx + dy * o.ty, g = dx * o.nx + dy * o.ny;
-    const double excess = t < 0.0 ? -t : (t > o.length ? t - o.length : 0.0);
-    if (std::abs(excess * excess + g * g - c.distance) > tie * c.distance)
+    if (std::abs(o.foot(px, py).distance - c.distance) > tie * c.distance)
       return false;
     const double mx = s.nx + o.nx, my = s.ny + o.ny, norm = std::sqrt(mx * mx + my * my);
     if (!(norm > 0.0))

@@ -88,6 +88,17 @@ private:
   };
   struct Segment {
     double ax, ay, tx, ty, length, nx, ny; // start, unit tangent, length, outward normal
+    // Where a point lies against it: position along it from the start, signed distance from its
+    // line (negative behind it), how far beyond its ends, squared distance to it.
+    struct Foot {
+      double t, g, excess, distance;
+    };
+    Foot foot(double px, double py) const {
+      const double dx = px - ax, dy = py - ay;
+      const double t = dx * tx + dy * ty, g = dx * nx + dy * ny;
+      const double excess = t < 0.0 ? -t : (t > length ? t - length : 0.0);
+      return {t, g, excess, excess * excess + g * g};
+    }
   };
   // A pair of bodies (a, b) whose boxes widened by the margin overlapped, and what it looks at:
   // a's boundary nodes (indices into nodes_), b's segments (their two nodes, as indices into

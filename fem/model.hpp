@@ -33,8 +33,14 @@ struct Nodes {
   std::size_t size() const { return x.size(); }
 
   void addExternal(std::uint32_t a, double fx, double fy, double friction_x, double friction_y) {
+    addExternal(a, fx, fy, friction_x, friction_y, loaded);
+  }
+  // The same, a newly loaded node listed in `newly` (a thread's own list, appended to `loaded`
+  // after: contact adds its forces in parallel, each thread on its own nodes).
+  void addExternal(std::uint32_t a, double fx, double fy, double friction_x, double friction_y,
+                   std::vector<std::uint32_t> &newly) {
     if (!is_loaded[a])
-      is_loaded[a] = 1, loaded.push_back(a);
+      is_loaded[a] = 1, newly.push_back(a);
     External &e = external[a];
     e.fx += fx, e.fy += fy, e.friction_x += friction_x, e.friction_y += friction_y;
   }

@@ -29,20 +29,21 @@ RunSeries readRunSeries(const std::string &path) {
       throw std::runtime_error(path + ": the series have different lengths");
   if (s.time.size() < 2)
     throw std::runtime_error(path + ": fewer than two samples in /series");
-  // The projectile (body 0) stands on its tip at the start: without the scene's length, its
-  // length is its initial extent along y.
-  const auto y = column("/mesh/y");
-  const auto body = h5.read<std::uint32_t>("/mesh/node_body");
-  double lo = HUGE_VAL, hi = -HUGE_VAL;
-  for (std::size_t a = 0; a < y.size() && a < body.size(); ++a)
-    if (body[a] == 0)
-      lo = std::min(lo, y[a]), hi = std::max(hi, y[a]);
-  if (!(hi > lo))
-    throw std::runtime_error(path + ": no projectile (body 0) in /mesh");
-  // The scene's projectile.length (what run.end_depth counts in) when the file has it.
-  s.length = h5.hasAttribute("/", "projectile_length")
-                 ? h5.readAttribute<double>("/", "projectile_length")
-                 : hi - lo;
+  // The scene's projectile.length (what run.end_depth counts in) when the file has it; else, the
+  // projectile (body 0) standing on its tip at the start, its initial extent along y.
+  if (h5.hasAttribute("/", "projectile_length")) {
+    s.length = h5.readAttribute<double>("/", "projectile_length");
+  } else {
+    const auto y = column("/mesh/y");
+    const auto body = h5.read<std::uint32_t>("/mesh/node_body");
+    double lo = HUGE_VAL, hi = -HUGE_VAL;
+    for (std::size_t a = 0; a < y.size() && a < body.size(); ++a)
+      if (body[a] == 0)
+        lo = std::min(lo, y[a]), hi = std::max(hi, y[a]);
+    if (!(hi > lo))
+      throw std::runtime_error(path + ": no projectile (body 0) in /mesh");
+    s.length = hi - lo;
+  }
   if (h5.hasAttribute("/series/projectile", "mass"))
     s.mass = h5.readAttribute<double>("/series/projectile", "mass");
   if (h5.hasAttribute("/", "velocity"))

@@ -46,6 +46,14 @@ inline Result runMesopen(const std::string &args) {
   return r;
 }
 
+// A 0.6 x 0.3 mm target of 60 um grains and a 0.3 mm projectile, 20 ns; `run` ends the [run]
+// table.
+inline std::string tinyScene(const std::string &run = "frame_interval = 1e-8\n") {
+  return "[target]\nwidth = 0.6e-3\nheight = 0.3e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
+         "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 2e-8\n" +
+         run;
+}
+
 inline std::string readFile(const std::string &path) {
   std::ifstream in(path, std::ios::binary);
   std::ostringstream s;

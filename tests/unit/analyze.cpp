@@ -17,13 +17,7 @@ using test::ScratchDir;
 
 namespace {
 
-// The tiny scene of tests/unit/run.cpp: a 0.6 x 0.3 mm target of 60 um grains and a 0.3 mm
-// projectile, 20 ns; `run` ends the [run] table.
-std::string tinyScene(const std::string &run) {
-  return "[target]\nwidth = 0.6e-3\nheight = 0.3e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
-         "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 2e-8\n" +
-         run;
-}
+using test::tinyScene;
 
 nlohmann::json runAndAnalyze(const ScratchDir &dir, const std::string &scene) {
   test::writeFile(dir / "scene.toml", scene);
