@@ -60,14 +60,13 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
     }
     size_.push_back(longest);
   }
-  node_x_.resize(nodes_.size());
-  node_y_.resize(nodes_.size());
+  points_.resize(nodes_.size());
   boxes_.resize(n_bodies);
   travel_.assign(n_bodies, 0.0);
   travel_searched_.assign(n_bodies, 0.0);
   listed_.assign(n_bodies, 0);
   for (std::size_t k = 0; k < nodes_.size(); ++k)
-    node_x_[k] = nd.x[nodes_[k]], node_y_[k] = nd.y[nodes_[k]];
+    points_[k] = {nd.x[nodes_[k]], nd.y[nodes_[k]], nd.vx[nodes_[k]], nd.vy[nodes_[k]]};
   for (std::size_t b = 0; b < n_bodies; ++b)
     measure(model, b);
   // Grid cells about twice the typical body: a grain sits in at most four cells.
@@ -203,16 +202,17 @@ void Contact::addHits(Model &model) {
   stats_.deep += deep_steps;
 }
 
-// A body's boundary node positions and bounding box now, and how far its nodes moved since the
-// last call (the largest coordinate change, added to travel_).
+// A body's boundary node positions and velocities and its bounding box now, and how far its nodes
+// moved since the last call (the largest coordinate change, added to travel_).
 void Contact::measure(const Model &model, std::size_t b) {
   const Nodes &nd = model.nodes;
   Box box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
   double moved = 0.0;
   for (std::size_t k = node_begin_[b]; k < node_begin_[b + 1]; ++k) {
-    const double x = nd.x[nodes_[k]], y = nd.y[nodes_[k]];
-    moved = std::max(moved, std::max(std::abs(x - node_x_[k]), std::abs(y - node_y_[k])));
-    node_x_[k] = x, node_y_[k] = y;
+    const std::uint32_t a = nodes_[k];
+    const double x = nd.x[a], y = nd.y[a];
+    moved = std::max(moved, std::max(std::abs(x - points_[k].x), std::abs(y - points_[k].y)));
+    points_[k] = {x, y, nd.vx[a], nd.vy[a]};
     box.x0 = std::min(box.x0, x), box.x1 = std::max(box.x1, x);
     box.y0 = std::min(box.y0, y), box.y1 = std::max(box.y1, y);
   }
@@ -258,7 +258,7 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region,
   distance.resize(near.size());
   scratch.keep.assign(near.size(), 0);
   for (std::size_t k = node_begin_[A]; k < node_begin_[A + 1] && !near.empty(); ++k) {
-    const double px = node_x_[k], py = node_y_[k];
+    const double px = points_[k].x, py = points_[k].y;
     if (!region.contains(px, py))
       continue;
     const Closest c = closest(near, px, py, distance.data());
@@ -279,7 +279,7 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region,
 
 // The geometry of the boundary segment from p to q (indices into nodes_), at this step.
 Contact::Segment Contact::segment(std::uint32_t p, std::uint32_t q) const {
-  const double ax = node_x_[p], ay = node_y_[p], dx = node_x_[q] - ax, dy = node_y_[q] - ay;
+  const double ax = points_[p].x, ay = points_[p].y, dx = points_[q].x - ax, dy = points_[q].y - ay;
   const double length = std::sqrt(dx * dx + dy * dy), inv = length > 0.0 ? 1.0 / length : 0.0;
   // outward normal: the tangent turned right (the boundary runs counter-clockwise)
   return {ax, ay, dx * inv, dy * inv, length, dy * inv, -dx * inv};
@@ -310,7 +310,7 @@ void Contact::nearSegments(std::size_t body, const std::uint32_t *ends,
   scratch.near_ends.clear();
   for (const std::uint32_t *k = ends; k != ends_end; k += 2) {
     const std::uint32_t p = k[0], q = k[1];
-    const double ax = node_x_[p], ay = node_y_[p], bx = node_x_[q], by = node_y_[q];
+    const double ax = points_[p].x, ay = points_[p].y, bx = points_[q].x, by = points_[q].y;
     if (wide.overlaps({std::min(ax, bx), std::min(ay, by), std::max(ax, bx), std::max(ay, by)})) {
       const Segment s = segment(p, q);
       if (s.length > 0.0)
@@ -449,7 +449,7 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
   std::vector<std::uint32_t> &candidates = scratch.candidates;
   candidates.clear();
   for (const std::uint32_t *k = nodes; k != nodes_end; ++k)
-    if (region.contains(node_x_[*k], node_y_[*k]))
+    if (region.contains(points_[*k].x, points_[*k].y))
       candidates.push_back(*k);
   if (candidates.empty())
     return;
@@ -460,8 +460,7 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
     return;
   const double mu = s_.friction[model.bodies[A].material * n_materials_ + model.bodies[B].material];
   for (const std::uint32_t k : candidates) {
-    const double px = node_x_[k], py = node_y_[k];
-    const std::uint32_t p = nodes_[k];
+    const double px = points_[k].x, py = points_[k].y;
     // The closest point of B's boundary: on a segment's inside (the node is in contact when behind
     // it) or at a corner. Near a convex corner the node is then outside; behind the closest
     // segment's line it may be inside a dented corner, which the crossing count decides.
@@ -487,8 +486,8 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
       // a node outside it behind one of its segments: the crossing count decides
       continue;
     }
-    hit(model, p, nodes_[scratch.near_ends[2 * c.segment]],
-        nodes_[scratch.near_ends[2 * c.segment + 1]], w2, nx, ny, depth, h, mu, dt, hits);
+    hit(model, k, scratch.near_ends[2 * c.segment], scratch.near_ends[2 * c.segment + 1], w2, nx,
+        ny, depth, h, mu, dt, hits);
   }
 }
 
@@ -518,7 +517,7 @@ bool Contact::vertexTie(const Scratch &scratch, const Closest &c, double px, dou
     if (!(norm > 0.0))
       return false;
     nx = mx / norm, ny = my / norm;
-    depth = -((px - node_x_[vertex]) * nx + (py - node_y_[vertex]) * ny);
+    depth = -((px - points_[vertex].x) * nx + (py - points_[vertex].y) * ny);
     w2 = at_start ? 0.0 : 1.0;
     return true;
   }
@@ -531,7 +530,7 @@ bool Contact::inside(std::size_t B, double px, double py) const {
   bool in = false;
   for (std::size_t k = segment_begin_[B]; k < segment_begin_[B + 1]; ++k) {
     const std::uint32_t a = segment_ends_[2 * k], b = segment_ends_[2 * k + 1];
-    const double ax = node_x_[a], ay = node_y_[a], bx = node_x_[b], by = node_y_[b];
+    const double ax = points_[a].x, ay = points_[a].y, bx = points_[b].x, by = points_[b].y;
     if ((ay > py) != (by > py) && px < ax + (py - ay) * (bx - ax) / (by - ay))
       in = !in;
   }
@@ -551,31 +550,33 @@ void Contact::walls(const Model &model, double dt, std::vector<Hit> &hits) const
       continue;
     const double h = size_[b];
     for (std::size_t k = node_begin_[b]; k < node_begin_[b + 1]; ++k) {
-      const std::uint32_t p = nodes_[k];
-      const double x = node_x_[k], y = node_y_[k];
+      const double x = points_[k].x, y = points_[k].y;
       for (auto [on, depth, nx, ny] : {std::tuple{left, s_.wall_left - x, 1.0, 0.0},
                                        {right, x - s_.wall_right, -1.0, 0.0},
                                        {bottom, s_.wall_bottom - y, 0.0, 1.0}})
         if (on && depth > touching * h)
-          hit(model, p, no_node, no_node, 0.0, nx, ny, depth, h, s_.wall_friction, dt, hits);
+          hit(model, k, no_node, no_node, 0.0, nx, ny, depth, h, s_.wall_friction, dt, hits);
     }
   }
 }
 
-// The force on `node`, pushed out along (nx, ny) by `depth` from the segment s1-s2 (at weight w2
-// from s1) or from a wall (s1 = no_node), `h` the element size (the first `touching` h of the
-// depth is free); relative velocities at mid-step.
-void Contact::hit(const Model &model, std::uint32_t p, std::uint32_t s1, std::uint32_t s2,
+// The force on boundary node k (index into nodes_), pushed out along (nx, ny) by `depth` from the
+// segment k1-k2 (at weight w2 from k1) or from a wall (k1 = no_node), `h` the element size (the
+// first `touching` h of the depth is free); relative velocities at mid-step.
+void Contact::hit(const Model &model, std::uint32_t k, std::uint32_t k1, std::uint32_t k2,
                   double w2, double nx, double ny, double depth, double h, double mu, double dt,
                   std::vector<Hit> &hits) const {
   const Nodes &nd = model.nodes;
   const double w1 = 1.0 - w2;
-  double m_eff = nd.mass[p], vx = nd.vx[p], vy = nd.vy[p];
-  if (s1 != no_node) {
+  const std::uint32_t p = nodes_[k];
+  std::uint32_t s1 = no_node, s2 = no_node;
+  double m_eff = nd.mass[p], vx = points_[k].vx, vy = points_[k].vy;
+  if (k1 != no_node) {
+    s1 = nodes_[k1], s2 = nodes_[k2];
     const double m_seg = w1 * nd.mass[s1] + w2 * nd.mass[s2];
     m_eff = m_eff * m_seg / (m_eff + m_seg);
-    vx -= w1 * nd.vx[s1] + w2 * nd.vx[s2];
-    vy -= w1 * nd.vy[s1] + w2 * nd.vy[s2];
+    vx -= w1 * points_[k1].vx + w2 * points_[k2].vx;
+    vy -= w1 * points_[k1].vy + w2 * points_[k2].vy;
   }
   const double vn = vx * nx + vy * ny; // > 0: separating
   // Two nodes that meet are pushed apart by both passes, a wall contact by one: the walls take
