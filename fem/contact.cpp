@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -252,12 +253,12 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region,
                                 Scratch &scratch) const {
   nearSegments(B, segment_ends_.data() + 2 * segment_begin_[B],
                segment_ends_.data() + 2 * segment_begin_[B + 1], region, scratch);
-  const std::vector<Segment> &near = scratch.near;
+  const Near &near = scratch.near;
   std::vector<std::uint32_t> &items = scratch.items;
   std::vector<double> &distance = scratch.distance;
-  distance.resize(near.size());
-  scratch.keep.assign(near.size(), 0);
-  for (std::size_t k = node_begin_[A]; k < node_begin_[A + 1] && !near.empty(); ++k) {
+  distance.resize(near.size);
+  scratch.keep.assign(near.size, 0);
+  for (std::size_t k = node_begin_[A]; k < node_begin_[A + 1] && near.count > 0; ++k) {
     const double px = points_[k].x, py = points_[k].y;
     if (!region.contains(px, py))
       continue;
@@ -267,56 +268,91 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region,
       continue;
     items.push_back(static_cast<std::uint32_t>(k));
     const double reach = sq(clearance + margin);
-    for (std::size_t i = 0; i < near.size(); ++i)
+    for (std::size_t i = 0; i < near.size; ++i)
       scratch.keep[i] |= distance[i] < reach;
   }
   const auto nodes_end = static_cast<std::uint32_t>(items.size());
-  for (std::size_t i = 0; i < near.size(); ++i)
+  for (std::size_t i = 0; i < near.size; ++i)
     if (scratch.keep[i])
-      items.push_back(scratch.near_ends[2 * i]), items.push_back(scratch.near_ends[2 * i + 1]);
+      items.push_back(near.ends[2 * i]), items.push_back(near.ends[2 * i + 1]);
   return nodes_end;
 }
 
-// The geometry of the boundary segment from p to q (indices into nodes_), at this step.
-Contact::Segment Contact::segment(std::uint32_t p, std::uint32_t q) const {
-  const double ax = points_[p].x, ay = points_[p].y, dx = points_[q].x - ax, dy = points_[q].y - ay;
-  const double length = std::sqrt(dx * dx + dy * dy), inv = length > 0.0 ? 1.0 / length : 0.0;
-  // outward normal: the tangent turned right (the boundary runs counter-clockwise)
-  return {ax, ay, dx * inv, dy * inv, length, dy * inv, -dx * inv};
-}
-
-// The segment of `near` closest to (px, py), the first of equals; with `distances`, every
-// segment's squared distance goes there.
-Contact::Closest Contact::closest(const std::vector<Segment> &near, double px, double py,
-                                  double *distances) {
-  Closest c;
-  for (std::uint32_t i = 0; i < near.size(); ++i) {
-    const Segment::Foot f = near[i].foot(px, py);
+// The lanes block by block: the squared distances to the block's segments at once (no branch,
+// vectorized), then the first of the smallest if it is closer than those before.
+Contact::Closest Contact::closest(const Near &near, double px, double py,
+                                  double *distances) const {
+  constexpr std::size_t L = Near::lanes;
+  double best = std::numeric_limits<double>::infinity();
+  std::uint32_t which = no_node;
+  for (std::size_t base = 0; base < near.size; base += L) {
+    double d[L];
+    for (std::size_t j = 0; j < L; ++j)
+      d[j] = near[base + j].foot(px, py).distance;
+    double smallest = std::numeric_limits<double>::infinity();
+    for (std::size_t j = 0; j < L; ++j)
+      smallest = std::min(smallest, d[j]);
     if (distances)
-      distances[i] = f.distance;
-    if (f.distance < c.distance)
-      c = {i, f.distance, f.g, f.t, f.excess > 0.0};
+      std::copy(d, d + L, distances + base);
+    if (smallest < best) {
+      unsigned at = 0;
+      for (std::size_t j = 0; j < L; ++j)
+        at |= static_cast<unsigned>(d[j] == smallest) << j;
+      best = smallest;
+      which = static_cast<std::uint32_t>(base + std::countr_zero(at));
+    }
+  }
+  Closest c;
+  if (which != no_node) {
+    const Segment::Foot f = near[which].foot(px, py);
+    c = {which, f.distance, f.g, f.t, f.excess > 0.0};
   }
   return c;
 }
 
 // Of body `body`'s segments given by their ends, those of nonzero length whose boxes come within
-// its reach (see touch) of the rectangle: into scratch.near, their ends into scratch.near_ends.
+// its reach (see touch) of the rectangle: into scratch.near, in the given order. Their ends are
+// gathered first, then the geometry of all is computed in one pass (vectorized).
 void Contact::nearSegments(std::size_t body, const std::uint32_t *ends,
                            const std::uint32_t *ends_end, const Box &region,
                            Scratch &scratch) const {
+  constexpr std::size_t L = Near::lanes;
   const Box wide = region.widened(check_depth * size_[body]);
-  scratch.near.clear();
-  scratch.near_ends.clear();
-  for (const std::uint32_t *k = ends; k != ends_end; k += 2) {
-    const std::uint32_t p = k[0], q = k[1];
-    const double ax = points_[p].x, ay = points_[p].y, bx = points_[q].x, by = points_[q].y;
-    if (wide.overlaps({std::min(ax, bx), std::min(ay, by), std::max(ax, bx), std::max(ay, by)})) {
-      const Segment s = segment(p, q);
-      if (s.length > 0.0)
-        scratch.near.push_back(s), scratch.near_ends.push_back(p), scratch.near_ends.push_back(q);
-    }
+  Near &near = scratch.near;
+  const std::size_t listed = static_cast<std::size_t>(ends_end - ends) / 2;
+  const std::size_t size = (listed + L - 1) / L * L;
+  if (near.ax.size() < size) {
+    for (auto *v : {&near.ax, &near.ay, &near.tx, &near.ty, &near.length, &near.nx, &near.ny})
+      v->resize(size);
+    near.ends.resize(2 * size);
   }
+  // The start in (ax, ay), the end in (tx, ty) for now.
+  double *ax = near.ax.data(), *ay = near.ay.data(), *tx = near.tx.data(), *ty = near.ty.data(),
+         *length = near.length.data(), *nx = near.nx.data(), *ny = near.ny.data();
+  for (std::size_t i = 0; i < listed; ++i) {
+    const Point &a = points_[ends[2 * i]], &b = points_[ends[2 * i + 1]];
+    ax[i] = a.x, ay[i] = a.y, tx[i] = b.x, ty[i] = b.y;
+    near.ends[2 * i] = ends[2 * i], near.ends[2 * i + 1] = ends[2 * i + 1];
+  }
+  for (std::size_t i = listed; i < size; ++i) {
+    ax[i] = ay[i] = tx[i] = ty[i] = 0.0;
+    near.ends[2 * i] = near.ends[2 * i + 1] = no_node;
+  }
+  std::size_t count = 0;
+#pragma omp simd
+  for (std::size_t i = 0; i < size; ++i) {
+    const double x0 = ax[i], y0 = ay[i], x1 = tx[i], y1 = ty[i], dx = x1 - x0, dy = y1 - y0;
+    const double l = std::sqrt(dx * dx + dy * dy), inv = l > 0.0 ? 1.0 / l : 0.0;
+    const bool in = (l > 0.0) & (wide.x0 <= std::max(x0, x1)) & (std::min(x0, x1) <= wide.x1) &
+                    (wide.y0 <= std::max(y0, y1)) & (std::min(y0, y1) <= wide.y1); // padding: l = 0
+    // outward normal: the tangent turned right (the boundary runs counter-clockwise)
+    ax[i] = in ? x0 : Near::far, ay[i] = in ? y0 : 0.0;
+    tx[i] = in ? dx * inv : 1.0, ty[i] = in ? dy * inv : 0.0, length[i] = in ? l : 0.0;
+    nx[i] = in ? dy * inv : 0.0, ny[i] = in ? -dx * inv : -1.0;
+  }
+  for (std::size_t i = 0; i < size; ++i)
+    count += length[i] > 0.0;
+  near.size = size, near.count = count;
 }
 
 std::size_t Contact::Grid::ix(double x) const {
@@ -455,8 +491,8 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
     return;
   const double h = size_[B];
   nearSegments(B, ends, ends_end, region, scratch);
-  const std::vector<Segment> &near = scratch.near;
-  if (near.empty())
+  const Near &near = scratch.near;
+  if (near.count == 0)
     return;
   const double mu = s_.friction[model.bodies[A].material * n_materials_ + model.bodies[B].material];
   for (const std::uint32_t k : candidates) {
@@ -467,7 +503,7 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
     const Closest c = closest(near, px, py, nullptr);
     if (c.segment == no_node)
       continue;
-    const Segment &s = near[c.segment];
+    const Segment s = near[c.segment];
     double depth = -c.g, nx = s.nx, ny = s.ny, w2 = c.along / s.length;
     if (vertexTie(scratch, c, px, py, depth, nx, ny, w2)) { // a node meeting a node
       if (depth <= touching * h || (depth > check_depth * h && !inside(B, px, py)))
@@ -486,8 +522,8 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
       // a node outside it behind one of its segments: the crossing count decides
       continue;
     }
-    hit(model, k, scratch.near_ends[2 * c.segment], scratch.near_ends[2 * c.segment + 1], w2, nx,
-        ny, depth, h, mu, dt, hits);
+    hit(model, k, near.ends[2 * c.segment], near.ends[2 * c.segment + 1], w2, nx, ny, depth, h,
+        mu, dt, hits);
   }
 }
 
@@ -500,17 +536,17 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
 bool Contact::vertexTie(const Scratch &scratch, const Closest &c, double px, double py,
                         double &depth, double &nx, double &ny, double &w2) const {
   constexpr double tie = 1e-9; // relative: the same distance but for round-off
-  const std::vector<Segment> &near = scratch.near;
-  const Segment &s = near[c.segment];
+  const Near &near = scratch.near;
+  const Segment s = near[c.segment];
   const bool at_start = std::abs(c.along) <= tie * s.length;
   const bool at_end = std::abs(c.along - s.length) <= tie * s.length;
   if (at_start == at_end)
     return false;
-  const std::uint32_t vertex = scratch.near_ends[2 * c.segment + (at_start ? 0 : 1)];
-  for (std::uint32_t j = 0; j < near.size(); ++j) {
-    if (j == c.segment || scratch.near_ends[2 * j + (at_start ? 1 : 0)] != vertex)
+  const std::uint32_t vertex = near.ends[2 * c.segment + (at_start ? 0 : 1)];
+  for (std::uint32_t j = 0; j < near.size; ++j) {
+    if (j == c.segment || !near.in(j) || near.ends[2 * j + (at_start ? 1 : 0)] != vertex)
       continue;
-    const Segment &o = near[j];
+    const Segment o = near[j];
     if (std::abs(o.foot(px, py).distance - c.distance) > tie * c.distance)
       return false;
     const double mx = s.nx + o.nx, my = s.ny + o.ny, norm = std::sqrt(mx * mx + my * my);
@@ -566,14 +602,13 @@ void Contact::walls(const Model &model, double dt, std::vector<Hit> &hits) const
 void Contact::hit(const Model &model, std::uint32_t k, std::uint32_t k1, std::uint32_t k2,
                   double w2, double nx, double ny, double depth, double h, double mu, double dt,
                   std::vector<Hit> &hits) const {
-  const Nodes &nd = model.nodes;
   const double w1 = 1.0 - w2;
   const std::uint32_t p = nodes_[k];
   std::uint32_t s1 = no_node, s2 = no_node;
-  double m_eff = nd.mass[p], vx = points_[k].vx, vy = points_[k].vy;
+  double m_eff = model.nodes.mass[p], vx = points_[k].vx, vy = points_[k].vy;
   if (k1 != no_node) {
     s1 = nodes_[k1], s2 = nodes_[k2];
-    const double m_seg = w1 * nd.mass[s1] + w2 * nd.mass[s2];
+    const double m_seg = w1 * model.nodes.mass[s1] + w2 * model.nodes.mass[s2];
     m_eff = m_eff * m_seg / (m_eff + m_seg);
     vx -= w1 * points_[k1].vx + w2 * points_[k2].vx;
     vy -= w1 * points_[k1].vy + w2 * points_[k2].vy;

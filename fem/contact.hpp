@@ -96,7 +96,7 @@ private:
     Foot foot(double px, double py) const {
       const double dx = px - ax, dy = py - ay;
       const double t = dx * tx + dy * ty, g = dx * nx + dy * ny;
-      const double excess = t < 0.0 ? -t : (t > length ? t - length : 0.0);
+      const double excess = std::max(std::max(-t, t - length), 0.0); // before or beyond
       return {t, g, excess, excess * excess + g * g};
     }
   };
@@ -134,15 +134,31 @@ private:
     double distance = std::numeric_limits<double>::infinity(), g = 0.0, along = 0.0;
     bool corner = false;
   };
-  // A thread's working lists: segments near a node set (with their two nodes), distances.
+  // Segments near a region, for the search of the closest one to a point: their geometry (see
+  // Segment) as arrays, their two nodes (indices into nodes_), in blocks of `lanes` searched at
+  // once. A lane without a near segment (not near, of zero length, padding) lies far away (`far`)
+  // and is never the closest.
+  struct Near {
+    static constexpr std::size_t lanes = 8;
+    static constexpr double far = 1e300;
+    std::size_t size = 0, count = 0; // lanes (a multiple of `lanes`), near segments among them
+    std::vector<double> ax, ay, tx, ty, length, nx, ny;
+    std::vector<std::uint32_t> ends;
+    Segment operator[](std::size_t i) const {
+      return {ax[i], ay[i], tx[i], ty[i], length[i], nx[i], ny[i]};
+    }
+    bool in(std::size_t i) const { return length[i] > 0.0; } // a near segment
+  };
+  // A thread's working lists: segments near a node set, distances.
   struct Scratch {
-    std::vector<Segment> near;
-    std::vector<std::uint32_t> near_ends, items, candidates;
+    Near near;
+    std::vector<std::uint32_t> items, candidates;
     std::vector<double> distance;
     std::vector<char> keep;
   };
-  Segment segment(std::uint32_t p, std::uint32_t q) const;
-  static Closest closest(const std::vector<Segment> &near, double px, double py, double *distances);
+  // The near segment closest to (px, py), the first of equals; with `distances`, every lane's
+  // squared distance goes there.
+  Closest closest(const Near &near, double px, double py, double *distances) const;
   void nearSegments(std::size_t body, const std::uint32_t *ends, const std::uint32_t *ends_end,
                     const Box &region, Scratch &scratch) const;
   void refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &scratch) const;
