@@ -67,7 +67,8 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
   travel_searched_.assign(n_bodies, 0.0);
   listed_.assign(n_bodies, 0);
   for (std::size_t k = 0; k < nodes_.size(); ++k)
-    points_[k] = {nd.x[nodes_[k]], nd.y[nodes_[k]], nd.vx[nodes_[k]], nd.vy[nodes_[k]]};
+    points_[k] = {nd.x[nodes_[k]], nd.y[nodes_[k]], nd.vx[nodes_[k]], nd.vy[nodes_[k]],
+                  nd.mass[nodes_[k]]};
   for (std::size_t b = 0; b < n_bodies; ++b)
     measure(model, b);
   // Grid cells about twice the typical body: a grain sits in at most four cells.
@@ -213,7 +214,7 @@ void Contact::measure(const Model &model, std::size_t b) {
     const std::uint32_t a = nodes_[k];
     const double x = nd.x[a], y = nd.y[a];
     moved = std::max(moved, std::max(std::abs(x - points_[k].x), std::abs(y - points_[k].y)));
-    points_[k] = {x, y, nd.vx[a], nd.vy[a]};
+    points_[k] = {x, y, nd.vx[a], nd.vy[a], nd.mass[a]};
     box.x0 = std::min(box.x0, x), box.x1 = std::max(box.x1, x);
     box.y0 = std::min(box.y0, y), box.y1 = std::max(box.y1, y);
   }
@@ -605,10 +606,10 @@ void Contact::hit(const Model &model, std::uint32_t k, std::uint32_t k1, std::ui
   const double w1 = 1.0 - w2;
   const std::uint32_t p = nodes_[k];
   std::uint32_t s1 = no_node, s2 = no_node;
-  double m_eff = model.nodes.mass[p], vx = points_[k].vx, vy = points_[k].vy;
+  double m_eff = points_[k].mass, vx = points_[k].vx, vy = points_[k].vy;
   if (k1 != no_node) {
     s1 = nodes_[k1], s2 = nodes_[k2];
-    const double m_seg = w1 * model.nodes.mass[s1] + w2 * model.nodes.mass[s2];
+    const double m_seg = w1 * points_[k1].mass + w2 * points_[k2].mass;
     m_eff = m_eff * m_seg / (m_eff + m_seg);
     vx -= w1 * points_[k1].vx + w2 * points_[k2].vx;
     vy -= w1 * points_[k1].vy + w2 * points_[k2].vy;

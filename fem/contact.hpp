@@ -179,10 +179,10 @@ private:
   std::size_t n_materials_;
   std::vector<std::size_t> node_begin_, segment_begin_; // per body, into nodes_ and segment_ends_ / 2
   std::vector<std::uint32_t> nodes_;                    // boundary nodes, body by body
-  // A boundary node's position and velocity this step, side by side: the narrow phase reads them
-  // at scattered nodes (half a cache line a node).
-  struct alignas(32) Point {
-    double x, y, vx, vy;
+  // A boundary node's position, velocity and mass this step, side by side: the narrow phase reads
+  // them at scattered nodes.
+  struct alignas(16) Point {
+    double x, y, vx, vy, mass;
   };
   std::vector<Point> points_;                           // per boundary node (as nodes_)
   std::vector<std::uint32_t> segment_ends_; // boundary edges (ccw), their nodes as indices into nodes_
