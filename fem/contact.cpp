@@ -96,6 +96,8 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
   rest_grid_.build(boxes_, resting, cell_);
   const std::size_t runs = runs_per_thread * static_cast<std::size_t>(omp_get_max_threads());
   run_hits_.resize(runs);
+  for (Hits &hits : run_hits_)
+    hits.loads.resize(owner_blocks);
   arenas_.resize(runs);
   block_loaded_.resize(owner_blocks);
   for (std::size_t b = 0; b < n_bodies; ++b)
@@ -132,7 +134,7 @@ void Contact::addForces(Model &model, double, double dt) {
 #pragma omp for schedule(dynamic, 1)
     for (long r = 0; r < runs; ++r) {
       std::vector<std::uint32_t> &arena = arenas_[r];
-      std::vector<Hit> &hits = run_hits_[r];
+      Hits &hits = run_hits_[r];
       hits.clear();
       for (std::size_t i = run_pairs_[r]; i < run_pairs_[r + 1]; ++i) {
         Pair &pair = pairs_[i];
@@ -160,39 +162,35 @@ void Contact::addForces(Model &model, double, double dt) {
   stats_.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// The hits into the nodes, in their order, every body loaded woken. Each block of bodies (fixed,
-// whatever the number of threads) is one thread's: it adds the forces on its nodes and lists its
-// newly loaded nodes, so that every node sums its forces in the same order, and the loaded nodes
-// come block by block, for any number of threads.
+void Contact::Hits::clear() {
+  for (auto &block : loads)
+    block.clear();
+  count = deep = 0;
+  depth = 0.0;
+}
+
+// The contact forces into the nodes, every body loaded woken. Each block of bodies (fixed,
+// whatever the number of threads) is one thread's: it adds the forces on its nodes, run by run in
+// the order of the contacts, and lists its newly loaded nodes, so that every node sums its forces
+// in the same order, and the loaded nodes come block by block, for any number of threads.
 void Contact::addHits(Model &model) {
   Nodes &nd = model.nodes;
-  std::size_t n_hits = 0;
-  for (const auto &hits : run_hits_)
-    n_hits += hits.size();
-  std::size_t contacts = 0, deep_steps = 0;
+  std::size_t n_loads = 0, contacts = 0, deep_steps = 0;
   double deepest = 0.0;
-#pragma omp parallel if (n_hits > 512) reduction(+ : contacts, deep_steps) reduction(max : deepest)
-  {
-    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
-    const std::size_t T = static_cast<std::size_t>(omp_get_num_threads());
-    auto load = [&](std::uint32_t a, double fx, double fy, double friction_x, double friction_y) {
-      const std::size_t k = block_[nd.body[a]];
-      if (k % T != t)
-        return false;
-      nd.addExternal(a, fx, fy, friction_x, friction_y, block_loaded_[k]);
-      model.wake(nd.body[a]);
-      return true;
-    };
-    for (const auto &hits : run_hits_)
-      for (const Hit &h : hits) {
-        if (load(h.node, h.fx, h.fy, h.friction_x, h.friction_y)) {
-          ++contacts;
-          deepest = std::max(deepest, h.depth);
-          deep_steps += h.depth > deep;
-        }
-        if (h.s1 != no_node)
-          for (auto [s, w] : {std::pair{h.s1, 1.0 - h.w2}, {h.s2, h.w2}})
-            load(s, -w * h.fx, -w * h.fy, -w * h.friction_x, -w * h.friction_y);
+  for (const Hits &hits : run_hits_) {
+    for (const auto &block : hits.loads)
+      n_loads += block.size();
+    contacts += hits.count, deep_steps += hits.deep, deepest = std::max(deepest, hits.depth);
+  }
+  const long blocks = static_cast<long>(block_loaded_.size());
+#pragma omp parallel for schedule(static, 1) if (n_loads > 1024)
+  for (long k = 0; k < blocks; ++k) {
+    std::uint32_t woken = no_node;
+    for (const Hits &hits : run_hits_)
+      for (const Load &l : hits.loads[k]) {
+        nd.addExternal(l.node, l.fx, l.fy, l.friction_x, l.friction_y, block_loaded_[k]);
+        if (l.body != woken) // the loads of a body come together
+          model.wake(l.body), woken = l.body;
       }
   }
   for (auto &loaded : block_loaded_) {
@@ -476,7 +474,7 @@ void Contact::restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add 
 // is the closest to it.
 void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
                     const std::uint32_t *nodes_end, const std::uint32_t *ends,
-                    const std::uint32_t *ends_end, double dt, std::vector<Hit> &hits,
+                    const std::uint32_t *ends_end, double dt, Hits &hits,
                     Scratch &scratch) const {
   // A node inside B is in the overlap of the two boxes: the listed nodes there, if any, are
   // checked against the segments within `reach` of the overlap (a node behind one of them by less
@@ -523,8 +521,8 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
       // a node outside it behind one of its segments: the crossing count decides
       continue;
     }
-    hit(model, k, near.ends[2 * c.segment], near.ends[2 * c.segment + 1], w2, nx, ny, depth, h,
-        mu, dt, hits);
+    hit(A, k, B, near.ends[2 * c.segment], near.ends[2 * c.segment + 1], w2, nx, ny, depth, h, mu,
+        dt, hits);
   }
 }
 
@@ -575,7 +573,7 @@ bool Contact::inside(std::size_t B, double px, double py) const {
 }
 
 // The rigid walls: a boundary node of a moving body beyond a wall is pushed back along its normal.
-void Contact::walls(const Model &model, double dt, std::vector<Hit> &hits) const {
+void Contact::walls(const Model &model, double dt, Hits &hits) const {
   const bool left = !std::isnan(s_.wall_left), right = !std::isnan(s_.wall_right),
              bottom = !std::isnan(s_.wall_bottom);
   if (!left && !right && !bottom)
@@ -592,37 +590,47 @@ void Contact::walls(const Model &model, double dt, std::vector<Hit> &hits) const
                                        {right, x - s_.wall_right, -1.0, 0.0},
                                        {bottom, s_.wall_bottom - y, 0.0, 1.0}})
         if (on && depth > touching * h)
-          hit(model, k, no_node, no_node, 0.0, nx, ny, depth, h, s_.wall_friction, dt, hits);
+          hit(b, k, no_node, no_node, no_node, 0.0, nx, ny, depth, h, s_.wall_friction, dt, hits);
     }
   }
 }
 
-// The force on boundary node k (index into nodes_), pushed out along (nx, ny) by `depth` from the
-// segment k1-k2 (at weight w2 from k1) or from a wall (k1 = no_node), `h` the element size (the
-// first `touching` h of the depth is free); relative velocities at mid-step.
-void Contact::hit(const Model &model, std::uint32_t k, std::uint32_t k1, std::uint32_t k2,
-                  double w2, double nx, double ny, double depth, double h, double mu, double dt,
-                  std::vector<Hit> &hits) const {
+// The force on boundary node k (index into nodes_) of body A, pushed out along (nx, ny) by `depth`
+// from the segment k1-k2 of body B (at weight w2 from k1) or from a wall (k1 = no_node), `h` the
+// element size (the first `touching` h of the depth is free); relative velocities at mid-step. The
+// reaction goes to the segment's nodes by weights 1 - w2, w2.
+void Contact::hit(std::uint32_t A, std::uint32_t k, std::uint32_t B, std::uint32_t k1,
+                  std::uint32_t k2, double w2, double nx, double ny, double depth, double h,
+                  double mu, double dt, Hits &hits) const {
   const double w1 = 1.0 - w2;
-  const std::uint32_t p = nodes_[k];
-  std::uint32_t s1 = no_node, s2 = no_node;
-  double m_eff = points_[k].mass, vx = points_[k].vx, vy = points_[k].vy;
+  const Point &a = points_[k];
+  double m_eff = a.mass, vx = a.vx, vy = a.vy;
   if (k1 != no_node) {
-    s1 = nodes_[k1], s2 = nodes_[k2];
-    const double m_seg = w1 * points_[k1].mass + w2 * points_[k2].mass;
+    const Point &b1 = points_[k1], &b2 = points_[k2];
+    const double m_seg = w1 * b1.mass + w2 * b2.mass;
     m_eff = m_eff * m_seg / (m_eff + m_seg);
-    vx -= w1 * points_[k1].vx + w2 * points_[k2].vx;
-    vy -= w1 * points_[k1].vy + w2 * points_[k2].vy;
+    vx -= w1 * b1.vx + w2 * b2.vx;
+    vy -= w1 * b1.vy + w2 * b2.vy;
   }
   const double vn = vx * nx + vy * ny; // > 0: separating
   // Two nodes that meet are pushed apart by both passes, a wall contact by one: the walls take
   // twice the stiffness (kappa 1 by default, the one-step constraint).
-  const double kappa = s1 == no_node ? 2.0 * s_.stiffness : s_.stiffness;
+  const double kappa = k1 == no_node ? 2.0 * s_.stiffness : s_.stiffness;
   const double c = 2.0 * s_.damping * std::sqrt(kappa);
   const double fn = std::max(0.0, m_eff / dt * (kappa * (depth - touching * h) / dt - c * vn));
   const double tx = vx - vn * nx, ty = vy - vn * ny, slip = std::sqrt(tx * tx + ty * ty);
   const double ft = slip > 0.0 ? std::min(mu * fn, m_eff * slip / dt) / slip : 0.0;
-  hits.push_back({p, s1, s2, w2, fn * nx - ft * tx, fn * ny - ft * ty, -ft * tx, -ft * ty, depth / h});
+  const double fx = fn * nx - ft * tx, fy = fn * ny - ft * ty, friction_x = -ft * tx,
+               friction_y = -ft * ty;
+  hits.loads[block_[A]].push_back({nodes_[k], A, fx, fy, friction_x, friction_y});
+  if (k1 != no_node) {
+    std::vector<Load> &loads = hits.loads[block_[B]];
+    for (auto [s, w] : {std::pair{k1, w1}, {k2, w2}})
+      loads.push_back({nodes_[s], B, -w * fx, -w * fy, -w * friction_x, -w * friction_y});
+  }
+  ++hits.count;
+  hits.depth = std::max(hits.depth, depth / h);
+  hits.deep += depth / h > deep;
 }
 
 } // namespace mesopen::fem

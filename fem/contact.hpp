@@ -71,13 +71,6 @@ public:
   double stepStiffness() const override { return 2.0 * s_.stiffness; }
   const ContactStatistics &statistics() const { return stats_; }
 
-  // One contact force: on `node`, and minus it on the segment's nodes by weights 1 - w2, w2 (no
-  // segment for a wall).
-  struct Hit {
-    std::uint32_t node, s1, s2;
-    double w2, fx, fy, friction_x, friction_y, depth; // depth / element size
-  };
-
 private:
   struct Box {
     double x0, y0, x1, y1;
@@ -134,6 +127,21 @@ private:
     double distance = std::numeric_limits<double>::infinity(), g = 0.0, along = 0.0;
     bool corner = false;
   };
+  // A contact force on a node (or a segment's node's share of the reaction), with its frictional
+  // part; `body` is the node's.
+  struct Load {
+    std::uint32_t node, body;
+    double fx, fy, friction_x, friction_y;
+  };
+  // A run's contact forces, by block of bodies (see addHits) in the order of the contacts, and
+  // their number, deepest penetration (over the element size) and how many are deeper than half
+  // an element.
+  struct Hits {
+    std::vector<std::vector<Load>> loads; // per block of bodies
+    std::size_t count = 0, deep = 0;
+    double depth = 0.0;
+    void clear();
+  };
   // Segments near a region, for the search of the closest one to a point: their geometry (see
   // Segment) as arrays, their two nodes (indices into nodes_), in blocks of `lanes` searched at
   // once. A lane without a near segment (not near, of zero length, padding) lies far away (`far`)
@@ -166,14 +174,14 @@ private:
                          Scratch &scratch) const;
   void touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
              const std::uint32_t *nodes_end, const std::uint32_t *ends, const std::uint32_t *ends_end,
-             double dt, std::vector<Hit> &hits, Scratch &scratch) const;
+             double dt, Hits &hits, Scratch &scratch) const;
   bool vertexTie(const Scratch &scratch, const Closest &c, double px, double py, double &depth,
                  double &nx, double &ny, double &w2) const;
   bool inside(std::size_t B, double px, double py) const;
-  void walls(const Model &model, double dt, std::vector<Hit> &hits) const;
-  void hit(const Model &model, std::uint32_t k, std::uint32_t k1, std::uint32_t k2, double w2,
-           double nx, double ny, double depth, double h, double mu, double dt,
-           std::vector<Hit> &hits) const;
+  void walls(const Model &model, double dt, Hits &hits) const;
+  void hit(std::uint32_t A, std::uint32_t k, std::uint32_t B, std::uint32_t k1, std::uint32_t k2,
+           double w2, double nx, double ny, double depth, double h, double mu, double dt,
+           Hits &hits) const;
 
   ContactSettings s_;
   std::size_t n_materials_;
@@ -201,7 +209,7 @@ private:
   // run_pairs_[r + 1]) (the last also those added since the search), their lists, their hits.
   std::vector<std::size_t> run_pairs_;
   std::vector<std::vector<std::uint32_t>> arenas_;
-  std::vector<std::vector<Hit>> run_hits_;
+  std::vector<Hits> run_hits_;
   std::vector<std::uint8_t> block_;                      // per body: its block of bodies
   std::vector<std::vector<std::uint32_t>> block_loaded_; // per block of bodies: nodes it loaded
   ContactStatistics stats_;
