@@ -67,8 +67,7 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
   travel_searched_.assign(n_bodies, 0.0);
   listed_.assign(n_bodies, 0);
   for (std::size_t k = 0; k < nodes_.size(); ++k)
-    points_[k] = {nd.x[nodes_[k]], nd.y[nodes_[k]], nd.vx[nodes_[k]], nd.vy[nodes_[k]],
-                  nd.mass[nodes_[k]]};
+    points_[k] = {nd.x[nodes_[k]], nd.y[nodes_[k]]};
   for (std::size_t b = 0; b < n_bodies; ++b)
     measure(model, b);
   // Grid cells about twice the typical body: a grain sits in at most four cells.
@@ -202,7 +201,7 @@ void Contact::addHits(Model &model) {
   stats_.deep += deep_steps;
 }
 
-// A body's boundary node positions and velocities and its bounding box now, and how far its nodes
+// A body's boundary node positions and its bounding box now, and how far its nodes
 // moved since the last call (the largest coordinate change, added to travel_).
 void Contact::measure(const Model &model, std::size_t b) {
   const Nodes &nd = model.nodes;
@@ -212,7 +211,7 @@ void Contact::measure(const Model &model, std::size_t b) {
     const std::uint32_t a = nodes_[k];
     const double x = nd.x[a], y = nd.y[a];
     moved = std::max(moved, std::max(std::abs(x - points_[k].x), std::abs(y - points_[k].y)));
-    points_[k] = {x, y, nd.vx[a], nd.vy[a], nd.mass[a]};
+    points_[k] = {x, y};
     box.x0 = std::min(box.x0, x), box.x1 = std::max(box.x1, x);
     box.y0 = std::min(box.y0, y), box.y1 = std::max(box.y1, y);
   }
@@ -521,7 +520,7 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
       // a node outside it behind one of its segments: the crossing count decides
       continue;
     }
-    hit(A, k, B, near.ends[2 * c.segment], near.ends[2 * c.segment + 1], w2, nx, ny, depth, h, mu,
+    hit(model, A, k, B, near.ends[2 * c.segment], near.ends[2 * c.segment + 1], w2, nx, ny, depth, h, mu,
         dt, hits);
   }
 }
@@ -590,7 +589,7 @@ void Contact::walls(const Model &model, double dt, Hits &hits) const {
                                        {right, x - s_.wall_right, -1.0, 0.0},
                                        {bottom, s_.wall_bottom - y, 0.0, 1.0}})
         if (on && depth > touching * h)
-          hit(b, k, no_node, no_node, no_node, 0.0, nx, ny, depth, h, s_.wall_friction, dt, hits);
+          hit(model, b, k, no_node, no_node, no_node, 0.0, nx, ny, depth, h, s_.wall_friction, dt, hits);
     }
   }
 }
@@ -599,18 +598,19 @@ void Contact::walls(const Model &model, double dt, Hits &hits) const {
 // from the segment k1-k2 of body B (at weight w2 from k1) or from a wall (k1 = no_node), `h` the
 // element size (the first `touching` h of the depth is free); relative velocities at mid-step. The
 // reaction goes to the segment's nodes by weights 1 - w2, w2.
-void Contact::hit(std::uint32_t A, std::uint32_t k, std::uint32_t B, std::uint32_t k1,
-                  std::uint32_t k2, double w2, double nx, double ny, double depth, double h,
-                  double mu, double dt, Hits &hits) const {
+void Contact::hit(const Model &model, std::uint32_t A, std::uint32_t k, std::uint32_t B,
+                  std::uint32_t k1, std::uint32_t k2, double w2, double nx, double ny, double depth,
+                  double h, double mu, double dt, Hits &hits) const {
+  const Nodes &nd = model.nodes;
   const double w1 = 1.0 - w2;
-  const Point &a = points_[k];
-  double m_eff = a.mass, vx = a.vx, vy = a.vy;
+  const std::uint32_t p = nodes_[k];
+  double m_eff = nd.mass[p], vx = nd.vx[p], vy = nd.vy[p];
   if (k1 != no_node) {
-    const Point &b1 = points_[k1], &b2 = points_[k2];
-    const double m_seg = w1 * b1.mass + w2 * b2.mass;
+    const std::uint32_t s1 = nodes_[k1], s2 = nodes_[k2];
+    const double m_seg = w1 * nd.mass[s1] + w2 * nd.mass[s2];
     m_eff = m_eff * m_seg / (m_eff + m_seg);
-    vx -= w1 * b1.vx + w2 * b2.vx;
-    vy -= w1 * b1.vy + w2 * b2.vy;
+    vx -= w1 * nd.vx[s1] + w2 * nd.vx[s2];
+    vy -= w1 * nd.vy[s1] + w2 * nd.vy[s2];
   }
   const double vn = vx * nx + vy * ny; // > 0: separating
   // Two nodes that meet are pushed apart by both passes, a wall contact by one: the walls take
@@ -622,7 +622,7 @@ void Contact::hit(std::uint32_t A, std::uint32_t k, std::uint32_t B, std::uint32
   const double ft = slip > 0.0 ? std::min(mu * fn, m_eff * slip / dt) / slip : 0.0;
   const double fx = fn * nx - ft * tx, fy = fn * ny - ft * ty, friction_x = -ft * tx,
                friction_y = -ft * ty;
-  hits.loads[block_[A]].push_back({nodes_[k], A, fx, fy, friction_x, friction_y});
+  hits.loads[block_[A]].push_back({p, A, fx, fy, friction_x, friction_y});
   if (k1 != no_node) {
     std::vector<Load> &loads = hits.loads[block_[B]];
     for (auto [s, w] : {std::pair{k1, w1}, {k2, w2}})

@@ -179,18 +179,18 @@ private:
                  double &nx, double &ny, double &w2) const;
   bool inside(std::size_t B, double px, double py) const;
   void walls(const Model &model, double dt, Hits &hits) const;
-  void hit(std::uint32_t A, std::uint32_t k, std::uint32_t B, std::uint32_t k1, std::uint32_t k2,
-           double w2, double nx, double ny, double depth, double h, double mu, double dt,
-           Hits &hits) const;
+  void hit(const Model &model, std::uint32_t A, std::uint32_t k, std::uint32_t B, std::uint32_t k1,
+           std::uint32_t k2, double w2, double nx, double ny, double depth, double h, double mu,
+           double dt, Hits &hits) const;
 
   ContactSettings s_;
   std::size_t n_materials_;
   std::vector<std::size_t> node_begin_, segment_begin_; // per body, into nodes_ and segment_ends_ / 2
   std::vector<std::uint32_t> nodes_;                    // boundary nodes, body by body
-  // A boundary node's position, velocity and mass this step, side by side: the narrow phase reads
+  // A boundary node's position this step, the two coordinates side by side: the narrow phase reads
   // them at scattered nodes.
   struct alignas(16) Point {
-    double x, y, vx, vy, mass;
+    double x, y;
   };
   std::vector<Point> points_;                           // per boundary node (as nodes_)
   std::vector<std::uint32_t> segment_ends_; // boundary edges (ccw), their nodes as indices into nodes_
