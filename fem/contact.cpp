@@ -278,8 +278,7 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region,
 
 // The lanes block by block: the squared distances to the block's segments at once (no branch,
 // vectorized), then the first of the smallest if it is closer than those before.
-Contact::Closest Contact::closest(const Near &near, double px, double py,
-                                  double *distances) const {
+Contact::Closest Contact::closest(const Near &near, double px, double py, double *distances) const {
   constexpr std::size_t L = Near::lanes;
   double best = std::numeric_limits<double>::infinity();
   std::uint32_t which = no_node;
@@ -473,8 +472,7 @@ void Contact::restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add 
 // is the closest to it.
 void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
                     const std::uint32_t *nodes_end, const std::uint32_t *ends,
-                    const std::uint32_t *ends_end, double dt, Hits &hits,
-                    Scratch &scratch) const {
+                    const std::uint32_t *ends_end, double dt, Hits &hits, Scratch &scratch) const {
   // A node inside B is in the overlap of the two boxes: the listed nodes there, if any, are
   // checked against the segments within `reach` of the overlap (a node behind one of them by less
   // than `reach` finds its closest segment among them; deeper contacts are checked by the crossing
@@ -520,8 +518,8 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
       // a node outside it behind one of its segments: the crossing count decides
       continue;
     }
-    hit(model, A, k, B, near.ends[2 * c.segment], near.ends[2 * c.segment + 1], w2, nx, ny, depth, h, mu,
-        dt, hits);
+    hit(model, A, k, B, near.ends[2 * c.segment], near.ends[2 * c.segment + 1], w2, nx, ny, depth,
+        h, mu, dt, hits);
   }
 }
 
