@@ -151,6 +151,10 @@ void Contact::addForces(Model &model, double, double dt) {
         touch(model, pair.b, pair.a, items + pair.end[1], items + pair.end[2],
               items + pair.end[2], items + pair.end[3], dt, hits, scratch);
       }
+      // The forces after the search: their nodes' masses and velocities, scattered in memory, are
+      // then fetched many at once.
+      for (const Found &f : hits.found)
+        hit(model, f, dt, hits);
     }
   }
   stats_.refreshed += refreshed;
@@ -162,6 +166,7 @@ void Contact::addForces(Model &model, double, double dt) {
 }
 
 void Contact::Hits::clear() {
+  found.clear();
   for (auto &block : loads)
     block.clear();
   count = deep = 0;
@@ -518,8 +523,9 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
       // a node outside it behind one of its segments: the crossing count decides
       continue;
     }
-    hit(model, A, k, B, near.ends[2 * c.segment], near.ends[2 * c.segment + 1], w2, nx, ny, depth,
-        h, mu, dt, hits);
+    hits.found.push_back({static_cast<std::uint32_t>(A), k, static_cast<std::uint32_t>(B),
+                          near.ends[2 * c.segment], near.ends[2 * c.segment + 1], w2, nx, ny, depth,
+                          h, mu});
   }
 }
 
@@ -587,18 +593,17 @@ void Contact::walls(const Model &model, double dt, Hits &hits) const {
                                        {right, x - s_.wall_right, -1.0, 0.0},
                                        {bottom, s_.wall_bottom - y, 0.0, 1.0}})
         if (on && depth > touching * h)
-          hit(model, b, k, no_node, no_node, no_node, 0.0, nx, ny, depth, h, s_.wall_friction, dt, hits);
+          hit(model, {b, static_cast<std::uint32_t>(k), no_node, no_node, no_node, 0.0, nx, ny,
+                      depth, h, s_.wall_friction},
+              dt, hits);
     }
   }
 }
 
-// The force on boundary node k (index into nodes_) of body A, pushed out along (nx, ny) by `depth`
-// from the segment k1-k2 of body B (at weight w2 from k1) or from a wall (k1 = no_node), `h` the
-// element size (the first `touching` h of the depth is free); relative velocities at mid-step. The
-// reaction goes to the segment's nodes by weights 1 - w2, w2.
-void Contact::hit(const Model &model, std::uint32_t A, std::uint32_t k, std::uint32_t B,
-                  std::uint32_t k1, std::uint32_t k2, double w2, double nx, double ny, double depth,
-                  double h, double mu, double dt, Hits &hits) const {
+// The force of a contact (the first `touching` h of the depth is free), relative velocities at
+// mid-step; the reaction goes to the segment's nodes by weights 1 - w2, w2.
+void Contact::hit(const Model &model, const Found &f, double dt, Hits &hits) const {
+  const auto [A, k, B, k1, k2, w2, nx, ny, depth, h, mu] = f;
   const Nodes &nd = model.nodes;
   const double w1 = 1.0 - w2;
   const std::uint32_t p = nodes_[k];

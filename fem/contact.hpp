@@ -133,10 +133,18 @@ private:
     std::uint32_t node, body;
     double fx, fy, friction_x, friction_y;
   };
-  // A run's contact forces, by block of bodies (see addHits) in the order of the contacts, and
-  // their number, deepest penetration (over the element size) and how many are deeper than half
-  // an element.
+  // A contact: boundary node k (index into nodes_) of body A, pushed out along (nx, ny) by
+  // `depth` from the segment k1-k2 of body B (at weight w2 from k1) or from a wall (k1 = no_node);
+  // h the element size, mu the friction coefficient.
+  struct Found {
+    std::uint32_t A, k, B, k1, k2;
+    double w2, nx, ny, depth, h, mu;
+  };
+  // A run's contacts as the narrow phase finds them, then their forces by block of bodies (see
+  // addHits) in the order of the contacts, and their number, deepest penetration (over the
+  // element size) and how many are deeper than half an element.
   struct Hits {
+    std::vector<Found> found;
     std::vector<std::vector<Load>> loads; // per block of bodies
     std::size_t count = 0, deep = 0;
     double depth = 0.0;
@@ -179,9 +187,7 @@ private:
                  double &nx, double &ny, double &w2) const;
   bool inside(std::size_t B, double px, double py) const;
   void walls(const Model &model, double dt, Hits &hits) const;
-  void hit(const Model &model, std::uint32_t A, std::uint32_t k, std::uint32_t B, std::uint32_t k1,
-           std::uint32_t k2, double w2, double nx, double ny, double depth, double h, double mu,
-           double dt, Hits &hits) const;
+  void hit(const Model &model, const Found &f, double dt, Hits &hits) const;
 
   ContactSettings s_;
   std::size_t n_materials_;
