@@ -43,6 +43,17 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
     throw std::invalid_argument("contact: friction needs one value or one per pair of materials");
   const std::size_t n_bodies = model.bodies.size();
   takeBoundaries(model);
+  // Each body's element size: its longest boundary edge at the start (the contact's reach and
+  // depths are measured in it, through erosion too).
+  for (const Body &body : model.bodies) {
+    double longest = 0.0;
+    for (std::size_t k = 0; k + 1 < body.boundary.size(); k += 2) {
+      const std::uint32_t a = body.boundary[k], b = body.boundary[k + 1];
+      longest = std::max(longest, std::sqrt(sq(model.nodes.x[b] - model.nodes.x[a]) +
+                                            sq(model.nodes.y[b] - model.nodes.y[a])));
+    }
+    size_.push_back(longest);
+  }
   boxes_.resize(n_bodies);
   travel_.assign(n_bodies, 0.0);
   travel_searched_.assign(n_bodies, 0.0);
@@ -87,7 +98,7 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
 void Contact::takeBoundaries(const Model &model) {
   const Nodes &nd = model.nodes;
   node_begin_.assign(1, 0), segment_begin_.assign(1, 0);
-  nodes_.clear(), segment_ends_.clear(), size_.clear();
+  nodes_.clear(), segment_ends_.clear();
   for (const Body &body : model.bodies) {
     std::vector<std::uint32_t> nodes(body.boundary.begin(), body.boundary.end());
     std::sort(nodes.begin(), nodes.end());
@@ -98,12 +109,6 @@ void Contact::takeBoundaries(const Model &model) {
     nodes_.insert(nodes_.end(), nodes.begin(), nodes.end());
     node_begin_.push_back(nodes_.size());
     segment_begin_.push_back(segment_ends_.size() / 2);
-    double longest = 0.0;
-    for (std::size_t k = 0; k + 1 < body.boundary.size(); k += 2) {
-      const std::uint32_t a = body.boundary[k], b = body.boundary[k + 1];
-      longest = std::max(longest, std::sqrt(sq(nd.x[b] - nd.x[a]) + sq(nd.y[b] - nd.y[a])));
-    }
-    size_.push_back(longest);
   }
   node_x_.resize(nodes_.size());
   node_y_.resize(nodes_.size());
@@ -111,27 +116,20 @@ void Contact::takeBoundaries(const Model &model) {
     node_x_[k] = nd.x[nodes_[k]], node_y_[k] = nd.y[nodes_[k]];
 }
 
-// Erosion changed some boundaries: the lists, which hold indices into them, are all taken anew
-// at the next step with a new search for pairs. The element size of a body stays that of its
-// first boundary (the contact's reach and depths are measured in it). The overlaps the new
+// Erosion changed the boundaries of `bodies`: the lists, which hold indices into the boundaries,
+// are all taken anew at the next step with a new search for pairs. The overlaps the new
 // boundaries have with their neighbours are allowed for (allowOverlaps).
-void Contact::boundaryChanged(const Model &model) {
-  const std::vector<double> size = size_;
+void Contact::boundaryChanged(const Model &model, const std::vector<std::uint32_t> &bodies) {
   const std::vector<std::uint32_t> before = nodes_;
   const std::vector<std::size_t> before_begin = node_begin_;
   takeBoundaries(model);
-  size_ = size;
   for (std::size_t b = 0; b < model.bodies.size(); ++b)
     measure(model, b);
-  eroded_seen_.resize(model.bodies.size(), 0);
   if (allowance_.empty())
     allowance_.assign(model.nodes.size(), 0.0);
-  for (std::size_t C = 0; C < model.bodies.size(); ++C)
-    if (model.bodies[C].eroded != eroded_seen_[C]) {
-      eroded_seen_[C] = model.bodies[C].eroded;
-      allowOverlaps(C, std::vector<std::uint32_t>(before.begin() + before_begin[C],
-                                                   before.begin() + before_begin[C + 1]));
-    }
+  for (std::uint32_t C : bodies)
+    allowOverlaps(C, std::vector<std::uint32_t>(before.begin() + before_begin[C],
+                                                 before.begin() + before_begin[C + 1]));
   run_pairs_.clear();
 }
 

@@ -69,7 +69,7 @@ public:
   // A node meeting a node is pushed by both passes, a node at a wall by one with twice the
   // stiffness: kappa_n = 2 kappa either way.
   double stepStiffness() const override { return 2.0 * s_.stiffness; }
-  void boundaryChanged(const Model &model) override;
+  void boundaryChanged(const Model &model, const std::vector<std::uint32_t> &bodies) override;
   const ContactStatistics &statistics() const { return stats_; }
 
   // One contact force: on `node`, and minus it on the segment's nodes by weights 1 - w2, w2 (no
@@ -197,7 +197,6 @@ private:
   };
   std::vector<double> allowance_;
   std::vector<Allowance> allowed_;
-  std::vector<std::size_t> eroded_seen_; // per body: Body::eroded when its boundary was taken
 };
 
 } // namespace mesopen::fem

@@ -648,8 +648,13 @@ void Solver::erode() {
   eroded_elements_ += failed.size();
   energy_.internal -= energy; // this step's pass summed theirs
   body_active_seen_.clear(); // the chunks are laid out anew
+  std::vector<std::uint32_t> bodies;
+  for (std::uint32_t e : failed)
+    bodies.push_back(el.body[e]);
+  std::sort(bodies.begin(), bodies.end());
+  bodies.erase(std::unique(bodies.begin(), bodies.end()), bodies.end());
   for (auto *provider : providers_)
-    provider->boundaryChanged(m_);
+    provider->boundaryChanged(m_, bodies);
 }
 
 void Solver::accountEnergy() {

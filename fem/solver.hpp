@@ -57,8 +57,8 @@ public:
   // node, (omega_e dt)^2 + kappa_n <= 4, so the solver scales the elements' step by
   // sqrt(1 - kappa_n / 4).
   virtual double stepStiffness() const { return 0.0; }
-  // The bodies' boundaries changed (elements eroded): what was built from them is taken anew.
-  virtual void boundaryChanged(const Model &) {}
+  // The boundaries of `bodies` changed (elements eroded): what was built from them is taken anew.
+  virtual void boundaryChanged(const Model &, const std::vector<std::uint32_t> & /*bodies*/) {}
 };
 
 // A run that cannot go on (an inverted element, a step collapsed by a sliver); the message says
