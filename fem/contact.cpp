@@ -21,6 +21,7 @@ constexpr double list_margin = 0.5;   // a pair's lists: margin / the smaller bo
 constexpr double search_margin = 1.0; // pairs of bodies: margin / the median element size
 constexpr std::size_t runs_per_thread = 4; // runs of pairs: a thread takes the next one free
 constexpr std::size_t owner_blocks = 16;   // blocks of bodies, each adding its nodes' forces
+constexpr double release_steps = 200.0;    // an overlap erosion laid bare opens over this many steps
 
 double sq(double x) { return x * x; }
 } // namespace
@@ -41,33 +42,23 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
     s_.friction.assign(n_materials_ * n_materials_, s_.friction[0]);
   if (s_.friction.size() != n_materials_ * n_materials_)
     throw std::invalid_argument("contact: friction needs one value or one per pair of materials");
-  const Nodes &nd = model.nodes;
   const std::size_t n_bodies = model.bodies.size();
-  node_begin_.push_back(0), segment_begin_.push_back(0);
+  takeBoundaries(model);
+  // Each body's element size: its longest boundary edge at the start (the contact's reach and
+  // depths are measured in it, through erosion too).
   for (const Body &body : model.bodies) {
-    std::vector<std::uint32_t> nodes(body.boundary.begin(), body.boundary.end());
-    std::sort(nodes.begin(), nodes.end());
-    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
-    for (std::uint32_t p : body.boundary)
-      segment_ends_.push_back(static_cast<std::uint32_t>(
-          nodes_.size() + (std::lower_bound(nodes.begin(), nodes.end(), p) - nodes.begin())));
-    nodes_.insert(nodes_.end(), nodes.begin(), nodes.end());
-    node_begin_.push_back(nodes_.size());
-    segment_begin_.push_back(segment_ends_.size() / 2);
     double longest = 0.0;
     for (std::size_t k = 0; k + 1 < body.boundary.size(); k += 2) {
       const std::uint32_t a = body.boundary[k], b = body.boundary[k + 1];
-      longest = std::max(longest, std::sqrt(sq(nd.x[b] - nd.x[a]) + sq(nd.y[b] - nd.y[a])));
+      longest = std::max(longest, std::sqrt(sq(model.nodes.x[b] - model.nodes.x[a]) +
+                                            sq(model.nodes.y[b] - model.nodes.y[a])));
     }
     size_.push_back(longest);
   }
-  points_.resize(nodes_.size());
   boxes_.resize(n_bodies);
   travel_.assign(n_bodies, 0.0);
   travel_searched_.assign(n_bodies, 0.0);
   listed_.assign(n_bodies, 0);
-  for (std::size_t k = 0; k < nodes_.size(); ++k)
-    points_[k] = {nd.x[nodes_[k]], nd.y[nodes_[k]]};
   for (std::size_t b = 0; b < n_bodies; ++b)
     measure(model, b);
   // Grid cells about twice the typical body: a grain sits in at most four cells.
@@ -103,8 +94,100 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
     block_.push_back(static_cast<std::uint8_t>(b * owner_blocks / n_bodies));
 }
 
+// The bodies' boundary nodes and segments from Body::boundary, at their positions now. Nodes
+// that erosion left without elements are not among them: held by contact springs alone, a free
+// node squeezed between several grains is stiffer than the step allows (as in explicit codes'
+// usual practice, eroded nodes leave the contact; they keep their mass and momentum).
+void Contact::takeBoundaries(const Model &model) {
+  const Nodes &nd = model.nodes;
+  node_begin_.assign(1, 0), segment_begin_.assign(1, 0);
+  nodes_.clear(), segment_ends_.clear();
+  for (const Body &body : model.bodies) {
+    std::vector<std::uint32_t> nodes(body.boundary.begin(), body.boundary.end());
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    for (std::uint32_t p : body.boundary)
+      segment_ends_.push_back(static_cast<std::uint32_t>(
+          nodes_.size() + (std::lower_bound(nodes.begin(), nodes.end(), p) - nodes.begin())));
+    nodes_.insert(nodes_.end(), nodes.begin(), nodes.end());
+    node_begin_.push_back(nodes_.size());
+    segment_begin_.push_back(segment_ends_.size() / 2);
+  }
+  points_.resize(nodes_.size());
+  for (std::size_t k = 0; k < nodes_.size(); ++k)
+    points_[k] = {nd.x[nodes_[k]], nd.y[nodes_[k]]};
+}
+
+// Erosion changed the boundaries of `bodies`: the lists, which hold indices into the boundaries,
+// are all taken anew at the next step with a new search for pairs. The overlaps the new
+// boundaries have with their neighbours are allowed for (allowOverlaps).
+void Contact::boundaryChanged(const Model &model, const std::vector<std::uint32_t> &bodies) {
+  const std::vector<std::uint32_t> before = nodes_;
+  const std::vector<std::size_t> before_begin = node_begin_;
+  takeBoundaries(model);
+  for (std::size_t b = 0; b < model.bodies.size(); ++b)
+    measure(model, b);
+  if (allowance_.empty())
+    allowance_.assign(model.nodes.size(), 0.0);
+  for (std::uint32_t C : bodies)
+    allowOverlaps(C, std::vector<std::uint32_t>(before.begin() + before_begin[C],
+                                                 before.begin() + before_begin[C + 1]));
+  run_pairs_.clear();
+}
+
+// The overlaps of body C's new boundary with the bodies of its pairs: their nodes inside C, and
+// C's newly bare nodes (not in `before`, its boundary nodes before) inside them, deeper than a
+// contact gets in a step (check_depth of an element): each such node's depth is allowed for.
+void Contact::allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &before) {
+  auto allow = [&](std::uint32_t node, double depth) {
+    if (depth <= allowance_[node])
+      return;
+    if (allowance_[node] == 0.0)
+      allowed_.push_back({node, 0.0});
+    allowance_[node] = depth;
+    for (Allowance &a : allowed_)
+      if (a.node == node)
+        a.rate = depth / release_steps;
+  };
+  for (const Pair &pair : pairs_) {
+    if (pair.a != C && pair.b != C)
+      continue;
+    const std::size_t B = pair.a == C ? pair.b : pair.a;
+    const Box region = boxes_[C].overlap(boxes_[B]);
+    for (std::size_t k = node_begin_[B]; k < node_begin_[B + 1]; ++k)
+      if (region.contains(points_[k].x, points_[k].y))
+        if (const double d = penetration(C, points_[k].x, points_[k].y); d > check_depth * size_[C])
+          allow(nodes_[k], d);
+    for (std::size_t k = node_begin_[C]; k < node_begin_[C + 1]; ++k)
+      if (region.contains(points_[k].x, points_[k].y) &&
+          !std::binary_search(before.begin(), before.end(), nodes_[k]))
+        if (const double d = penetration(B, points_[k].x, points_[k].y); d > check_depth * size_[B])
+          allow(nodes_[k], d);
+  }
+}
+
+// How deep (px, py) lies inside body B: its distance to B's boundary, 0 outside.
+double Contact::penetration(std::size_t B, double px, double py) const {
+  if (!inside(B, px, py))
+    return 0.0;
+  double closest = HUGE_VAL;
+  for (std::size_t k = segment_begin_[B]; k < segment_begin_[B + 1]; ++k) {
+    const Point &a = points_[segment_ends_[2 * k]], &b = points_[segment_ends_[2 * k + 1]];
+    const double dx = b.x - a.x, dy = b.y - a.y, length = std::sqrt(dx * dx + dy * dy);
+    if (length > 0.0) // outward normal: the tangent turned right (the boundary runs ccw)
+      closest = std::min(closest, Segment{a.x, a.y, dx / length, dy / length, length, dy / length,
+                                          -dx / length}.foot(px, py).distance);
+  }
+  return std::sqrt(closest);
+}
+
 void Contact::addForces(Model &model, double, double dt) {
   const auto start = std::chrono::steady_clock::now();
+  // The overlaps erosion laid bare open step by step.
+  std::erase_if(allowed_, [&](const Allowance &a) {
+    allowance_[a.node] = std::max(0.0, allowance_[a.node] - a.rate);
+    return allowance_[a.node] == 0.0;
+  });
   moving_.clear();
   for (std::size_t b = 0; b < model.bodies.size(); ++b)
     if (!model.bodies[b].at_rest && node_begin_[b] < node_begin_[b + 1])
@@ -523,6 +606,9 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
       // a node outside it behind one of its segments: the crossing count decides
       continue;
     }
+    if (!allowance_.empty() && allowance_[nodes_[k]] > 0.0 &&
+        (depth -= allowance_[nodes_[k]]) <= touching * h)
+      continue; // an overlap erosion laid bare, still opening
     hits.found.push_back({static_cast<std::uint32_t>(A), k, static_cast<std::uint32_t>(B),
                           near.ends[2 * c.segment], near.ends[2 * c.segment + 1], w2, nx, ny, depth,
                           h, mu});

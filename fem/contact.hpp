@@ -69,6 +69,7 @@ public:
   // A node meeting a node is pushed by both passes, a node at a wall by one with twice the
   // stiffness: kappa_n = 2 kappa either way.
   double stepStiffness() const override { return 2.0 * s_.stiffness; }
+  void boundaryChanged(const Model &model, const std::vector<std::uint32_t> &bodies) override;
   const ContactStatistics &statistics() const { return stats_; }
 
 private:
@@ -114,6 +115,9 @@ private:
     void build(const std::vector<Box> &boxes, const std::vector<std::uint32_t> &which, double cell);
   };
 
+  void takeBoundaries(const Model &model);
+  void allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &before);
+  double penetration(std::size_t B, double px, double py) const;
   void measure(const Model &model, std::size_t body);
   void addHits(Model &model);
   void findPairs();
@@ -219,6 +223,15 @@ private:
   std::vector<std::uint8_t> block_;                      // per body: its block of bodies
   std::vector<std::vector<std::uint32_t>> block_loaded_; // per block of bodies: nodes it loaded
   ContactStatistics stats_;
+  // Overlaps that erosion laid bare: a node already inside another body when the elements that
+  // held it out left. Its depth then [m] is not pushed against (per model node), and is let go
+  // over release_steps steps, so that the overlap opens at a bounded speed instead of in one step.
+  struct Allowance {
+    std::uint32_t node;
+    double rate; // [m per step]
+  };
+  std::vector<double> allowance_;
+  std::vector<Allowance> allowed_;
 };
 
 } // namespace mesopen::fem

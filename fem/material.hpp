@@ -52,11 +52,16 @@ public:
   virtual double density() const = 0;       // rho0 [kg/m^3]
   virtual bool plastic() const = 0;         // true when a strength model (plastic flow) is on
   virtual void update(const StrainBatch &in, StressState &state, MaterialOutput &out) const = 0;
+  // The equivalent plastic strain at which an element fails and is removed (erosion; an element
+  // of such a material also fails when crushed to a fifth of its area); 0: never (the parameter
+  // `erosion_strain` of the types that have it).
+  double erosionStrain() const { return erosion_strain_; }
 
 private:
   friend std::unique_ptr<Material> makeMaterial(const std::string &,
                                                 const std::map<std::string, double> &);
   std::string type_;
+  double erosion_strain_ = 0.0;
 };
 
 // A material's parameter: name, unit, meaning, allowed closed range, default.

@@ -1,11 +1,45 @@
 #include "model.hpp"
 
 #include <algorithm>
-#include <map>
 #include <stdexcept>
+#include <tuple>
 #include <utility>
 
 namespace mesopen::fem {
+
+namespace {
+// A body's boundary edges: those of one of its (remaining) elements only, in that element's
+// counter-clockwise order, sorted by their lower node.
+void findBoundary(const Elements &el, Body &body) {
+  struct Edge {
+    std::uint32_t lo, hi;
+    int use; // +1: used from lo to hi, -1: from hi to lo
+  };
+  std::vector<Edge> edges;
+  edges.reserve(3 * (body.element_end - body.element_begin));
+  for (std::size_t e = body.element_begin; e < body.element_end; ++e)
+    if (!el.eroded[e])
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t a = el.node[3 * e + k], c = el.node[3 * e + (k + 1) % 3];
+        edges.push_back({std::min(a, c), std::max(a, c), a < c ? 1 : -1});
+      }
+  std::sort(edges.begin(), edges.end(), [](const Edge &p, const Edge &q) {
+    return std::tie(p.lo, p.hi) < std::tie(q.lo, q.hi);
+  });
+  body.boundary.clear();
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    int use = 0;
+    for (; j < edges.size() && edges[j].lo == edges[i].lo && edges[j].hi == edges[i].hi; ++j)
+      use += edges[j].use;
+    if (j - i == 1 && use > 0)
+      body.boundary.insert(body.boundary.end(), {edges[i].lo, edges[i].hi});
+    else if (j - i == 1)
+      body.boundary.insert(body.boundary.end(), {edges[i].hi, edges[i].lo});
+    i = j;
+  }
+}
+} // namespace
 
 Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> materials,
                  const std::vector<int> &body_material, const std::vector<std::string> &body_names) {
@@ -33,6 +67,8 @@ Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> ma
                   &el.plastic_strain, &el.viscosity})
     v->assign(n_elements, 0.0);
   el.body.assign(n_elements, 0);
+  el.eroded.assign(n_elements, 0);
+  nd.detached.assign(n_nodes, 0);
 
   model.bodies.resize(n_bodies);
   for (std::size_t b = 0; b < n_bodies; ++b) {
@@ -45,7 +81,6 @@ Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> ma
     const double rho = model.materials[body.material]->density();
     std::fill(nd.body.begin() + body.node_begin, nd.body.begin() + body.node_end, b);
     // Lumped mass: a third of each element's mass at each of its nodes.
-    std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges; // edge -> uses (+1 ab, -1 ba)
     for (std::size_t e = body.element_begin; e < body.element_end; ++e) {
       const std::uint32_t *n = &el.node[3 * e];
       for (int k = 0; k < 3; ++k)
@@ -62,19 +97,43 @@ Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> ma
       for (int k = 0; k < 3; ++k) {
         nd.mass[n[k]] += rho * area / 3.0;
         nd.area0[n[k]] += area / 3.0;
-        const std::uint32_t a = n[k], c = n[(k + 1) % 3];
-        edges[{std::min(a, c), std::max(a, c)}] += a < c ? 1 : -1;
       }
     }
-    // Boundary edges: used by one element only, kept in that element's (counter-clockwise) order.
-    for (const auto &[edge, use] : edges)
-      if (use == 1)
-        body.boundary.insert(body.boundary.end(), {edge.first, edge.second});
-      else if (use == -1)
-        body.boundary.insert(body.boundary.end(), {edge.second, edge.first});
+    findBoundary(el, body);
   }
 
   return model;
+}
+
+double erodeElements(Model &model, const std::vector<std::uint32_t> &elements) {
+  Nodes &nd = model.nodes;
+  Elements &el = model.elements;
+  double energy = 0.0;
+  std::vector<std::uint32_t> bodies;
+  for (std::uint32_t e : elements) {
+    if (el.eroded[e])
+      continue;
+    el.eroded[e] = 1;
+    energy += el.energy[e];
+    for (int k = 0; k < 3; ++k)
+      nd.area0[el.node[3 * e + k]] -= el.area0[e] / 3.0;
+    ++model.bodies[el.body[e]].eroded;
+    if (std::find(bodies.begin(), bodies.end(), el.body[e]) == bodies.end())
+      bodies.push_back(el.body[e]);
+  }
+  for (std::uint32_t b : bodies) {
+    Body &body = model.bodies[b];
+    findBoundary(el, body);
+    // The nodes no remaining element holds.
+    std::vector<std::uint8_t> held(body.node_end - body.node_begin, 0);
+    for (std::size_t e = body.element_begin; e < body.element_end; ++e)
+      if (!el.eroded[e])
+        for (int k = 0; k < 3; ++k)
+          held[el.node[3 * e + k] - body.node_begin] = 1;
+    for (std::size_t a = body.node_begin; a < body.node_end; ++a)
+      nd.detached[a] = !held[a - body.node_begin];
+  }
+  return energy;
 }
 
 void setBodyVelocity(Model &model, std::size_t body, double vx, double vy, double spin) {
@@ -92,6 +151,8 @@ BodyMotion bodyMotion(const Model &model, std::size_t body) {
   const Body &b = model.bodies[body];
   BodyMotion m{0, 0, 0, 0, 0, 0};
   for (std::size_t a = b.node_begin; a < b.node_end; ++a) {
+    if (nd.detached[a])
+      continue;
     m.mass += nd.mass[a];
     m.com_x += nd.mass[a] * nd.x[a];
     m.com_y += nd.mass[a] * nd.y[a];
@@ -100,7 +161,8 @@ BodyMotion bodyMotion(const Model &model, std::size_t body) {
   }
   m.com_x /= m.mass, m.com_y /= m.mass;
   for (std::size_t a = b.node_begin; a < b.node_end; ++a) // H = sum r x m v (thesis Eq. 3.13)
-    m.angular_momentum += nd.mass[a] * ((nd.x[a] - m.com_x) * nd.vy[a] - (nd.y[a] - m.com_y) * nd.vx[a]);
+    if (!nd.detached[a])
+      m.angular_momentum += nd.mass[a] * ((nd.x[a] - m.com_x) * nd.vy[a] - (nd.y[a] - m.com_y) * nd.vx[a]);
   return m;
 }
 

@@ -20,6 +20,9 @@ struct Nodes {
   std::vector<double> mass;       // lumped mass [kg/m]
   std::vector<double> area0;      // a third of the initial area of each element at the node [m^2]
   std::vector<std::uint32_t> body;
+  // 1: every element of the node has eroded; it goes on as a free mass, out of contact (see
+  // erodeElements).
+  std::vector<std::uint8_t> detached;
   // External forces of this step (contact, coupling) [N/m] and their frictional part, nonzero only
   // at the nodes listed in `loaded` (each once): few nodes carry them, and the node loops of the
   // time step then stream four arrays fewer. The four side by side: they are added to together, at
@@ -62,6 +65,7 @@ struct Elements {
   std::vector<double> sxx, syy, sxy, pressure, energy, plastic_strain;
   std::vector<double> viscosity;     // artificial viscous pressure q of the last step [Pa]
   std::vector<std::uint32_t> body;
+  std::vector<std::uint8_t> eroded;  // 1: removed from the model (see erodeElements)
   std::size_t size() const { return area0.size(); }
 };
 
@@ -70,6 +74,7 @@ struct Body {
   std::size_t node_begin = 0, node_end = 0, element_begin = 0, element_end = 0;
   int material = 0;           // index into Model::materials
   bool at_rest = false;       // not updated while at rest and unloaded (see Model::wake)
+  std::size_t eroded = 0;     // its elements removed by erosion
   std::vector<std::uint32_t> boundary; // boundary edges (node pairs, counter-clockwise)
 };
 
@@ -104,11 +109,19 @@ struct MeshView {
 Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> materials,
                  const std::vector<int> &body_material, const std::vector<std::string> &body_names);
 
+// Erosion: the elements removed from the model, as when a material fails (EPIC's eroding
+// elements, Johnson & Stryk 1987). Their nodes keep their mass and momentum; a node left without
+// elements goes on as a free mass (Nodes::detached) that nothing else touches. The bodies' boundaries are found anew (the
+// edges of one remaining element), and the nodal reference areas lose the elements' thirds.
+// Returns the internal energy the elements held [J/m], which leaves with them.
+double erodeElements(Model &model, const std::vector<std::uint32_t> &elements);
+
 // Initial velocity of a body: translation (vx, vy) plus rotation `spin` [rad/s] about its centre
 // of mass. Marks the body as moving.
 void setBodyVelocity(Model &model, std::size_t body, double vx, double vy, double spin = 0.0);
 
-// Centre of mass, linear momentum and angular momentum about the centre of mass of a body.
+// Centre of mass, linear momentum and angular momentum about the centre of mass of a body (its
+// nodes still held by an element: detached nodes have left it).
 struct BodyMotion {
   double mass, com_x, com_y, px, py, angular_momentum;
 };

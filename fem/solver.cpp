@@ -16,6 +16,14 @@ constexpr std::size_t node_block = 4096; // nodes per block of the node loops
 constexpr std::size_t unit_target = 4096; // elements per work unit of the element pass
 constexpr double refine_margin = 1.05; // refine the steps below this times the last shortest
 
+// Whether an element of a material that erodes (erosion strain `erosion`, infinite when it does
+// not) has failed: at its erosion strain, or crushed to a fifth of its area (a grain corner driven
+// into it, a few steps before it would invert).
+constexpr double crushed_area = 0.2;
+bool hasFailed(double plastic_strain, double area, double area0, double erosion) {
+  return plastic_strain >= erosion || (erosion < HUGE_VAL && area < crushed_area * area0);
+}
+
 // Appends the range `piece` to `ranges` in pieces of at most `limit`, first filling up the last
 // range (if it is at index `first` or later, ends where `piece` begins and `joinable` says so).
 template <class R, class Joinable>
@@ -196,6 +204,7 @@ void Solver::step() {
     throw RunFailure(msg.str());
   }
   accountEnergy();
+  erode();                  // elements that failed in this step leave the model
 }
 
 // Work ranges over the bodies that move: element chunks of one material, node blocks.
@@ -206,7 +215,7 @@ void Solver::updateActivity() {
     changed = body_active_seen_[b] != !m_.bodies[b].at_rest;
   if (!changed)
     return;
-  body_active_seen_.resize(n_bodies);
+  body_active_seen_.assign(n_bodies, 0);
   chunks_.clear();
   units_.clear();
   unit_nodes_.clear();
@@ -229,16 +238,26 @@ void Solver::updateActivity() {
       unit_elements = 0;
     }
     Unit &unit = units_.back();
-    unit_elements += body.element_end - body.element_begin;
-    appendInPieces(chunks_, unit.chunk_begin, Chunk{{body.element_begin, body.element_end}, material, averaged},
-                   s_.chunk, [&](const Chunk &c) {
-                     return c.material == material && c.averaged_volume == averaged;
-                   });
+    // The body's elements in runs without eroded ones.
+    for (std::size_t e = body.element_begin; e < body.element_end;) {
+      std::size_t end = body.element_end;
+      if (body.eroded > 0) {
+        while (e < end && m_.elements.eroded[e])
+          ++e;
+        end = e;
+        while (end < body.element_end && !m_.elements.eroded[end])
+          ++end;
+      }
+      appendInPieces(chunks_, unit.chunk_begin, Chunk{{e, end}, material, averaged}, s_.chunk,
+                     [&](const Chunk &c) { return c.material == material && c.averaged_volume == averaged; });
+      unit_elements += end - e;
+      active_elements_ += end - e;
+      e = end;
+    }
     appendInPieces(unit_nodes_, unit.nodes_begin, Range{body.node_begin, body.node_end},
                    std::numeric_limits<std::size_t>::max(), [](const Range &) { return true; });
     appendInPieces(node_ranges_, 0, Range{body.node_begin, body.node_end}, node_block,
                    [](const Range &) { return true; });
-    active_elements_ += body.element_end - body.element_begin;
     unit.chunk_end = chunks_.size();
     unit.nodes_end = unit_nodes_.size();
     unit.node_lo = std::min(unit.node_lo, body.node_begin);
@@ -451,7 +470,7 @@ void Solver::nodalVolumes(const Unit &unit, const UnitNodes &nodes) {
   }
   for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
     for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a)
-      jacobian[a - base] /= area0[a];
+      jacobian[a - base] = area0[a] > 0.0 ? jacobian[a - base] / area0[a] : 1.0; // 0: detached
 }
 
 // Kinematics, material update, artificial viscosity and nodal forces of one batch of elements.
@@ -501,6 +520,7 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
     min_area = std::min(min_area, std::min(area_new, two_am));
   }
   sums.inverted = -1;
+  sums.eroding = false;
   if (!(min_area > 0.0)) {
     for (std::size_t i = 0; i < n; ++i)
       if (!(area[i] > 0.0 && vmid[i] > 0.0))
@@ -526,6 +546,11 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   alignas(64) double shear_share[max_chunk];
   MaterialOutput out{cs, shear_share};
   chunk.material->update(in, state, out);
+  // Elements that failed (hasFailed) leave the model after this step (erode): their step does not
+  // count.
+  const double erosion = chunk.material->erosionStrain() > 0.0 ? chunk.material->erosionStrain() : HUGE_VAL;
+  const double *plastic_strain = state.plastic_strain;
+  long failing = 0;
 
   // Artificial viscosity (Wilkins 1980), compression only:
   //   q = rho L (C_Q L tr(D)^2 + C_L c |tr(D)|),  tr(D) < 0,  L the shortest altitude;
@@ -541,7 +566,7 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   const double *sxx_ = el.sxx.data() + e0, *syy_ = el.syy.data() + e0, *sxy_ = el.sxy.data() + e0;
   const double *pressure = el.pressure.data() + e0;
   double *energy = el.energy.data() + e0, *viscosity = el.viscosity.data() + e0;
-#pragma omp simd reduction(+ : internal, viscous) reduction(min : dt_min)
+#pragma omp simd reduction(+ : internal, viscous, failing) reduction(min : dt_min)
   for (std::size_t i = 0; i < n; ++i) {
     const double comp = std::max(-(dxx[i] + dyy[i]), 0.0);
     const double rho = rho0 * area0[i] / area[i];
@@ -558,9 +583,12 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
       fy[k][i] = -0.5 * (sxy * gx[k][i] + syy * gy[k][i]);
     }
     const double ls = (2.0 / 3.0) * len[i], Q = cl * cs[i] + cq * ls * comp;
-    step[i] = ls / (Q + std::sqrt(Q * Q + cs[i] * cs[i]));
+    const bool fails = hasFailed(plastic_strain[i], area[i], area0[i], erosion);
+    failing += fails;
+    step[i] = fails ? HUGE_VAL : ls / (Q + std::sqrt(Q * Q + cs[i] * cs[i]));
     dt_min = std::min(dt_min, step[i]);
   }
+  sums.eroding = failing > 0;
   // The elements whose step is near the shortest of the last pass (refine_below_) take the exact
   // element bound for their material's state: L_s / c times criticalStepGain, the damping factor
   // unchanged.
@@ -586,6 +614,49 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   sums.dt_min = dt_min;
 }
 
+// The elements that failed in this step's pass (hasFailed) are removed
+// (erodeElements): their internal energy is booked as eroded, the element chunks are laid out
+// anew and the providers take the new boundaries. Their forces leave f(n+1), which the next
+// half-kick uses; the step to come was taken without them (elementPass).
+void Solver::erode() {
+  std::vector<std::uint32_t> failed;
+  for (std::size_t i = 0; i < chunks_.size(); ++i)
+    if (sums_[i].eroding) {
+      const double limit = chunks_[i].material->erosionStrain();
+      for (std::size_t e = chunks_[i].begin; e < chunks_[i].end; ++e)
+        if (hasFailed(m_.elements.plastic_strain[e], m_.elements.area[e], m_.elements.area0[e], limit))
+          failed.push_back(static_cast<std::uint32_t>(e));
+    }
+  if (failed.empty())
+    return;
+  // Their forces leave f(n+1) with them: f_k = -A B_k^T sigma, as in elementPass.
+  Nodes &nd = m_.nodes;
+  const Elements &el = m_.elements;
+  for (std::uint32_t e : failed) {
+    const std::uint32_t *v = &el.node[3 * e];
+    const double pq = el.pressure[e] + el.viscosity[e];
+    const double sxx = el.sxx[e] - pq, syy = el.syy[e] - pq, sxy = el.sxy[e];
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t b = v[(k + 1) % 3], c = v[(k + 2) % 3];
+      const double gx = nd.y[b] - nd.y[c], gy = nd.x[c] - nd.x[b];
+      nd.fx[v[k]] += 0.5 * (sxx * gx + sxy * gy);
+      nd.fy[v[k]] += 0.5 * (sxy * gx + syy * gy);
+    }
+  }
+  const double energy = erodeElements(m_, failed);
+  energy_.eroded += energy;
+  eroded_elements_ += failed.size();
+  energy_.internal -= energy; // this step's pass summed theirs
+  body_active_seen_.clear(); // the chunks are laid out anew
+  std::vector<std::uint32_t> bodies;
+  for (std::uint32_t e : failed)
+    bodies.push_back(el.body[e]);
+  std::sort(bodies.begin(), bodies.end());
+  bodies.erase(std::unique(bodies.begin(), bodies.end()), bodies.end());
+  for (auto *provider : providers_)
+    provider->boundaryChanged(m_, bodies);
+}
+
 void Solver::accountEnergy() {
   // Element sums of this step's pass (chunk order: the same for any thread count).
   double internal = 0.0, plastic = 0.0, viscous = 0.0;
@@ -600,7 +671,7 @@ void Solver::accountEnergy() {
   energy_.friction -= friction_work_;
   energy_.contact -= provider_work_ - friction_work_;
   energy_.external += kick_work_;
-  const double total = energy_.kinetic + internal + energy_.friction + energy_.contact;
+  const double total = energy_.kinetic + internal + energy_.friction + energy_.contact + energy_.eroded;
   const double scale = std::max({std::abs(total), std::abs(energy_.initial), std::abs(energy_.external)});
   energy_.balance_error = scale > 0.0 ? (total - energy_.initial - energy_.external) / scale : 0.0;
 }

@@ -35,12 +35,14 @@ struct SolverSettings {
 // Energies per metre of depth [J/m]. Internal includes the plastic and viscous work done.
 // Friction is the energy the frictional forces took out (minus their work), contact the energy the
 // normal contact forces took out (held in the penalty springs or dissipated by their damping);
-// external is the work of the imposed velocities and of gravity. The balance error is
-//   (kinetic + internal + friction + contact - external - initial) / max(|total|, initial, |external|)
+// external is the work of the imposed velocities and of gravity; eroded the internal energy the
+// eroded elements took with them. The balance error is
+//   (kinetic + internal + friction + contact + eroded - external - initial)
+//     / max(|total|, initial, |external|)
 // (0 when nothing moves).
 struct Energy {
   double kinetic = 0, internal = 0, plastic = 0, viscous = 0, friction = 0, contact = 0,
-         external = 0;
+         external = 0, eroded = 0;
   double initial = 0, balance_error = 0;
 };
 
@@ -55,6 +57,8 @@ public:
   // node, (omega_e dt)^2 + kappa_n <= 4, so the solver scales the elements' step by
   // sqrt(1 - kappa_n / 4).
   virtual double stepStiffness() const { return 0.0; }
+  // The boundaries of `bodies` changed (elements eroded): what was built from them is taken anew.
+  virtual void boundaryChanged(const Model &, const std::vector<std::uint32_t> & /*bodies*/) {}
 };
 
 // A run that cannot go on (an inverted element, a step collapsed by a sliver); the message says
@@ -76,8 +80,9 @@ public:
   double dt() const { return dt_; }              // the step the next step() takes
   const Energy &energy() const { return energy_; }
   void addForceProvider(ForceProvider *provider);
-  // Elements updated in the last step (bodies at rest are skipped).
+  // Elements updated in the last step (bodies at rest and eroded elements are skipped).
   std::size_t activeElements() const { return active_elements_; }
+  std::size_t erodedElements() const { return eroded_elements_; } // over the run
 
   // The element pass alone, as the time loop calls it: stresses and forces at the current
   // positions with the current velocities over a step dt (for benchmarks).
@@ -115,6 +120,7 @@ private:
   struct ChunkSums {
     double internal, plastic, viscous, dt_min;
     long inverted; // an inverted element, or -1
+    bool eroding;  // an element reached its material's erosion strain
   };
 
   void updateActivity();
@@ -129,6 +135,7 @@ private:
   void nodalVolumes(const Unit &unit, const UnitNodes &nodes);
   void elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums);
   void applyConstraints(double half_dt, bool second_half);
+  void erode();
   std::string thinnestElement() const;
   void accountEnergy();
 
@@ -143,7 +150,7 @@ private:
   std::vector<KickSums> kick_sums_; // per node block (first half-kick) or unit (second)
   std::vector<double> inv_mass_;
   std::vector<char> body_active_seen_;
-  std::size_t active_elements_ = 0;
+  std::size_t active_elements_ = 0, eroded_elements_ = 0;
   double time_ = 0.0, dt_ = 0.0, next_dt_ = 0.0;
   double step_scale_ = 1.0; // sqrt(1 - kappa_n / 4) for the providers' stiffness kappa_n
   double first_dt_ = 0.0;   // the first step (after the providers' scaling)

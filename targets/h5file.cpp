@@ -68,6 +68,8 @@ hid_t fileType(H5File::Type type) {
     return H5T_STD_I32LE;
   case H5File::Type::i64:
     return H5T_STD_I64LE;
+  case H5File::Type::u8:
+    return H5T_STD_U8LE;
   case H5File::Type::u32:
     return H5T_STD_U32LE;
   case H5File::Type::u64:
@@ -84,6 +86,8 @@ hid_t memoryType(H5File::Type type) {
     return H5T_NATIVE_INT32;
   case H5File::Type::i64:
     return H5T_NATIVE_INT64;
+  case H5File::Type::u8:
+    return H5T_NATIVE_UINT8;
   case H5File::Type::u32:
     return H5T_NATIVE_UINT32;
   case H5File::Type::u64:

@@ -14,15 +14,15 @@
 
 namespace mesopen {
 
-// Element types stored: float64, int32, int64, uint32, uint64 (little-endian in the file).
+// Element types stored: float64, int32, int64, uint8, uint32, uint64 (little-endian in the file).
 template <class T>
 concept H5Number =
     std::same_as<T, double> || std::same_as<T, int> || std::same_as<T, std::int64_t> ||
-    std::same_as<T, std::uint32_t> || std::same_as<T, std::uint64_t>;
+    std::same_as<T, std::uint8_t> || std::same_as<T, std::uint32_t> || std::same_as<T, std::uint64_t>;
 
 class H5File {
 public:
-  enum class Type { f64, i32, i64, u32, u64 };
+  enum class Type { f64, i32, i64, u8, u32, u64 };
 
   // New file (an existing one is replaced), open for writing.
   static H5File create(const std::string &path);
@@ -102,6 +102,8 @@ private:
       return Type::i32;
     else if constexpr (std::same_as<T, std::int64_t>)
       return Type::i64;
+    else if constexpr (std::same_as<T, std::uint8_t>)
+      return Type::u8;
     else if constexpr (std::same_as<T, std::uint32_t>)
       return Type::u32;
     else

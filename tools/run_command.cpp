@@ -270,7 +270,9 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
   j["ns_per_element_step"] = 1e9 * loop.solver_seconds / std::max(loop.element_steps, 1.0);
   j["energy"] = {{"kinetic", e.kinetic},   {"internal", e.internal},   {"plastic", e.plastic},
                  {"viscous", e.viscous},   {"friction", e.friction},   {"contact", e.contact},
-                 {"external", e.external}, {"initial", e.initial},     {"balance_error", e.balance_error}};
+                 {"external", e.external}, {"eroded", e.eroded},       {"initial", e.initial},
+                 {"balance_error", e.balance_error}};
+  j["eroded_elements"] = solver.erodedElements();
   if (contact) {
     const fem::ContactStatistics &c = contact->statistics();
     j["contact"] = {{"seconds", c.seconds},

@@ -56,9 +56,10 @@ const Series::Column series_columns[] = {
      "energy the normal contact forces took out: held in the penalty springs or dissipated",
      {}},
     {"energy/external", "J/m", "work of the imposed velocities (fixed nodes) and gravity", {}},
+    {"energy/eroded", "J/m", "internal energy the eroded elements took with them", {}},
     {"energy/balance_error",
      "",
-     "(kinetic + internal + friction + contact - initial - external) / max(|total|, initial, "
+     "(kinetic + internal + friction + contact + eroded - initial - external) / max(|total|, initial, "
      "|external|)",
      {}},
 };
@@ -119,7 +120,7 @@ void writeFrameVtu(const std::string &path, const fem::Model &model, const Frame
   body->SetNumberOfTuples(static_cast<vtkIdType>(el.size()));
   for (std::size_t e = 0; e < el.size(); ++e) {
     const vtkIdType ids[3] = {el.node[3 * e], el.node[3 * e + 1], el.node[3 * e + 2]};
-    grid->InsertNextCell(VTK_TRIANGLE, 3, ids);
+    grid->InsertNextCell(el.eroded[e] ? VTK_EMPTY_CELL : VTK_TRIANGLE, el.eroded[e] ? 0 : 3, ids);
     body->SetValue(static_cast<vtkIdType>(e), static_cast<int>(el.body[e]));
   }
   grid->GetPointData()->AddArray(velocity);
@@ -160,7 +161,8 @@ double Series::last(const std::string &name) const {
 double Series::depth(const fem::Model &model) const {
   double lowest = HUGE_VAL;
   for (std::size_t a = model.bodies[0].node_begin; a < model.bodies[0].node_end; ++a)
-    lowest = std::min(lowest, model.nodes.y[a]);
+    if (!model.nodes.detached[a]) // eroded material has left the projectile
+      lowest = std::min(lowest, model.nodes.y[a]);
   return lowest0_ - lowest;
 }
 
@@ -168,9 +170,12 @@ void Series::sample(const fem::Model &model, const fem::Solver &solver) {
   const fem::Body &p = model.bodies[0];
   const fem::Nodes &nd = model.nodes;
   const fem::BodyMotion m = fem::bodyMotion(model, 0);
-  // Forces from outside the projectile (contact); zero while nothing touches it.
+  // Forces from outside the projectile (contact); zero while nothing touches it. Its nodes that
+  // eroded material left behind (detached) are no longer the projectile's.
   double fx = 0.0, fy = 0.0, cross = 0.0, dot = 0.0, lowest = HUGE_VAL;
   for (std::size_t a = p.node_begin, i = 0; a < p.node_end; ++a, ++i) {
+    if (nd.detached[a])
+      continue;
     fx += nd.external[a].fx, fy += nd.external[a].fy;
     // Least-squares rigid rotation from the initial shape: tilt = atan2(sum m X' x x', sum m X'.x')
     // with X' and x' the initial and current positions relative to the centre of mass.
@@ -199,6 +204,7 @@ void Series::sample(const fem::Model &model, const fem::Solver &solver) {
                            e.friction,
                            e.contact,
                            e.external,
+                           e.eroded,
                            e.balance_error};
   static_assert(std::size(values) == std::size(series_columns));
   for (std::size_t c = 0; c < columns_.size(); ++c)
@@ -271,6 +277,7 @@ void Frames::take(const fem::Model &model, const fem::Solver &solver) {
                          {"effective_stress", &s.effective},
                          {"plastic_strain", &el.plastic_strain}})
     h5_.write(g + "/" + name, *v);
+  h5_.write(g + "/eroded", el.eroded);
   times_.push_back(solver.time());
 }
 

@@ -6,12 +6,15 @@
 //   /series/projectile/{com_x, com_y, vx, vy, rotational_momentum, lateral_force, axial_force,
 //                       tilt, depth}                           attributes unit, meaning
 //   /series/projectile                                         attribute mass [kg/m]
-//   /series/energy/{kinetic, internal, plastic, viscous, friction, contact, external,
+//   /series/energy/{kinetic, internal, plastic, viscous, friction, contact, external, eroded,
 //                   balance_error}
 //   /mesh/{x, y (initial node positions), triangles (n x 3, uint32), element_body, node_body}
 //                                                              attribute body_names
 //   /frames/NNNNNN/{x, y, vx, vy (nodes); sxx, syy, sxy, szz (total stress sigma = S - p I),
-//                   pressure, effective_stress, plastic_strain (elements)}, attributes time, step
+//                   pressure, effective_stress, plastic_strain, eroded (uint8, 1: removed)
+//                   (elements)}, attributes time, step
+// Eroded elements are empty cells in the VTK frames; nodes that erosion left without elements
+// are not the projectile's in its series.
 // Body 0 is the projectile, body b >= 1 the grain b - 1 of the target.
 #pragma once
 

@@ -81,8 +81,11 @@ std::unique_ptr<Material> makeMaterial(const std::string &type_or_preset, const 
   const MaterialType *type = findMaterialType(preset ? preset->type : type_or_preset);
   if (!type)
     throw std::invalid_argument("unknown material \"" + type_or_preset + "\"");
-  std::unique_ptr<Material> material = type->make(completeParameters(*type, preset, overrides));
+  const Parameters values = completeParameters(*type, preset, overrides);
+  std::unique_ptr<Material> material = type->make(values);
   material->type_ = type->name;
+  if (auto erosion = values.find("erosion_strain"); erosion != values.end())
+    material->erosion_strain_ = erosion->second;
   return material;
 }
 

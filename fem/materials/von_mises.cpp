@@ -93,7 +93,9 @@ MaterialType vonMisesMaterialType() {
            {"pressure_cutoff", "Pa", "K_c: the pressure stays >= -K_c", 0.0, 1e12, 0.0},
            {"yield_stress", "Pa", "initial yield stress Y0", 0.0, 1e12, 1.16e9},
            {"hardening_modulus", "Pa", "linear hardening M in Y = Y0 + M eps_p", 0.0, 1e13, 0.12e9},
-           {"plastic", "", "plastic flow on; false: elastic, no strength limit", 0.0, 1.0, 1.0, true}},
+           {"plastic", "", "plastic flow on; false: elastic, no strength limit", 0.0, 1.0, 1.0, true},
+           {"erosion_strain", "", "equivalent plastic strain at which an element is removed (eroded; also when crushed to a fifth of its area); 0: never",
+            0.0, 1e3, 0.0}},
           [](const Parameters &p) -> std::unique_ptr<Material> { return std::make_unique<VonMises>(p); }};
 }
 

@@ -65,4 +65,10 @@ inline void writeFile(const std::string &path, const std::string &text) {
   std::ofstream(path) << text;
 }
 
+// `mesopen run` on `scene`, written to DIR/scene.toml, with its output in DIR/out.
+inline Result runScene(const ScratchDir &dir, const std::string &scene) {
+  writeFile(dir / "scene.toml", scene);
+  return runMesopen("run " + (dir / "scene.toml") + " -o " + (dir / "out") + " --quiet");
+}
+
 } // namespace mesopen::test

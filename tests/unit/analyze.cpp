@@ -20,8 +20,7 @@ namespace {
 using test::tinyScene;
 
 nlohmann::json runAndAnalyze(const ScratchDir &dir, const std::string &scene) {
-  test::writeFile(dir / "scene.toml", scene);
-  auto r = test::runMesopen("run " + (dir / "scene.toml") + " -o " + (dir / "out") + " --quiet");
+  auto r = test::runScene(dir, scene);
   EXPECT_EQ(r.code, 0) << r.output;
   r = test::runMesopen("analyze " + (dir / "out") + " -o " + (dir / "plots"));
   EXPECT_EQ(r.code, 0) << r.output;

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numeric>
 #include <omp.h>
 #include <random>
 
@@ -158,6 +159,55 @@ TEST(StableStep, CollapseEndsTheRunNamingTheElement) {
   }
   EXPECT_NE(message.find("the stable step fell"), std::string::npos) << message;
   EXPECT_NE(message.find("element 0 of body"), std::string::npos) << message;
+}
+
+// The area a body's boundary encloses, by Green's theorem over its edges (holes count negative).
+double enclosedArea(const fem::Model &model, std::size_t b) {
+  const std::vector<std::uint32_t> &edges = model.bodies[b].boundary;
+  const fem::Nodes &nd = model.nodes;
+  double area = 0.0;
+  for (std::size_t k = 0; k < edges.size(); k += 2)
+    area += 0.5 * (nd.x[edges[k]] * nd.y[edges[k + 1]] - nd.x[edges[k + 1]] * nd.y[edges[k]]);
+  return area;
+}
+
+// Eroding elements: the boundary becomes the edges of one remaining element each, in its
+// counter-clockwise order (a hole's loop then runs clockwise, and the enclosed area is the
+// remaining elements' exactly); the nodal reference areas lose the elements' thirds; the masses
+// stay; a node left without elements is detached and no longer counts in the body's motion; the
+// elements' internal energy is returned.
+TEST(Erosion, BoundaryAreasAndDetachedNodes) {
+  TestMesh mesh;
+  mesh.addRectangle(0, 0, 3e-5, 3e-5, 3, 3, 0.2, 7);
+  fem::Model model = mesh.model(test::oneMaterial("steel"));
+  const fem::Nodes &nd = model.nodes;
+  auto sum = [](const std::vector<double> &v) { return std::accumulate(v.begin(), v.end(), 0.0); };
+  const double mass = sum(nd.mass), area = sum(model.elements.area0);
+  EXPECT_EQ(model.bodies[0].boundary.size(), 2u * 12);
+  model.elements.energy[8] = 1.5, model.elements.energy[9] = 2.5;
+  EXPECT_DOUBLE_EQ(fem::erodeElements(model, {8, 9}), 4.0); // the middle cell: a hole
+  const double hole = model.elements.area0[8] + model.elements.area0[9];
+  EXPECT_EQ(model.bodies[0].boundary.size(), 2u * 16);
+  EXPECT_NEAR(enclosedArea(model, 0), area - hole, 1e-12 * area);
+  EXPECT_NEAR(sum(nd.area0), area - hole, 1e-12 * area);
+  EXPECT_EQ(sum(nd.mass), mass);
+  EXPECT_EQ(model.bodies[0].eroded, 2u);
+  // Every boundary edge is an edge of exactly one remaining element, in the same direction.
+  const auto &b = model.bodies[0].boundary;
+  for (std::size_t k = 0; k < b.size(); k += 2) {
+    int uses = 0;
+    for (std::size_t e = 0; e < model.elements.size(); ++e)
+      for (int i = 0; i < 3 && !model.elements.eroded[e]; ++i)
+        uses += model.elements.node[3 * e + i] == b[k] && model.elements.node[3 * e + (i + 1) % 3] == b[k + 1];
+    EXPECT_EQ(uses, 1) << "edge " << b[k] << "-" << b[k + 1];
+  }
+  // The two elements at the corner node 0: it is left alone, a free mass.
+  const fem::BodyMotion before = fem::bodyMotion(model, 0);
+  fem::erodeElements(model, {0, 1});
+  EXPECT_EQ(nd.detached[0], 1);
+  EXPECT_EQ(std::accumulate(nd.detached.begin(), nd.detached.end(), 0), 1);
+  EXPECT_NEAR(fem::bodyMotion(model, 0).mass, before.mass - nd.mass[0], 1e-15 * mass);
+  EXPECT_NEAR(enclosedArea(model, 0), sum(nd.area0), 1e-12 * area);
 }
 
 TEST(Materials, RegistryAndPresets) {

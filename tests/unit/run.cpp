@@ -17,10 +17,7 @@ namespace {
 
 using test::tinyScene;
 
-test::Result runScene(const ScratchDir &dir, const std::string &scene) {
-  test::writeFile(dir / "scene.toml", scene);
-  return test::runMesopen("run " + (dir / "scene.toml") + " -o " + (dir / "out") + " --quiet");
-}
+using test::runScene;
 
 const char *series_names[] = {"step",
                               "dt",
