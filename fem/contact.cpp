@@ -209,8 +209,8 @@ void Contact::addForces(Model &model, double, double dt) {
   // Narrow phase over the runs of pairs, each with its lists and its hits: taken run by run, the
   // hits come in pair order whatever the number of threads.
   const long runs = static_cast<long>(arenas_.size());
-  std::size_t refreshed = 0, overlapping = 0;
-#pragma omp parallel if (pairs_.size() > 64) reduction(+ : refreshed, overlapping)
+  std::size_t refreshed = 0, overlapping = 0, checks = 0, skipped = 0;
+#pragma omp parallel if (pairs_.size() > 64) reduction(+ : refreshed, overlapping, checks, skipped)
   {
     Scratch scratch;
 #pragma omp for schedule(dynamic, 1)
@@ -228,11 +228,24 @@ void Contact::addForces(Model &model, double, double dt) {
         if (2.0 * ((travel_[pair.a] - pair.travel_a) + (travel_[pair.b] - pair.travel_b)) >
             pair.margin)
           refresh(pair, arena, scratch), ++refreshed;
+        // A side whose nodes were clear of the other body by `clear` stays so while the two
+        // bodies move by less than that together (a node and a boundary point each by at most
+        // sqrt(2) times their body's travel): no contact to look for.
+        const double travel = travel_[pair.a] + travel_[pair.b];
         const std::uint32_t *items = arena.data() + pair.begin;
-        touch(model, pair.a, pair.b, items, items + pair.end[0], items + pair.end[0],
-              items + pair.end[1], dt, hits, scratch);
-        touch(model, pair.b, pair.a, items + pair.end[1], items + pair.end[2],
-              items + pair.end[2], items + pair.end[3], dt, hits, scratch);
+        const std::uint32_t part[5] = {0, pair.end[0], pair.end[1], pair.end[2], pair.end[3]};
+        for (int side = 0; side < 2; ++side) {
+          ++checks;
+          if (2.0 * (travel - pair.clear_travel[side]) < pair.clear[side]) {
+            ++skipped;
+            continue;
+          }
+          pair.clear[side] = touch(model, side ? pair.b : pair.a, side ? pair.a : pair.b,
+                                   items + part[2 * side], items + part[2 * side + 1],
+                                   items + part[2 * side + 1], items + part[2 * side + 2], hits,
+                                   scratch);
+          pair.clear_travel[side] = travel;
+        }
       }
       // The forces after the search: their nodes' masses and velocities, scattered in memory, are
       // then fetched many at once.
@@ -241,6 +254,7 @@ void Contact::addForces(Model &model, double, double dt) {
     }
   }
   stats_.refreshed += refreshed;
+  stats_.checks += checks, stats_.skipped += skipped;
   stats_.pairs = overlapping;
   walls(model, dt, run_hits_.back());
   addHits(model);
@@ -328,6 +342,7 @@ void Contact::refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &sc
   }
   std::copy(items.begin(), items.end(), arena.begin() + pair.begin);
   pair.travel_a = travel_[a], pair.travel_b = travel_[b], pair.margin = margin;
+  pair.clear[0] = pair.clear[1] = 0.0; // other nodes: to be checked
 }
 
 // Appends to scratch.items body A's nodes in the rectangle that are behind their closest segment
@@ -397,8 +412,9 @@ Contact::Closest Contact::closest(const Near &near, double px, double py, double
 
 // Of body `body`'s segments given by their ends, those of nonzero length whose boxes come within
 // its reach (see touch) of the rectangle: into scratch.near, in the given order. Their ends are
-// gathered first, then the geometry of all is computed in one pass (vectorized).
-void Contact::nearSegments(std::size_t body, const std::uint32_t *ends,
+// gathered first, then the geometry of all is computed in one pass (vectorized). Returns the
+// rectangle widened by that reach: a segment not taken lies wholly outside it.
+Contact::Box Contact::nearSegments(std::size_t body, const std::uint32_t *ends,
                            const std::uint32_t *ends_end, const Box &region,
                            Scratch &scratch) const {
   constexpr std::size_t L = Near::lanes;
@@ -438,6 +454,7 @@ void Contact::nearSegments(std::size_t body, const std::uint32_t *ends,
   for (std::size_t i = 0; i < size; ++i)
     count += length[i] > 0.0;
   near.size = size, near.count = count;
+  return wide;
 }
 
 std::size_t Contact::Grid::ix(double x) const {
@@ -556,56 +573,82 @@ void Contact::restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add 
 }
 
 // The boundary nodes of body A that are inside body B, among A's `nodes` and B's `segments` (from
-// the pair's list). A node inside B is in the overlap of the two boxes; the segment that decides
-// is the closest to it.
-void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
-                    const std::uint32_t *nodes_end, const std::uint32_t *ends,
-                    const std::uint32_t *ends_end, double dt, Hits &hits, Scratch &scratch) const {
+// the pair's list), into `hits`. A node inside B is in the overlap of the two boxes; the segment
+// that decides is the closest to it. Returns, when none is in contact, a lower bound on the
+// distance of the listed nodes from B: from the nodes outside the overlap, their distance to B's
+// box; from those in it found outside B, their distance to the closest near segment, or to the
+// edge of the region the near segments cover if that is less (0 where a node touches, is inside,
+// or was judged at a corner alone).
+double Contact::touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
+                      const std::uint32_t *nodes_end, const std::uint32_t *ends,
+                      const std::uint32_t *ends_end, Hits &hits, Scratch &scratch) const {
   // A node inside B is in the overlap of the two boxes: the listed nodes there, if any, are
   // checked against the segments within `reach` of the overlap (a node behind one of them by less
   // than `reach` finds its closest segment among them; deeper contacts are checked by the crossing
   // count).
-  const Box region = boxes_[A].overlap(boxes_[B]);
+  const Box &box = boxes_[B];
+  const Box region = boxes_[A].overlap(box);
   std::vector<std::uint32_t> &candidates = scratch.candidates;
   candidates.clear();
-  for (const std::uint32_t *k = nodes; k != nodes_end; ++k)
-    if (region.contains(points_[*k].x, points_[*k].y))
+  double clear = HUGE_VAL; // squared
+  for (const std::uint32_t *k = nodes; k != nodes_end; ++k) {
+    const Point &p = points_[*k];
+    if (region.contains(p.x, p.y))
       candidates.push_back(*k);
+    else // outside B's box: at least this far from B (the largest of the coordinate gaps)
+      clear = std::min(clear, sq(std::max(std::max(box.x0 - p.x, p.x - box.x1),
+                                          std::max(box.y0 - p.y, p.y - box.y1))));
+  }
   if (candidates.empty())
-    return;
+    return std::sqrt(clear);
   const double h = size_[B];
-  nearSegments(B, ends, ends_end, region, scratch);
+  const Box wide = nearSegments(B, ends, ends_end, region, scratch);
   const Near &near = scratch.near;
   if (near.count == 0)
-    return;
+    return 0.0;
   const double mu = s_.friction[model.bodies[A].material * n_materials_ + model.bodies[B].material];
+  const std::size_t found = hits.found.size();
   for (const std::uint32_t k : candidates) {
     const double px = points_[k].x, py = points_[k].y;
     // The closest point of B's boundary: on a segment's inside (the node is in contact when behind
     // it) or at a corner. Near a convex corner the node is then outside; behind the closest
     // segment's line it may be inside a dented corner, which the crossing count decides.
     const Closest c = closest(near, px, py, nullptr);
-    if (c.segment == no_node)
+    if (c.segment == no_node) {
+      clear = 0.0;
       continue;
+    }
+    // Outside B, the node is as far from it as from the closest near segment, or from the edge
+    // of the region the near segments cover (the segments beyond lie beyond it).
+    const double outside =
+        std::min(c.distance, sq(std::min(std::min(px - wide.x0, wide.x1 - px),
+                                         std::min(py - wide.y0, wide.y1 - py))));
     const Segment s = near[c.segment];
     double depth = -c.g, nx = s.nx, ny = s.ny, w2 = c.along / s.length;
     if (vertexTie(scratch, c, px, py, depth, nx, ny, w2)) { // a node meeting a node
-      if (depth <= touching * h || (depth > check_depth * h && !inside(B, px, py)))
+      if (depth <= touching * h || (depth > check_depth * h && !inside(B, px, py))) {
+        clear = std::min(clear, depth < 0.0 || depth > check_depth * h ? outside : 0.0);
         continue;
+      }
     } else if (c.g >= 0.0) {
+      clear = std::min(clear, c.corner ? 0.0 : outside);
       continue;
     } else if (c.corner) { // pushed out toward the corner
       w2 = c.along < 0.0 ? 0.0 : 1.0;
       const double vx = s.ax + w2 * s.length * s.tx - px, vy = s.ay + w2 * s.length * s.ty - py;
       depth = std::sqrt(vx * vx + vy * vy);
-      if (!(depth > check_depth * h) || !inside(B, px, py)) // clear of the boundary
+      if (!(depth > check_depth * h) || !inside(B, px, py)) { // clear of the boundary
+        clear = std::min(clear, depth > check_depth * h ? outside : 0.0);
         continue;
+      }
       nx = vx / depth, ny = vy / depth;
     } else if (depth <= touching * h || (depth > check_depth * h && !inside(B, px, py))) {
       // touching only; or deeper than a few percent of an element, where a dented grain can put
       // a node outside it behind one of its segments: the crossing count decides
+      clear = std::min(clear, depth > check_depth * h ? outside : 0.0);
       continue;
     }
+    clear = 0.0;
     if (!allowance_.empty() && allowance_[nodes_[k]] > 0.0 &&
         (depth -= allowance_[nodes_[k]]) <= touching * h)
       continue; // an overlap erosion laid bare, still opening
@@ -613,6 +656,7 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
                           near.ends[2 * c.segment], near.ends[2 * c.segment + 1], w2, nx, ny, depth,
                           h, mu});
   }
+  return hits.found.size() > found ? 0.0 : std::sqrt(clear);
 }
 
 // A node as close to both segments that meet at a vertex, its closest point the vertex itself (a

@@ -59,6 +59,7 @@ struct ContactStatistics {
   std::size_t deep = 0;                  // over the run: node-steps deeper than half an element
   std::size_t refreshed = 0;             // over the run: pair lists (re)built
   std::size_t searches = 0;              // over the run: searches for pairs of bodies
+  std::size_t checks = 0, skipped = 0;   // over the run: sides of pairs checked, skipped as clear
   double seconds = 0.0;                  // wall time spent in contact, over the run
 };
 
@@ -104,6 +105,10 @@ private:
     std::uint32_t end[4] = {}; // ends of the four parts, from `begin`
     double travel_a = -std::numeric_limits<double>::infinity(), travel_b = 0.0; // when listed
     double margin = 0.0;
+    // Per side (a's nodes against b, b's against a): a lower bound on the distance of the listed
+    // nodes from the other body when last checked without contact (0: in contact or unknown), and
+    // the two bodies' travel then (see addForces).
+    double clear[2] = {}, clear_travel[2] = {};
   };
   // Bodies in a uniform grid of cells (cell lists), for the broad phase.
   struct Grid {
@@ -179,14 +184,14 @@ private:
   // The near segment closest to (px, py), the first of equals; with `distances`, every lane's
   // squared distance goes there.
   Closest closest(const Near &near, double px, double py, double *distances) const;
-  void nearSegments(std::size_t body, const std::uint32_t *ends, const std::uint32_t *ends_end,
+  Box nearSegments(std::size_t body, const std::uint32_t *ends, const std::uint32_t *ends_end,
                     const Box &region, Scratch &scratch) const;
   void refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &scratch) const;
   std::uint32_t listNear(std::size_t A, std::size_t B, const Box &region, double margin,
                          Scratch &scratch) const;
-  void touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
-             const std::uint32_t *nodes_end, const std::uint32_t *ends, const std::uint32_t *ends_end,
-             double dt, Hits &hits, Scratch &scratch) const;
+  double touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
+               const std::uint32_t *nodes_end, const std::uint32_t *ends,
+               const std::uint32_t *ends_end, Hits &hits, Scratch &scratch) const;
   bool vertexTie(const Scratch &scratch, const Closest &c, double px, double py, double &depth,
                  double &nx, double &ny, double &w2) const;
   bool inside(std::size_t B, double px, double py) const;
