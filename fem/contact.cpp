@@ -631,7 +631,7 @@ double Contact::touch(const Model &model, std::size_t A, std::size_t B, const st
         continue;
       }
     } else if (c.g >= 0.0) {
-      clear = std::min(clear, c.corner ? 0.0 : outside);
+      clear = std::min(clear, outside);
       continue;
     } else if (c.corner) { // pushed out toward the corner
       w2 = c.along < 0.0 ? 0.0 : 1.0;
