@@ -209,8 +209,9 @@ void Contact::addForces(Model &model, double, double dt) {
   // Narrow phase over the runs of pairs, each with its lists and its hits: taken run by run, the
   // hits come in pair order whatever the number of threads.
   const long runs = static_cast<long>(arenas_.size());
-  std::size_t refreshed = 0, overlapping = 0, checks = 0, skipped = 0;
-#pragma omp parallel if (pairs_.size() > 64) reduction(+ : refreshed, overlapping, checks, skipped)
+  std::size_t refreshed = 0, overlapping = 0, checks = 0, skipped = 0, partial = 0;
+#pragma omp parallel if (pairs_.size() > 64) \
+    reduction(+ : refreshed, overlapping, checks, skipped, partial)
   {
     Scratch scratch;
 #pragma omp for schedule(dynamic, 1)
@@ -228,23 +229,24 @@ void Contact::addForces(Model &model, double, double dt) {
         if (2.0 * ((travel_[pair.a] - pair.travel_a) + (travel_[pair.b] - pair.travel_b)) >
             pair.margin)
           refresh(pair, arena, scratch), ++refreshed;
-        // A side whose nodes were clear of the other body by `clear` stays so while the two
-        // bodies move by less than that together (a node and a boundary point each by at most
-        // sqrt(2) times their body's travel): no contact to look for.
+        // A side is looked at if some of its nodes are hot, or the clear ones may have come
+        // into contact (see touch).
         const double travel = travel_[pair.a] + travel_[pair.b];
         const std::uint32_t *items = arena.data() + pair.begin;
         const std::uint32_t part[5] = {0, pair.end[0], pair.end[1], pair.end[2], pair.end[3]};
+        std::uint32_t *hot = arena.data() + pair.begin + pair.end[3];
         for (int side = 0; side < 2; ++side) {
           ++checks;
-          if (2.0 * (travel - pair.clear_travel[side]) < pair.clear[side]) {
+          const bool all = !(travel < pair.until[side]);
+          if (!all && pair.hot[side] == 0) {
             ++skipped;
             continue;
           }
-          pair.clear[side] = touch(model, side ? pair.b : pair.a, side ? pair.a : pair.b,
-                                   items + part[2 * side], items + part[2 * side + 1],
-                                   items + part[2 * side + 1], items + part[2 * side + 2], hits,
-                                   scratch);
-          pair.clear_travel[side] = travel;
+          partial += !all;
+          touch(model, side ? pair.b : pair.a, side ? pair.a : pair.b, items + part[2 * side],
+                items + part[2 * side + 1], items + part[2 * side + 1], items + part[2 * side + 2],
+                travel, pair.until[side], hot + (side ? pair.end[0] : 0), pair.hot[side], hits,
+                scratch);
         }
       }
       // The forces after the search: their nodes' masses and velocities, scattered in memory, are
@@ -254,7 +256,7 @@ void Contact::addForces(Model &model, double, double dt) {
     }
   }
   stats_.refreshed += refreshed;
-  stats_.checks += checks, stats_.skipped += skipped;
+  stats_.checks += checks, stats_.skipped += skipped, stats_.partial += partial;
   stats_.pairs = overlapping;
   walls(model, dt, run_hits_.back());
   addHits(model);
@@ -335,14 +337,16 @@ void Contact::refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &sc
   pair.end[1] = static_cast<std::uint32_t>(items.size());
   pair.end[2] = listNear(b, a, region, margin, scratch);
   pair.end[3] = static_cast<std::uint32_t>(items.size());
-  if (items.size() > pair.capacity) {
+  // after the lists, room for the hot nodes of each side
+  const std::size_t room = items.size() + pair.end[0] + (pair.end[2] - pair.end[1]);
+  if (room > pair.capacity) {
     pair.begin = static_cast<std::uint32_t>(arena.size());
-    pair.capacity = static_cast<std::uint32_t>(items.size() + items.size() / 2 + 8);
+    pair.capacity = static_cast<std::uint32_t>(room + room / 2 + 8);
     arena.resize(arena.size() + pair.capacity);
   }
   std::copy(items.begin(), items.end(), arena.begin() + pair.begin);
   pair.travel_a = travel_[a], pair.travel_b = travel_[b], pair.margin = margin;
-  pair.clear[0] = pair.clear[1] = 0.0; // other nodes: to be checked
+  pair.until[0] = pair.until[1] = 0.0, pair.hot[0] = pair.hot[1] = 0; // all to be looked at
 }
 
 // Appends to scratch.items body A's nodes in the rectangle that are behind their closest segment
@@ -574,81 +578,111 @@ void Contact::restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add 
 
 // The boundary nodes of body A that are inside body B, among A's `nodes` and B's `segments` (from
 // the pair's list), into `hits`. A node inside B is in the overlap of the two boxes; the segment
-// that decides is the closest to it. Returns, when none is in contact, a lower bound on the
-// distance of the listed nodes from B: from the nodes outside the overlap, their distance to B's
-// box; from those in it found outside B, their distance to the closest near segment, or to the
-// edge of the region the near segments cover if that is less (0 where a node touches, is inside,
-// or was judged at a corner alone).
-double Contact::touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
-                      const std::uint32_t *nodes_end, const std::uint32_t *ends,
-                      const std::uint32_t *ends_end, Hits &hits, Scratch &scratch) const {
+// that decides is the closest to it.
+// A node found outside B, at least a distance g from it, stays outside while the two bodies
+// travel together by less than g / 2 (a node and a point of B's boundary move by at most sqrt(2)
+// times their body's travel): it is clear until the pair's travel `travel` now plus g / 2. g is,
+// for a node outside the overlap, its distance to B's box; for one in it, its distance to the
+// closest near segment, or to the edge of the region the near segments cover if that is less.
+// The other nodes (in contact, touching, inside, or at a corner alone) are hot: they are looked at
+// every step. So all nodes are looked at when `travel` reaches `until` (the least travel up to
+// which every node last found clear stays clear), else the `n_hot` nodes in `hot` (positions in
+// `nodes`) alone; both are updated.
+void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
+                    const std::uint32_t *nodes_end, const std::uint32_t *ends,
+                    const std::uint32_t *ends_end, double travel, double &until,
+                    std::uint32_t *hot, std::uint32_t &n_hot, Hits &hits,
+                    Scratch &scratch) const {
   // A node inside B is in the overlap of the two boxes: the listed nodes there, if any, are
   // checked against the segments within `reach` of the overlap (a node behind one of them by less
   // than `reach` finds its closest segment among them; deeper contacts are checked by the crossing
   // count).
   const Box &box = boxes_[B];
   const Box region = boxes_[A].overlap(box);
-  std::vector<std::uint32_t> &candidates = scratch.candidates;
+  std::vector<std::uint32_t> &candidates = scratch.candidates; // positions in `nodes`
   candidates.clear();
-  double clear = HUGE_VAL; // squared
-  for (const std::uint32_t *k = nodes; k != nodes_end; ++k) {
-    const Point &p = points_[*k];
+  const bool all = !(travel < until);
+  double clear = all ? HUGE_VAL : until;
+  auto look = [&](std::uint32_t i) {
+    const Point &p = points_[nodes[i]];
     if (region.contains(p.x, p.y))
-      candidates.push_back(*k);
-    else // outside B's box: at least this far from B (the largest of the coordinate gaps)
-      clear = std::min(clear, sq(std::max(std::max(box.x0 - p.x, p.x - box.x1),
-                                          std::max(box.y0 - p.y, p.y - box.y1))));
-  }
+      candidates.push_back(i);
+    else // outside B's box: at least as far from B as the largest of the coordinate gaps
+      clear = std::min(clear, travel + 0.5 * std::max(std::max(box.x0 - p.x, p.x - box.x1),
+                                                      std::max(box.y0 - p.y, p.y - box.y1)));
+  };
+  if (all)
+    for (std::uint32_t i = 0; i < static_cast<std::uint32_t>(nodes_end - nodes); ++i)
+      look(i);
+  else
+    for (std::uint32_t j = 0; j < n_hot; ++j)
+      look(hot[j]);
+  n_hot = 0;
+  until = clear;
   if (candidates.empty())
-    return std::sqrt(clear);
+    return;
   const double h = size_[B];
   const Box wide = nearSegments(B, ends, ends_end, region, scratch);
   const Near &near = scratch.near;
-  if (near.count == 0)
-    return 0.0;
+  if (near.count == 0) {
+    std::copy(candidates.begin(), candidates.end(), hot);
+    n_hot = static_cast<std::uint32_t>(candidates.size());
+    return;
+  }
   const double mu = s_.friction[model.bodies[A].material * n_materials_ + model.bodies[B].material];
-  const std::size_t found = hits.found.size();
-  for (const std::uint32_t k : candidates) {
+  for (const std::uint32_t i : candidates) {
+    const std::uint32_t k = nodes[i];
     const double px = points_[k].x, py = points_[k].y;
     // The closest point of B's boundary: on a segment's inside (the node is in contact when behind
     // it) or at a corner. Near a convex corner the node is then outside; behind the closest
     // segment's line it may be inside a dented corner, which the crossing count decides.
     const Closest c = closest(near, px, py, nullptr);
     if (c.segment == no_node) {
-      clear = 0.0;
+      hot[n_hot++] = i;
       continue;
     }
     // Outside B, the node is as far from it as from the closest near segment, or from the edge
     // of the region the near segments cover (the segments beyond lie beyond it).
-    const double outside =
-        std::min(c.distance, sq(std::min(std::min(px - wide.x0, wide.x1 - px),
-                                         std::min(py - wide.y0, wide.y1 - py))));
+    auto outside = [&] {
+      const double edge = std::min(std::min(px - wide.x0, wide.x1 - px),
+                                   std::min(py - wide.y0, wide.y1 - py));
+      until = std::min(until, travel + 0.5 * std::min(std::sqrt(c.distance), edge));
+    };
     const Segment s = near[c.segment];
     double depth = -c.g, nx = s.nx, ny = s.ny, w2 = c.along / s.length;
     if (vertexTie(scratch, c, px, py, depth, nx, ny, w2)) { // a node meeting a node
       if (depth <= touching * h || (depth > check_depth * h && !inside(B, px, py))) {
-        clear = std::min(clear, depth < 0.0 || depth > check_depth * h ? outside : 0.0);
+        if (depth < 0.0 || depth > check_depth * h)
+          outside();
+        else
+          hot[n_hot++] = i;
         continue;
       }
     } else if (c.g >= 0.0) {
-      clear = std::min(clear, outside);
+      outside();
       continue;
     } else if (c.corner) { // pushed out toward the corner
       w2 = c.along < 0.0 ? 0.0 : 1.0;
       const double vx = s.ax + w2 * s.length * s.tx - px, vy = s.ay + w2 * s.length * s.ty - py;
       depth = std::sqrt(vx * vx + vy * vy);
       if (!(depth > check_depth * h) || !inside(B, px, py)) { // clear of the boundary
-        clear = std::min(clear, depth > check_depth * h ? outside : 0.0);
+        if (depth > check_depth * h)
+          outside();
+        else
+          hot[n_hot++] = i;
         continue;
       }
       nx = vx / depth, ny = vy / depth;
     } else if (depth <= touching * h || (depth > check_depth * h && !inside(B, px, py))) {
       // touching only; or deeper than a few percent of an element, where a dented grain can put
       // a node outside it behind one of its segments: the crossing count decides
-      clear = std::min(clear, depth > check_depth * h ? outside : 0.0);
+      if (depth > check_depth * h)
+        outside();
+      else
+        hot[n_hot++] = i;
       continue;
     }
-    clear = 0.0;
+    hot[n_hot++] = i;
     if (!allowance_.empty() && allowance_[nodes_[k]] > 0.0 &&
         (depth -= allowance_[nodes_[k]]) <= touching * h)
       continue; // an overlap erosion laid bare, still opening
@@ -656,7 +690,6 @@ double Contact::touch(const Model &model, std::size_t A, std::size_t B, const st
                           near.ends[2 * c.segment], near.ends[2 * c.segment + 1], w2, nx, ny, depth,
                           h, mu});
   }
-  return hits.found.size() > found ? 0.0 : std::sqrt(clear);
 }
 
 // A node as close to both segments that meet at a vertex, its closest point the vertex itself (a

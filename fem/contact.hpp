@@ -60,6 +60,7 @@ struct ContactStatistics {
   std::size_t refreshed = 0;             // over the run: pair lists (re)built
   std::size_t searches = 0;              // over the run: searches for pairs of bodies
   std::size_t checks = 0, skipped = 0;   // over the run: sides of pairs checked, skipped as clear
+  std::size_t partial = 0;               // over the run: sides whose hot nodes alone were looked at
   double seconds = 0.0;                  // wall time spent in contact, over the run
 };
 
@@ -105,10 +106,11 @@ private:
     std::uint32_t end[4] = {}; // ends of the four parts, from `begin`
     double travel_a = -std::numeric_limits<double>::infinity(), travel_b = 0.0; // when listed
     double margin = 0.0;
-    // Per side (a's nodes against b, b's against a): a lower bound on the distance of the listed
-    // nodes from the other body when last checked without contact (0: in contact or unknown), and
-    // the two bodies' travel then (see addForces).
-    double clear[2] = {}, clear_travel[2] = {};
+    // Per side (a's nodes against b, b's against a; see touch): the travel of the two bodies
+    // together up to which its clear nodes need no look, and how many nodes are not clear (hot,
+    // listed in the arena after the pair's lists).
+    double until[2] = {};
+    std::uint32_t hot[2] = {};
   };
   // Bodies in a uniform grid of cells (cell lists), for the broad phase.
   struct Grid {
@@ -189,9 +191,10 @@ private:
   void refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &scratch) const;
   std::uint32_t listNear(std::size_t A, std::size_t B, const Box &region, double margin,
                          Scratch &scratch) const;
-  double touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
-               const std::uint32_t *nodes_end, const std::uint32_t *ends,
-               const std::uint32_t *ends_end, Hits &hits, Scratch &scratch) const;
+  void touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
+             const std::uint32_t *nodes_end, const std::uint32_t *ends, const std::uint32_t *ends_end,
+             double travel, double &until, std::uint32_t *hot, std::uint32_t &n_hot, Hits &hits,
+             Scratch &scratch) const;
   bool vertexTie(const Scratch &scratch, const Closest &c, double px, double py, double &depth,
                  double &nx, double &ny, double &w2) const;
   bool inside(std::size_t B, double px, double py) const;
