@@ -387,29 +387,27 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region,
 // vectorized), then the first of the smallest if it is closer than those before.
 Contact::Closest Contact::closest(const Near &near, double px, double py, double *distances) const {
   constexpr std::size_t L = Near::lanes;
-  double best = std::numeric_limits<double>::infinity();
-  std::uint32_t which = no_node;
+  Closest c;
   for (std::size_t base = 0; base < near.size; base += L) {
-    double d[L];
-    for (std::size_t j = 0; j < L; ++j)
-      d[j] = near[base + j].foot(px, py).distance;
+    double d[L], t[L], g[L];
+    for (std::size_t j = 0; j < L; ++j) {
+      const Segment::Foot f = near[base + j].foot(px, py);
+      d[j] = f.distance, t[j] = f.t, g[j] = f.g;
+    }
     double smallest = std::numeric_limits<double>::infinity();
     for (std::size_t j = 0; j < L; ++j)
       smallest = std::min(smallest, d[j]);
     if (distances)
       std::copy(d, d + L, distances + base);
-    if (smallest < best) {
+    if (smallest < c.distance) {
       unsigned at = 0;
       for (std::size_t j = 0; j < L; ++j)
         at |= static_cast<unsigned>(d[j] == smallest) << j;
-      best = smallest;
-      which = static_cast<std::uint32_t>(base + std::countr_zero(at));
+      const auto j = static_cast<std::uint32_t>(std::countr_zero(at));
+      // beyond an end (Segment::foot's excess > 0)
+      c = {static_cast<std::uint32_t>(base + j), d[j], g[j], t[j],
+           t[j] < 0.0 || t[j] > near.length[base + j]};
     }
-  }
-  Closest c;
-  if (which != no_node) {
-    const Segment::Foot f = near[which].foot(px, py);
-    c = {which, f.distance, f.g, f.t, f.excess > 0.0};
   }
   return c;
 }
@@ -702,11 +700,12 @@ bool Contact::vertexTie(const Scratch &scratch, const Closest &c, double px, dou
                         double &depth, double &nx, double &ny, double &w2) const {
   constexpr double tie = 1e-9; // relative: the same distance but for round-off
   const Near &near = scratch.near;
-  const Segment s = near[c.segment];
-  const bool at_start = std::abs(c.along) <= tie * s.length;
-  const bool at_end = std::abs(c.along - s.length) <= tie * s.length;
+  const double length = near.length[c.segment];
+  const bool at_start = std::abs(c.along) <= tie * length;
+  const bool at_end = std::abs(c.along - length) <= tie * length;
   if (at_start == at_end)
     return false;
+  const Segment s = near[c.segment];
   const std::uint32_t vertex = near.ends[2 * c.segment + (at_start ? 0 : 1)];
   for (std::uint32_t j = 0; j < near.size; ++j) {
     if (j == c.segment || !near.in(j) || near.ends[2 * j + (at_start ? 1 : 0)] != vertex)
