@@ -27,7 +27,10 @@
 // and refreshed when the two bodies may have moved by a quarter of that (a bound on the
 // displacement of every boundary node, summed step by step): a step looks at a handful of nodes
 // and segments per pair, in one stream of memory per run of pairs, and finds exactly what a search of
-// the whole boundaries would.
+// the whole boundaries would. Of those nodes, one found outside the other body by a gap g stays
+// outside while the two bodies move by less than g / 2 together: such clear nodes are looked at
+// again only then, the others (hot: in contact, touching) every step; a side of a pair with no hot
+// node and no clear node due is skipped.
 #pragma once
 
 #include "solver.hpp"
