@@ -657,7 +657,12 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
         continue;
       }
     } else if (c.g >= 0.0) {
-      outside();
+      // in front of the closest segment's line; at a corner alone (the node as close to the
+      // other segment of that vertex, which round-off did not take), it may be inside a dent
+      if (c.corner)
+        hot[n_hot++] = i;
+      else
+        outside();
       continue;
     } else if (c.corner) { // pushed out toward the corner
       w2 = c.along < 0.0 ? 0.0 : 1.0;
