@@ -174,9 +174,10 @@ double Contact::penetration(std::size_t B, double px, double py) const {
   for (std::size_t k = segment_begin_[B]; k < segment_begin_[B + 1]; ++k) {
     const Point &a = points_[segment_ends_[2 * k]], &b = points_[segment_ends_[2 * k + 1]];
     const double dx = b.x - a.x, dy = b.y - a.y, length = std::sqrt(dx * dx + dy * dy);
+    const double inv = 1.0 / length; // as nearSegments computes it
     if (length > 0.0) // outward normal: the tangent turned right (the boundary runs ccw)
-      closest = std::min(closest, Segment{a.x, a.y, dx / length, dy / length, length, dy / length,
-                                          -dx / length}.foot(px, py).distance);
+      closest = std::min(closest, Segment{a.x, a.y, dx * inv, dy * inv, length, dy * inv,
+                                          -dx * inv}.foot(px, py).distance);
   }
   return std::sqrt(closest);
 }
