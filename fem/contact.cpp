@@ -149,6 +149,7 @@ void Contact::allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &bef
       if (a.node == node)
         a.rate = depth / release_steps;
   };
+  Scratch scratch;
   for (const Pair &pair : pairs_) {
     if (pair.a != C && pair.b != C)
       continue;
@@ -156,30 +157,24 @@ void Contact::allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &bef
     const Box region = boxes_[C].overlap(boxes_[B]);
     for (std::size_t k = node_begin_[B]; k < node_begin_[B + 1]; ++k)
       if (region.contains(points_[k].x, points_[k].y))
-        if (const double d = penetration(C, points_[k].x, points_[k].y); d > check_depth * size_[C])
+        if (const double d = penetration(C, points_[k].x, points_[k].y, scratch); d > check_depth * size_[C])
           allow(nodes_[k], d);
     for (std::size_t k = node_begin_[C]; k < node_begin_[C + 1]; ++k)
       if (region.contains(points_[k].x, points_[k].y) &&
           !std::binary_search(before.begin(), before.end(), nodes_[k]))
-        if (const double d = penetration(B, points_[k].x, points_[k].y); d > check_depth * size_[B])
+        if (const double d = penetration(B, points_[k].x, points_[k].y, scratch); d > check_depth * size_[B])
           allow(nodes_[k], d);
   }
 }
 
 // How deep (px, py) lies inside body B: its distance to B's boundary, 0 outside.
-double Contact::penetration(std::size_t B, double px, double py) const {
+double Contact::penetration(std::size_t B, double px, double py, Scratch &scratch) const {
   if (!inside(B, px, py))
     return 0.0;
-  double closest = HUGE_VAL;
-  for (std::size_t k = segment_begin_[B]; k < segment_begin_[B + 1]; ++k) {
-    const Point &a = points_[segment_ends_[2 * k]], &b = points_[segment_ends_[2 * k + 1]];
-    const double dx = b.x - a.x, dy = b.y - a.y, length = std::sqrt(dx * dx + dy * dy);
-    const double inv = 1.0 / length; // as nearSegments computes it
-    if (length > 0.0) // outward normal: the tangent turned right (the boundary runs ccw)
-      closest = std::min(closest, Segment{a.x, a.y, dx * inv, dy * inv, length, dy * inv,
-                                          -dx * inv}.foot(px, py).distance);
-  }
-  return std::sqrt(closest);
+  // every segment of B lies in its box
+  nearSegments(B, segment_ends_.data() + 2 * segment_begin_[B],
+               segment_ends_.data() + 2 * segment_begin_[B + 1], boxes_[B], scratch);
+  return std::sqrt(closest(scratch.near, px, py, nullptr).distance);
 }
 
 void Contact::addForces(Model &model, double, double dt) {
@@ -210,9 +205,8 @@ void Contact::addForces(Model &model, double, double dt) {
   // Narrow phase over the runs of pairs, each with its lists and its hits: taken run by run, the
   // hits come in pair order whatever the number of threads.
   const long runs = static_cast<long>(arenas_.size());
-  std::size_t refreshed = 0, overlapping = 0, checks = 0, skipped = 0, partial = 0;
-#pragma omp parallel if (pairs_.size() > 64) \
-    reduction(+ : refreshed, overlapping, checks, skipped, partial)
+  std::size_t refreshed = 0, overlapping = 0, skipped = 0, partial = 0;
+#pragma omp parallel if (pairs_.size() > 64) reduction(+ : refreshed, overlapping, skipped, partial)
   {
     Scratch scratch;
 #pragma omp for schedule(dynamic, 1)
@@ -237,7 +231,6 @@ void Contact::addForces(Model &model, double, double dt) {
         const std::uint32_t part[5] = {0, pair.end[0], pair.end[1], pair.end[2], pair.end[3]};
         std::uint32_t *hot = arena.data() + pair.begin + pair.end[3];
         for (int side = 0; side < 2; ++side) {
-          ++checks;
           const bool all = !(travel < pair.until[side]);
           if (!all && pair.hot[side] == 0) {
             ++skipped;
@@ -257,7 +250,7 @@ void Contact::addForces(Model &model, double, double dt) {
     }
   }
   stats_.refreshed += refreshed;
-  stats_.checks += checks, stats_.skipped += skipped, stats_.partial += partial;
+  stats_.sides += 2 * overlapping, stats_.skipped += skipped, stats_.partial += partial;
   stats_.pairs = overlapping;
   walls(model, dt, run_hits_.back());
   addHits(model);

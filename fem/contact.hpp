@@ -62,7 +62,7 @@ struct ContactStatistics {
   std::size_t deep = 0;                  // over the run: node-steps deeper than half an element
   std::size_t refreshed = 0;             // over the run: pair lists (re)built
   std::size_t searches = 0;              // over the run: searches for pairs of bodies
-  std::size_t checks = 0, skipped = 0;   // over the run: sides of pairs checked, skipped as clear
+  std::size_t sides = 0, skipped = 0;    // over the run: sides of overlapping pairs, skipped as clear
   std::size_t partial = 0;               // over the run: sides whose hot nodes alone were looked at
   double seconds = 0.0;                  // wall time spent in contact, over the run
 };
@@ -127,7 +127,6 @@ private:
 
   void takeBoundaries(const Model &model);
   void allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &before);
-  double penetration(std::size_t B, double px, double py) const;
   void measure(const Model &model, std::size_t body);
   void addHits(Model &model);
   void findPairs();
@@ -192,6 +191,7 @@ private:
   Box nearSegments(std::size_t body, const std::uint32_t *ends, const std::uint32_t *ends_end,
                     const Box &region, Scratch &scratch) const;
   void refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &scratch) const;
+  double penetration(std::size_t B, double px, double py, Scratch &scratch) const;
   std::uint32_t listNear(std::size_t A, std::size_t B, const Box &region, double margin,
                          Scratch &scratch) const;
   void touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,

@@ -281,9 +281,9 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
                     {"deep_node_steps", c.deep},
                     {"last_step_pairs", c.pairs},
                     {"pair_sides_skipped_as_clear",
-                     static_cast<double>(c.skipped) / std::max<double>(c.checks, 1.0)},
+                     static_cast<double>(c.skipped) / std::max<double>(c.sides, 1.0)},
                     {"pair_sides_hot_nodes_only",
-                     static_cast<double>(c.partial) / std::max<double>(c.checks, 1.0)},
+                     static_cast<double>(c.partial) / std::max<double>(c.sides, 1.0)},
                     {"last_step_contacts", c.contacts}};
   }
   j["projectile"] = {{"depth", series.last("projectile/depth")},
