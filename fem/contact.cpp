@@ -300,21 +300,21 @@ void Contact::addHits(Model &model) {
 }
 
 // A body's boundary node positions and its bounding box now, and how far its nodes
-// moved since the last call (the largest coordinate change, added to travel_).
+// moved since the last call (the largest distance, added to travel_).
 void Contact::measure(const Model &model, std::size_t b) {
   const Nodes &nd = model.nodes;
   Box box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-  double moved = 0.0;
+  double moved2 = 0.0;
   for (std::size_t k = node_begin_[b]; k < node_begin_[b + 1]; ++k) {
     const std::uint32_t a = nodes_[k];
     const double x = nd.x[a], y = nd.y[a];
-    moved = std::max(moved, std::max(std::abs(x - points_[k].x), std::abs(y - points_[k].y)));
+    moved2 = std::max(moved2, sq(x - points_[k].x) + sq(y - points_[k].y));
     points_[k] = {x, y};
     box.x0 = std::min(box.x0, x), box.x1 = std::max(box.x1, x);
     box.y0 = std::min(box.y0, y), box.y1 = std::max(box.y1, y);
   }
   boxes_[b] = box;
-  travel_[b] += moved;
+  travel_[b] += std::sqrt(moved2);
 }
 
 // A pair's lists, taken in the overlap of the two boxes widened by the margin: the nodes of each
@@ -436,7 +436,7 @@ Contact::Box Contact::nearSegments(std::size_t body, const std::uint32_t *ends,
     near.ends[2 * i] = near.ends[2 * i + 1] = no_node;
   }
   std::size_t count = 0;
-#pragma omp simd
+#pragma omp simd reduction(+ : count)
   for (std::size_t i = 0; i < size; ++i) {
     const double x0 = ax[i], y0 = ay[i], x1 = tx[i], y1 = ty[i], dx = x1 - x0, dy = y1 - y0;
     const double l = std::sqrt(dx * dx + dy * dy), inv = l > 0.0 ? 1.0 / l : 0.0;
@@ -446,9 +446,8 @@ Contact::Box Contact::nearSegments(std::size_t body, const std::uint32_t *ends,
     ax[i] = in ? x0 : Near::far, ay[i] = in ? y0 : 0.0;
     tx[i] = in ? dx * inv : 1.0, ty[i] = in ? dy * inv : 0.0, length[i] = in ? l : 0.0;
     nx[i] = in ? dy * inv : 0.0, ny[i] = in ? -dx * inv : -1.0;
+    count += in;
   }
-  for (std::size_t i = 0; i < size; ++i)
-    count += length[i] > 0.0;
   near.size = size, near.count = count;
   return wide;
 }
@@ -572,11 +571,11 @@ void Contact::restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add 
 // the pair's list), into `hits`. A node inside B is in the overlap of the two boxes; the segment
 // that decides is the closest to it.
 // A node found outside B, at least a distance g from it, stays outside while the two bodies
-// travel together by less than g / 2 (a node and a point of B's boundary move by at most sqrt(2)
-// times their body's travel): it is clear until the pair's travel `travel` now plus g / 2. g is,
+// travel together by less than g (a node and a point of B's boundary move by at most their
+// body's travel): it is clear until the pair's travel `travel` now plus g. g is,
 // for a node outside the overlap, its distance to B's box; for one in it, its distance to the
 // closest near segment, or to the edge of the region the near segments cover if that is less.
-// The other nodes (in contact, touching, inside, or at a corner alone) are hot: they are looked at
+// The other nodes (in contact, touching, or by a vertex whose other segment is not near) are hot: they are looked at
 // every step. So all nodes are looked at when `travel` reaches `until` (the least travel up to
 // which every node last found clear stays clear), else the `n_hot` nodes in `hot` (positions in
 // `nodes`) alone; both are updated.
@@ -600,8 +599,8 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
     if (region.contains(p.x, p.y))
       candidates.push_back(i);
     else // outside B's box: at least as far from B as the largest of the coordinate gaps
-      clear = std::min(clear, travel + 0.5 * std::max(std::max(box.x0 - p.x, p.x - box.x1),
-                                                      std::max(box.y0 - p.y, p.y - box.y1)));
+      clear = std::min(clear, travel + std::max(std::max(box.x0 - p.x, p.x - box.x1),
+                                                std::max(box.y0 - p.y, p.y - box.y1)));
   };
   if (all)
     for (std::uint32_t i = 0; i < static_cast<std::uint32_t>(nodes_end - nodes); ++i)
@@ -626,51 +625,34 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
     const std::uint32_t k = nodes[i];
     const double px = points_[k].x, py = points_[k].y;
     // The closest point of B's boundary: on a segment's inside (the node is in contact when behind
-    // it) or at a corner. Near a convex corner the node is then outside; behind the closest
-    // segment's line it may be inside a dented corner, which the crossing count decides.
-    const Closest c = closest(near, px, py, nullptr);
+    // it) or a vertex (when behind its vertex normal; see atVertex).
+    Closest c = closest(near, px, py, nullptr);
     if (c.segment == no_node) {
       hot[n_hot++] = i;
       continue;
     }
-    // Outside B, the node is as far from it as from the closest near segment, or from the edge
+    // w2: the weight of the segment's end, set if the node meets a vertex, else along / length
+    double depth = 0.0, nx = 0.0, ny = 0.0, w2 = -1.0;
+    const At at = atVertex(near, c, px, py, depth, nx, ny, w2);
+    if (at == At::unknown) { // beyond a segment's end, the other segment there not near
+      hot[n_hot++] = i;
+      continue;
+    }
+    // Outside B, the node is as far from it as from the closest point found, or from the edge
     // of the region the near segments cover (the segments beyond lie beyond it).
     auto outside = [&] {
       const double edge = std::min(std::min(px - wide.x0, wide.x1 - px),
                                    std::min(py - wide.y0, wide.y1 - py));
-      until = std::min(until, travel + 0.5 * std::min(std::sqrt(c.distance), edge));
+      until = std::min(until, travel + std::min(std::sqrt(c.distance), edge));
     };
     const Segment s = near[c.segment];
-    double depth = -c.g, nx = s.nx, ny = s.ny, w2 = c.along / s.length;
-    if (vertexTie(scratch, c, px, py, depth, nx, ny, w2)) { // a node meeting a node
-      if (depth <= touching * h || (depth > check_depth * h && !inside(B, px, py))) {
-        if (depth < 0.0 || depth > check_depth * h)
-          outside();
-        else
-          hot[n_hot++] = i;
-        continue;
-      }
-    } else if (c.g >= 0.0) {
-      // in front of the closest segment's line; at a corner alone (the node as close to the
-      // other segment of that vertex, which round-off did not take), it may be inside a dent
-      if (c.corner)
-        hot[n_hot++] = i;
-      else
-        outside();
+    if (at == At::segment)
+      depth = -c.g, nx = s.nx, ny = s.ny;
+    if (depth < 0.0) { // in front of the closest segment or vertex
+      outside();
       continue;
-    } else if (c.corner) { // pushed out toward the corner
-      w2 = c.along < 0.0 ? 0.0 : 1.0;
-      const double vx = s.ax + w2 * s.length * s.tx - px, vy = s.ay + w2 * s.length * s.ty - py;
-      depth = std::sqrt(vx * vx + vy * vy);
-      if (!(depth > check_depth * h) || !inside(B, px, py)) { // clear of the boundary
-        if (depth > check_depth * h)
-          outside();
-        else
-          hot[n_hot++] = i;
-        continue;
-      }
-      nx = vx / depth, ny = vy / depth;
-    } else if (depth <= touching * h || (depth > check_depth * h && !inside(B, px, py))) {
+    }
+    if (depth <= touching * h || (depth > check_depth * h && !inside(B, px, py))) {
       // touching only; or deeper than a few percent of an element, where a dented grain can put
       // a node outside it behind one of its segments: the crossing count decides
       if (depth > check_depth * h)
@@ -684,43 +666,52 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
         (depth -= allowance_[nodes_[k]]) <= touching * h)
       continue; // an overlap erosion laid bare, still opening
     hits.found.push_back({static_cast<std::uint32_t>(A), k, static_cast<std::uint32_t>(B),
-                          near.ends[2 * c.segment], near.ends[2 * c.segment + 1], w2, nx, ny, depth,
+                          near.ends[2 * c.segment], near.ends[2 * c.segment + 1],
+                          w2 < 0.0 ? c.along / s.length : w2, nx, ny, depth,
                           h, mu});
   }
 }
 
-// A node as close to both segments that meet at a vertex, its closest point the vertex itself (a
-// node meeting a node of a conforming face): the vertex normal, the mean of the two segments'
-// normals, the depth along it, the reaction on the vertex alone. Taking the first of the two
-// segments instead (and, by round-off, its inside or its corner) would depend on the order of the
-// list, and the two passes of a mirror-symmetric impact would differ. False when the closest point
-// is not such a vertex.
-bool Contact::vertexTie(const Scratch &scratch, const Closest &c, double px, double py,
-                        double &depth, double &nx, double &ny, double &w2) const {
-  constexpr double tie = 1e-9; // relative: the same distance but for round-off
-  const Near &near = scratch.near;
+// The closest point when the foot on the closest segment c falls at one of its ends V (within
+// `tie` of it, or beyond): V itself if the foot on the other segment at V falls at V or beyond it
+// too, else the inside of that other segment (as close as c or closer: round-off chose c), which
+// c then becomes (At::segment). At V, the node is behind B's boundary by its depth along V's
+// normal, the mean of the two segments' normals (At::vertex; depth < 0: in front), and the
+// reaction goes to V alone. The pseudo-normal decides inside or outside exactly for every point
+// whose closest point is V (Baerentzen & Aanaes 2005, IEEE TVCG 11(3), in 2D), where the side of
+// either segment's line can fail (a node in a dent on the line of one of its segments beyond V is
+// at g = 0 from it). The choice depends on the two feet alone, not on which of two segments as
+// close round-off took first: the two passes of a mirror-symmetric impact, whose lists run in
+// opposite orders, agree (a node meeting a node of a conforming face is at V of both).
+// At::unknown: c's foot is beyond V and the other segment is not near.
+Contact::At Contact::atVertex(const Near &near, Closest &c, double px, double py, double &depth,
+                              double &nx, double &ny, double &w2) const {
+  constexpr double tie = 1e-9; // relative: at the end but for round-off
   const double length = near.length[c.segment];
-  const bool at_start = std::abs(c.along) <= tie * length;
-  const bool at_end = std::abs(c.along - length) <= tie * length;
-  if (at_start == at_end)
-    return false;
-  const Segment s = near[c.segment];
+  const bool at_start = c.along < 0.5 * length;
+  if (at_start ? c.along > tie * length : c.along < (1.0 - tie) * length)
+    return At::segment;
   const std::uint32_t vertex = near.ends[2 * c.segment + (at_start ? 0 : 1)];
   for (std::uint32_t j = 0; j < near.size; ++j) {
     if (j == c.segment || !near.in(j) || near.ends[2 * j + (at_start ? 1 : 0)] != vertex)
       continue;
     const Segment o = near[j];
-    if (std::abs(o.foot(px, py).distance - c.distance) > tie * c.distance)
-      return false;
+    const Segment::Foot f = o.foot(px, py);
+    if (at_start ? f.t < (1.0 - tie) * o.length : f.t > tie * o.length) {
+      c = {j, f.distance, f.g, f.t, false};
+      return At::segment;
+    }
+    const Segment s = near[c.segment];
     const double mx = s.nx + o.nx, my = s.ny + o.ny, norm = std::sqrt(mx * mx + my * my);
-    if (!(norm > 0.0))
-      return false;
+    if (!(norm > 0.0)) // the two segments fold back onto each other
+      break;
     nx = mx / norm, ny = my / norm;
     depth = -((px - points_[vertex].x) * nx + (py - points_[vertex].y) * ny);
     w2 = at_start ? 0.0 : 1.0;
-    return true;
+    c.distance = sq(px - points_[vertex].x) + sq(py - points_[vertex].y);
+    return At::vertex;
   }
-  return false;
+  return c.corner ? At::unknown : At::segment;
 }
 
 // Whether (px, py) lies inside body B's boundary polygon: the number of boundary segments a ray

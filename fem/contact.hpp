@@ -28,7 +28,7 @@
 // displacement of every boundary node, summed step by step): a step looks at a handful of nodes
 // and segments per pair, in one stream of memory per run of pairs, and finds exactly what a search of
 // the whole boundaries would. Of those nodes, one found outside the other body by a gap g stays
-// outside while the two bodies move by less than g / 2 together: such clear nodes are looked at
+// outside while the two bodies move by less than g together: such clear nodes are looked at
 // again only then, the others (hot: in contact, touching) every step; a side of a pair with no hot
 // node and no clear node due is skipped.
 #pragma once
@@ -198,8 +198,9 @@ private:
              const std::uint32_t *nodes_end, const std::uint32_t *ends, const std::uint32_t *ends_end,
              double travel, double &until, std::uint32_t *hot, std::uint32_t &n_hot, Hits &hits,
              Scratch &scratch) const;
-  bool vertexTie(const Scratch &scratch, const Closest &c, double px, double py, double &depth,
-                 double &nx, double &ny, double &w2) const;
+  enum class At { segment, vertex, unknown }; // see atVertex
+  At atVertex(const Near &near, Closest &c, double px, double py, double &depth, double &nx,
+              double &ny, double &w2) const;
   bool inside(std::size_t B, double px, double py) const;
   void walls(const Model &model, double dt, Hits &hits) const;
   void hit(const Model &model, const Found &f, double dt, Hits &hits) const;
