@@ -73,7 +73,7 @@ TEST(Contact, SlidingBlockDeceleratesAtMuG) {
 // (1e-9 of the velocity scale; at 200 m/s the impact leaves the grains plastically deformed, at
 // 1500 m/s, the thesis's fastest, crushed). Their faces meet node on node: a node's closest point
 // is then a vertex of the other face, at the same distance from both its segments up to round-off;
-// before the vertex normal (Contact::vertexTie) the pass took the first segment of its list, or by
+// before the vertex normal (Contact::atVertex) the pass took the first segment of its list, or by
 // round-off its corner, and the mirror error reached 2e-2. With contact stiffness kappa >= 0.7 the
 // mirror error grows to 1e-1: the doubled stiffness of node-on-node contact is then beyond the
 // explicit limit.
