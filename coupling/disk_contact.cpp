@@ -1,0 +1,176 @@
+#include "disk_contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace mesopen::coupling {
+
+namespace {
+constexpr std::size_t max_cells = 1u << 22;
+} // namespace
+
+DiskContact::DiskContact(const fem::Model &model, DiskContactSettings settings)
+    : s_(std::move(settings)) {
+  if (s_.friction.size() != model.bodies.size())
+    throw std::invalid_argument("DiskContact: one friction coefficient per FE body needed");
+  boundaryChanged(model);
+}
+
+void DiskContact::boundaryChanged(const fem::Model &model) {
+  const fem::Nodes &nd = model.nodes;
+  size_.assign(model.bodies.size(), 0.0);
+  fe_bodies_.clear();
+  for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+    const auto &edges = model.bodies[b].boundary;
+    for (std::size_t e = 0; e + 1 < edges.size(); e += 2)
+      size_[b] = std::max(size_[b], std::hypot(nd.x[edges[e + 1]] - nd.x[edges[e]],
+                                               nd.y[edges[e + 1]] - nd.y[edges[e]]));
+    if (!edges.empty())
+      fe_bodies_.push_back(static_cast<std::uint32_t>(b));
+  }
+}
+
+// The closest point of the body's boundary to (cx, cy), and the side: at a segment's inside by
+// its outward normal (the tangent turned right: boundaries run counter-clockwise), at a vertex by
+// the vertex's pseudo-normal, the sum of its two segments' normals.
+DiskContact::Closest DiskContact::closest(const fem::Model &model, std::size_t body, double cx,
+                                          double cy) const {
+  const fem::Nodes &nd = model.nodes;
+  const auto &edges = model.bodies[body].boundary;
+  double best = std::numeric_limits<double>::infinity(), best_t = 0.0, best_length = 0.0;
+  std::size_t best_edge = 0;
+  for (std::size_t e = 0; e < edges.size(); e += 2) {
+    const double ax = nd.x[edges[e]], ay = nd.y[edges[e]];
+    const double dx = nd.x[edges[e + 1]] - ax, dy = nd.y[edges[e + 1]] - ay;
+    const double length = std::sqrt(dx * dx + dy * dy);
+    if (!(length > 0.0))
+      continue;
+    const double t = std::clamp(((cx - ax) * dx + (cy - ay) * dy) / length, 0.0, length);
+    const double qx = ax + t * dx / length - cx, qy = ay + t * dy / length - cy;
+    const double d2 = qx * qx + qy * qy;
+    if (d2 < best)
+      best = d2, best_t = t, best_length = length, best_edge = e;
+  }
+  Closest c;
+  c.s1 = edges[best_edge], c.s2 = edges[best_edge + 1];
+  c.w = best_t / best_length;
+  c.distance = std::sqrt(best);
+  const double ax = nd.x[c.s1], ay = nd.y[c.s1], bx = nd.x[c.s2], by = nd.y[c.s2];
+  // the segment's outward normal, or the vertex's pseudo-normal
+  double mx = (by - ay) / best_length, my = -(bx - ax) / best_length;
+  if (best_t == 0.0 || best_t == best_length) {
+    const std::uint32_t vertex = best_t == 0.0 ? c.s1 : c.s2;
+    for (std::size_t e = 0; e < edges.size(); e += 2) {
+      if (e == best_edge || edges[e + (best_t == 0.0 ? 1 : 0)] != vertex)
+        continue;
+      const double ox = nd.x[edges[e + 1]] - nd.x[edges[e]], oy = nd.y[edges[e + 1]] - nd.y[edges[e]];
+      const double ol = std::sqrt(ox * ox + oy * oy);
+      if (ol > 0.0)
+        mx += oy / ol, my -= ox / ol;
+      break;
+    }
+  }
+  const double qx = ax + c.w * (bx - ax), qy = ay + c.w * (by - ay);
+  const double vx = cx - qx, vy = cy - qy;
+  const bool outside = vx * mx + vy * my >= 0.0;
+  if (c.distance > 0.0) {
+    const double sign = outside ? 1.0 : -1.0;
+    c.nx = sign * vx / c.distance, c.ny = sign * vy / c.distance;
+  } else {
+    const double norm = std::hypot(mx, my);
+    c.nx = mx / norm, c.ny = my / norm;
+  }
+  if (!outside)
+    c.distance = -c.distance; // the centre inside the body
+  return c;
+}
+
+void DiskContact::addForces(fem::Model &model, const Particles &disks, ParticleForces &forces,
+                            double dt) {
+  fem::Nodes &nd = model.nodes;
+  const std::size_t n = disks.size();
+  stats_.contacts = 0;
+  if (n == 0 || fe_bodies_.empty())
+    return;
+  // The disks in a grid of cells as wide as the largest disk.
+  double r_max = 0.0, x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+  for (std::size_t i = 0; i < n; ++i) {
+    r_max = std::max(r_max, disks.radius[i]);
+    x0 = std::min(x0, disks.x[i]), x1 = std::max(x1, disks.x[i]);
+    y0 = std::min(y0, disks.y[i]), y1 = std::max(y1, disks.y[i]);
+  }
+  double cell = std::max(2.0 * r_max, 1e-12);
+  std::size_t gx = 0, gy = 0;
+  for (;; cell *= 2.0) {
+    gx = static_cast<std::size_t>((x1 - x0) / cell) + 1, gy = static_cast<std::size_t>((y1 - y0) / cell) + 1;
+    if (gx * gy <= max_cells)
+      break;
+  }
+  auto cellOf = [&](std::size_t i) {
+    const auto ix = std::min(gx - 1, static_cast<std::size_t>((disks.x[i] - x0) / cell));
+    const auto iy = std::min(gy - 1, static_cast<std::size_t>((disks.y[i] - y0) / cell));
+    return iy * gx + ix;
+  };
+  cell_start_.assign(gx * gy + 1, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    ++cell_start_[cellOf(i) + 1];
+  for (std::size_t c = 0; c < gx * gy; ++c)
+    cell_start_[c + 1] += cell_start_[c];
+  cell_disks_.resize(n);
+  {
+    std::vector<std::size_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+    for (std::size_t i = 0; i < n; ++i)
+      cell_disks_[fill[cellOf(i)]++] = static_cast<std::uint32_t>(i);
+  }
+
+  const double kappa = 2.0 * s_.stiffness, zeta_c = 2.0 * s_.damping * std::sqrt(kappa);
+  for (const std::uint32_t b : fe_bodies_) {
+    const auto &edges = model.bodies[b].boundary;
+    Box box{INFINITY, INFINITY, -INFINITY, -INFINITY};
+    for (const std::uint32_t a : edges)
+      box = {std::min(box.x0, nd.x[a]), std::min(box.y0, nd.y[a]), std::max(box.x1, nd.x[a]),
+             std::max(box.y1, nd.y[a])};
+    if (box.x1 + r_max < x0 || box.x0 - r_max > x1 || box.y1 + r_max < y0 || box.y0 - r_max > y1)
+      continue;
+    const auto ix0 = static_cast<std::size_t>(std::max(0.0, (box.x0 - r_max - x0) / cell));
+    const auto iy0 = static_cast<std::size_t>(std::max(0.0, (box.y0 - r_max - y0) / cell));
+    const auto ix1 = std::min(gx - 1, static_cast<std::size_t>(std::max(0.0, (box.x1 + r_max - x0) / cell)));
+    const auto iy1 = std::min(gy - 1, static_cast<std::size_t>(std::max(0.0, (box.y1 + r_max - y0) / cell)));
+    for (std::size_t iy = iy0; iy <= iy1; ++iy)
+      for (std::size_t ix = ix0; ix <= ix1; ++ix)
+        for (std::size_t k = cell_start_[iy * gx + ix]; k < cell_start_[iy * gx + ix + 1]; ++k) {
+          const std::uint32_t i = cell_disks_[k];
+          const double cx = disks.x[i], cy = disks.y[i], r = disks.radius[i];
+          if (cx + r < box.x0 || cx - r > box.x1 || cy + r < box.y0 || cy - r > box.y1)
+            continue;
+          const Closest c = closest(model, b, cx, cy);
+          const double depth = r - c.distance; // c.distance < 0: the centre inside
+          if (!(depth > 0.0))
+            continue;
+          // relative velocity of the disk's contact point to the boundary point
+          const double w1 = 1.0 - c.w, w2 = c.w;
+          const double om = disks.omega[i];
+          const double vx = disks.vx[i] + om * r * c.ny - (w1 * nd.vx[c.s1] + w2 * nd.vx[c.s2]);
+          const double vy = disks.vy[i] - om * r * c.nx - (w1 * nd.vy[c.s1] + w2 * nd.vy[c.s2]);
+          const double vn = vx * c.nx + vy * c.ny; // > 0: separating
+          const double m = disks.mass[i], m_seg = w1 * nd.mass[c.s1] + w2 * nd.mass[c.s2];
+          const double m_eff = m * m_seg / (m + m_seg), m_t = (m / 3.0) * m_seg / (m / 3.0 + m_seg);
+          const double fn = std::max(0.0, m_eff / dt * (kappa * depth / dt - zeta_c * vn));
+          const double tx = vx - vn * c.nx, ty = vy - vn * c.ny, slip = std::sqrt(tx * tx + ty * ty);
+          const double ft = slip > 0.0 ? std::min(s_.friction[b] * fn, m_t * slip / dt) / slip : 0.0;
+          const double fx = fn * c.nx - ft * tx, fy = fn * c.ny - ft * ty;
+          const double torque = -r * (c.nx * fy - c.ny * fx);
+          forces.fx[i] += fx, forces.fy[i] += fy, forces.torque[i] += torque;
+          nd.addExternal(c.s1, -w1 * fx, -w1 * fy, w1 * ft * tx, w1 * ft * ty);
+          nd.addExternal(c.s2, -w2 * fx, -w2 * fy, w2 * ft * tx, w2 * ft * ty);
+          model.wake(b);
+          stats_.work_on_disks += dt * (fx * disks.vx[i] + fy * disks.vy[i] + torque * om);
+          stats_.deepest = std::max(stats_.deepest, depth / size_[b]);
+          ++stats_.contacts;
+        }
+  }
+}
+
+} // namespace mesopen::coupling

@@ -1,0 +1,68 @@
+// Contact between the FE bodies' boundaries and DEM disks, with the law of FE-FE contact
+// (fem/contact.hpp): a penalty tied to the masses and the step, damping on approach, Coulomb
+// friction capped at the force that stops the slip in one step.
+//   A disk of centre c, radius r against a body: q the closest point of the body's boundary to c,
+//   on segment (s1, s2) at weight w of s2; n the unit normal from the body to the disk; overlap
+//   d = r - |c - q| (or r + |c - q| with the centre inside the body).
+//   f_n = max(0, m_eff / dt (kappa d / dt + 2 zeta sqrt(kappa) v_approach)),
+//     m_eff the reduced mass of the disk and the segment point ((1 - w) m_s1 + w m_s2);
+//     kappa twice the FE-FE kappa, as for the rigid walls: one pass finds the contact (with the
+//     default 0.5, the constraint that closes the overlap in one step);
+//   f_t = min(mu f_n, m_t |v_t| / dt) against the slip at the contact point (the disk's spin
+//     included), m_t the reduced mass with the disk's tangential 1/m + r^2/I = 3/m.
+// The force goes to the disk (and its torque about the centre), the reaction to s1 and s2 by
+// weights 1 - w, w: the two sum to zero up to round-off. A closest point at a vertex takes the
+// side of the vertex's pseudo-normal, as FE-FE contact does.
+#pragma once
+
+#include "dem.hpp"
+#include "model.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace mesopen::coupling {
+
+struct DiskContactSettings {
+  double stiffness = 0.5; // kappa of FE-FE contact
+  double damping = 0.5;   // zeta
+  std::vector<double> friction; // mu per FE body
+};
+
+struct DiskContactStatistics {
+  std::size_t contacts = 0;     // of the last call
+  double deepest = 0.0;         // the largest overlap over the FE element size, over the run
+  double work_on_disks = 0.0;   // the forces' work on the disks [J/m], over the run
+};
+
+class DiskContact {
+public:
+  DiskContact(const fem::Model &model, DiskContactSettings settings);
+  // The contact forces of every disk with every FE body: onto the disks into `forces`, the
+  // reactions into the FE nodes (Nodes::addExternal, with their frictional part; loaded bodies
+  // woken). Positions at x(n+1), velocities at n+1/2 on both sides.
+  void addForces(fem::Model &model, const Particles &disks, ParticleForces &forces, double dt);
+  // The reaction node forces lie in model.nodes.external; the boundaries of eroded bodies change.
+  void boundaryChanged(const fem::Model &model);
+  const DiskContactStatistics &statistics() const { return stats_; }
+  double stepStiffness() const { return 2.0 * s_.stiffness; }
+
+private:
+  struct Box {
+    double x0, y0, x1, y1;
+  };
+  struct Closest {
+    std::uint32_t s1, s2;   // the segment's nodes
+    double w = 0.0;         // weight of s2
+    double distance = 0.0, nx = 0.0, ny = 0.0; // |c - q|, unit normal out of the body
+  };
+  Closest closest(const fem::Model &model, std::size_t body, double cx, double cy) const;
+  DiskContactSettings s_;
+  std::vector<double> size_;                   // per body: longest boundary edge [m]
+  std::vector<std::uint32_t> fe_bodies_;       // bodies with a boundary
+  std::vector<std::size_t> cell_start_;        // grid of disks: first disk of each cell
+  std::vector<std::uint32_t> cell_disks_;
+  DiskContactStatistics stats_;
+};
+
+} // namespace mesopen::coupling
