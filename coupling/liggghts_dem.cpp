@@ -1,0 +1,153 @@
+#include "liggghts_dem.hpp"
+
+// LIGGGHTS: the C library interface, and the classes to reach `fix external` and the torques.
+#include "atom.h"
+#include "fix_external.h"
+#include "lammps.h"
+#include "library.h"
+#include "modify.h"
+#include "update.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <stdexcept>
+
+namespace mesopen::coupling {
+
+namespace {
+
+LAMMPS_NS::LAMMPS *lammps(void *p) { return static_cast<LAMMPS_NS::LAMMPS *>(p); }
+
+bool isNumber(const std::string &s) {
+  char *end = nullptr;
+  const double v = std::strtod(s.c_str(), &end);
+  return !s.empty() && end == s.c_str() + s.size() && std::isfinite(v);
+}
+
+bool isName(const std::string &s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+  });
+}
+
+void command(void *lmp, const std::string &text) {
+  lammps_command(lmp, const_cast<char *>(text.c_str()));
+}
+
+} // namespace
+
+LiggghtsDem::LiggghtsDem(const std::string &script,
+                         std::vector<std::pair<std::string, std::string>> variables,
+                         const std::string &log, MPI_Comm comm) {
+  namespace fs = std::filesystem;
+  if (!fs::is_regular_file(script))
+    throw std::invalid_argument("LIGGGHTS input script " + script + " not found");
+  std::vector<std::string> args = {"liggghts", "-screen", "none", "-log", log};
+  for (const auto &[name, value] : variables) {
+    if (!isName(name))
+      throw std::invalid_argument("LIGGGHTS variable name '" + name + "': only a-z, 0-9 and _");
+    if (name == "data" ? !fs::is_regular_file(value) : !isNumber(value))
+      throw std::invalid_argument("LIGGGHTS variable " + name + " = '" + value + "': " +
+                                  (name == "data" ? "no such file" : "not a finite number"));
+    if (name == "kn")
+      kn_ = std::strtod(value.c_str(), nullptr);
+    args.insert(args.end(), {"-var", name, value});
+  }
+  std::vector<char *> argv;
+  for (std::string &a : args)
+    argv.push_back(a.data());
+  lammps_open(static_cast<int>(argv.size()), argv.data(), comm, &lmp_);
+  lammps_file(lmp_, const_cast<char *>(script.c_str()));
+  LAMMPS_NS::Modify *modify = lammps(lmp_)->modify;
+  const int fix = modify->find_fix(const_cast<char *>("mesopen"));
+  if (fix < 0 || std::string(modify->fix[fix]->style) != "external") {
+    lammps_close(lmp_);
+    throw std::invalid_argument("LIGGGHTS input script " + script +
+                                " has no `fix mesopen all external pf/callback 1 1`");
+  }
+  static_cast<LAMMPS_NS::FixExternal *>(modify->fix[fix])->set_callback(callback, this);
+  command(lmp_, "run 0"); // set up; no exchange outside a window: the callback adds nothing
+  dt_ = *static_cast<double *>(lammps_extract_global(lmp_, const_cast<char *>("dt")));
+  read();
+}
+
+LiggghtsDem::~LiggghtsDem() {
+  if (lmp_)
+    lammps_close(lmp_);
+}
+
+// A tenth of the contact time pi sqrt(m / k_n) of the lightest disk against a wall.
+double LiggghtsDem::stableStep() const {
+  if (!(kn_ > 0.0) || p_.size() == 0)
+    return std::numeric_limits<double>::infinity();
+  return 0.1 * M_PI * std::sqrt(*std::min_element(p_.mass.begin(), p_.mass.end()) / kn_);
+}
+
+void LiggghtsDem::read() {
+  LAMMPS_NS::Atom *atom = lammps(lmp_)->atom;
+  const auto n = static_cast<std::size_t>(atom->nlocal);
+  for (auto *v : {&p_.x, &p_.y, &p_.vx, &p_.vy, &p_.omega, &p_.radius, &p_.mass})
+    v->resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    p_.x[i] = atom->x[i][0], p_.y[i] = atom->x[i][1];
+    p_.vx[i] = atom->v[i][0], p_.vy[i] = atom->v[i][1], p_.omega[i] = atom->omega[i][2];
+    p_.radius[i] = atom->radius[i], p_.mass[i] = atom->rmass[i];
+  }
+}
+
+// Called by `fix external` where the forces go in: within a window's step, after the drift (the
+// exchange); and when a run sets up (the step length changed), where the forces at x(n) are taken
+// again for the first half kick: those of the last exchange, by particle id (LIGGGHTS may have
+// reordered its particles since).
+void LiggghtsDem::callback(void *self, std::int64_t step, int n, int *id, double **, double **f) {
+  auto *dem = static_cast<LiggghtsDem *>(self);
+  double **torque = lammps(dem->lmp_)->atom->torque;
+  if (dem->exchange_ && step == dem->exchange_step_) {
+    dem->read(); // x(n+1), v(n+1/2)
+    dem->forces_.reset(dem->p_.size());
+    (*dem->exchange_)(dem->p_, dem->forces_);
+    for (int i = 0; i < n; ++i) {
+      const auto tag = static_cast<std::size_t>(id[i]);
+      if (dem->by_id_.size() <= tag)
+        dem->by_id_.resize(tag + 1, {0.0, 0.0, 0.0});
+      dem->by_id_[tag] = {dem->forces_.fx[i], dem->forces_.fy[i], dem->forces_.torque[i]};
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    const auto tag = static_cast<std::size_t>(id[i]);
+    const std::array<double, 3> last =
+        tag < dem->by_id_.size() ? dem->by_id_[tag] : std::array<double, 3>{0.0, 0.0, 0.0};
+    f[i][0] = last[0], f[i][1] = last[1], f[i][2] = 0.0;
+    torque[i][2] += last[2];
+  }
+}
+
+void LiggghtsDem::advance(double dt, const Exchange &exchange) {
+  // A new step needs the integrator set up again (its dt/2 and dt factors are taken in init).
+  const bool new_step = dt != dt_;
+  if (new_step) {
+    char text[64];
+    std::snprintf(text, sizeof text, "timestep %.17g", dt);
+    command(lmp_, text);
+    dt_ = dt;
+  }
+  exchange_ = &exchange;
+  exchange_step_ = lammps(lmp_)->update->ntimestep + 1;
+  command(lmp_, new_step ? "run 1 pre yes post no" : "run 1 pre no post no");
+  exchange_ = nullptr;
+  read();
+}
+
+double LiggghtsDem::kineticEnergy() const {
+  double e = 0.0;
+  for (std::size_t i = 0; i < p_.size(); ++i)
+    e += 0.5 * p_.mass[i] * (p_.vx[i] * p_.vx[i] + p_.vy[i] * p_.vy[i]) +
+         0.5 * p_.inertia(i) * p_.omega[i] * p_.omega[i];
+  return e;
+}
+
+} // namespace mesopen::coupling

@@ -1,0 +1,48 @@
+// The DEM participant run by LIGGGHTS 3.8 through its library interface (library.h): the input
+// script liggghts-inputs/dem.in with its variables, one `run 1` per time window, the FE bodies'
+// forces put in by `fix external pf/callback` (inside the step, after the drift: exactly the
+// velocity-Verlet step DemParticipant describes; writing the forces between runs instead gives
+// half the impulse) and their torques added in the same callback. The only file, with its .cpp,
+// that includes LIGGGHTS headers.
+#pragma once
+
+#include "dem.hpp"
+
+#include <mpi.h>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace mesopen::coupling {
+
+class LiggghtsDem : public DemParticipant {
+public:
+  // `variables` as the script's -var name value pairs; every value a finite number or an existing
+  // file, checked here (std::invalid_argument) before anything reaches LIGGGHTS, which exits the
+  // process on a bad command. LIGGGHTS writes its log to `log` ("none": nowhere).
+  LiggghtsDem(const std::string &script, std::vector<std::pair<std::string, std::string>> variables,
+              const std::string &log, MPI_Comm comm);
+  ~LiggghtsDem() override;
+  LiggghtsDem(const LiggghtsDem &) = delete;
+  LiggghtsDem &operator=(const LiggghtsDem &) = delete;
+  const Particles &particles() const override { return p_; }
+  double stableStep() const override;
+  void advance(double dt, const Exchange &exchange) override;
+  double kineticEnergy() const override;
+
+private:
+  static void callback(void *self, std::int64_t step, int n, int *id, double **x, double **f);
+  void read(); // the particles' state from LIGGGHTS's arrays into p_
+  void *lmp_ = nullptr;
+  Particles p_;
+  ParticleForces forces_;
+  const Exchange *exchange_ = nullptr; // set during a window
+  std::int64_t exchange_step_ = 0;     // LIGGGHTS's step number of the window's step
+  std::vector<std::array<double, 3>> by_id_; // the last exchange's force and torque, by id
+  double dt_ = 0.0, kn_ = 0.0;
+};
+
+} // namespace mesopen::coupling
