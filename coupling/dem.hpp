@@ -17,6 +17,13 @@ struct Particles {
   std::vector<double> radius, mass;        // [m], [kg/m]
   std::size_t size() const { return x.size(); }
   double inertia(std::size_t i) const { return 0.5 * mass[i] * radius[i] * radius[i]; }
+  // Kinetic energy, translation and rotation [J/m].
+  double kineticEnergy() const {
+    double e = 0.0;
+    for (std::size_t i = 0; i < size(); ++i)
+      e += 0.5 * mass[i] * (vx[i] * vx[i] + vy[i] * vy[i]) + 0.5 * inertia(i) * omega[i] * omega[i];
+    return e;
+  }
 };
 
 // Forces and torques on the disks [N/m, N m/m], written by the FE participant.
@@ -38,8 +45,6 @@ public:
   // The largest stable time step of its own contacts [s].
   virtual double stableStep() const = 0;
   virtual void advance(double dt, const Exchange &exchange) = 0;
-  // Kinetic energy of the disks, translation and rotation [J/m]; elastic energy in their springs.
-  virtual double kineticEnergy() const = 0;
 };
 
 } // namespace mesopen::coupling

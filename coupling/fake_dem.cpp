@@ -100,12 +100,4 @@ void FakeDem::advance(double dt, const Exchange &exchange) {
   }
 }
 
-double FakeDem::kineticEnergy() const {
-  double e = 0.0;
-  for (std::size_t i = 0; i < p_.size(); ++i)
-    e += 0.5 * p_.mass[i] * (p_.vx[i] * p_.vx[i] + p_.vy[i] * p_.vy[i]) +
-         0.5 * p_.inertia(i) * p_.omega[i] * p_.omega[i];
-  return e;
-}
-
 } // namespace mesopen::coupling

@@ -25,7 +25,6 @@ public:
   const Particles &particles() const override { return p_; }
   double stableStep() const override;
   void advance(double dt, const Exchange &exchange) override;
-  double kineticEnergy() const override;
 
 private:
   void ownForces(double dt);

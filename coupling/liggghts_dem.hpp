@@ -31,7 +31,6 @@ public:
   const Particles &particles() const override { return p_; }
   double stableStep() const override;
   void advance(double dt, const Exchange &exchange) override;
-  double kineticEnergy() const override;
 
 private:
   static void callback(void *self, std::int64_t step, int n, int *id, double **x, double **f);

@@ -3,6 +3,7 @@
 #include "coupling.hpp"
 #include "fake_dem.hpp"
 #include "liggghts_dem.hpp"
+#include "coupled.hpp"
 #include "meshes.hpp"
 #include "solver.hpp"
 
@@ -88,14 +89,7 @@ TEST(Liggghts, DiskHittingABlockMatchesTheFakeParticipant) {
     coupling::FeDemCoupling coupling(model, dem, {.friction = {0.3}});
     fem::Solver solver(model, {});
     solver.addForceProvider(&coupling);
-    const fem::Nodes &nd = model.nodes;
-    auto momentum = [&] {
-      const coupling::Particles &d = dem.particles();
-      std::array<double, 2> p{d.mass[0] * d.vx[0], d.mass[0] * d.vy[0]};
-      for (std::size_t a = 0; a < nd.size(); ++a)
-        p[0] += nd.mass[a] * nd.vx[a], p[1] += nd.mass[a] * nd.vy[a];
-      return p;
-    };
+    auto momentum = [&] { return test::totalMomentum(model, dem.particles()); };
     const auto p0 = momentum();
     worst = 0.0;
     while (solver.time() < 0.4e-6) {
