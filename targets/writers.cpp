@@ -1,5 +1,7 @@
 #include "writers.hpp"
 
+#include "disks.hpp"
+
 #include "atomic_file.hpp"
 #include "h5file.hpp"
 #include "measures.hpp"
@@ -105,19 +107,20 @@ void writeTargetH5(const std::string &path, const Target &target,
   });
 }
 
-void writeLiggghtsData(const std::string &path, const Target &target) {
-  const GrainFigures f = grainFigures(target.grains);
-  const std::size_t n = f.area.size();
+void writeLiggghtsData(const std::string &path, const Target &target,
+                       const std::vector<char> &meshed) {
+  const Disks disks = grainDisks(target.grains, target.spec.density, meshed);
+  const std::size_t n = disks.size();
   // LIGGGHTS in 2D still needs a z extent holding z = 0: a slab as thick as the largest disk.
   double d_max = 0.0;
-  for (double d : f.diameter)
-    d_max = std::max(d_max, d);
+  for (double r : disks.radius)
+    d_max = std::max(d_max, 2.0 * r);
   if (!(d_max > 0.0))
     d_max = target.spec.diameter_max;
 
   std::string text =
-      "LIGGGHTS data file by mesopen: atom_style granular, dimension 2, SI units; disks of the "
-      "grains' equivalent diameter at their centroids\n\n";
+      "LIGGGHTS data file by mesopen: atom_style granular, dimension 2, SI units; one disk per "
+      "grain at its centroid, of its mass, touching but not overlapping its neighbours\n\n";
   text += std::to_string(n) + " atoms\n1 atom types\n\n";
   text += "0 ";
   appendNumber(text, target.spec.width);
@@ -128,15 +131,15 @@ void writeLiggghtsData(const std::string &path, const Target &target) {
   text += ' ';
   appendNumber(text, 0.5 * d_max);
   text += " zlo zhi # slab of the largest diameter around z = 0 (2D)\n\nAtoms\n\n";
-  for (std::size_t g = 0; g < n; ++g) {
-    text += std::to_string(g + 1) + " 1 ";
-    appendNumber(text, f.diameter[g]);
+  for (std::size_t i = 0; i < n; ++i) {
+    text += std::to_string(i + 1) + " 1 ";
+    appendNumber(text, 2.0 * disks.radius[i]);
     text += ' ';
-    appendNumber(text, target.spec.density);
+    appendNumber(text, disks.density[i]);
     text += ' ';
-    appendNumber(text, f.centroid_x[g]);
+    appendNumber(text, disks.x[i]);
     text += ' ';
-    appendNumber(text, f.centroid_y[g]);
+    appendNumber(text, disks.y[i]);
     text += " 0\n";
   }
   writeText(path, text);

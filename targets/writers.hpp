@@ -23,10 +23,12 @@ namespace mesopen {
 //                nose_length, tip_cut, offset_x, offset_y                       when enabled
 void writeTargetH5(const std::string &path, const Target &target, const PlacedProjectile *projectile);
 
-// LIGGGHTS data file for atom_style granular in 2D: one disk per grain at its centroid with the
-// equivalent diameter D = sqrt(4A/pi) and the grain density, so that the disk's mass per metre
-// rho pi D^2 / 4 equals the polygon's rho A. Columns: id type diameter density x y z.
-void writeLiggghtsData(const std::string &path, const Target &target);
+// LIGGGHTS data file for atom_style granular in 2D: the disks of the grains not marked in
+// `meshed` (every grain if empty), as grainDisks makes them (disks.hpp): at the centroid, of the
+// grain's mass per metre rho A, touching but not overlapping their neighbours. Columns: id type
+// diameter density x y z.
+void writeLiggghtsData(const std::string &path, const Target &target,
+                       const std::vector<char> &meshed = {});
 
 // ParaView: grain polygons (or their triangles when meshed) and the projectile, with cell data
 // body (0 projectile, 1.. grains), grain diameter.

@@ -1,11 +1,14 @@
 // The target writers: HDF5 layout and read-back, byte-identical repeats, the LIGGGHTS data file's
 // contents, atomic writing (no temporary left, nothing written on failure).
+#include "disks.hpp"
 #include "writers.hpp"
 #include "h5file.hpp"
 #include "mesh.hpp"
 #include "polygon.hpp"
 
 #include <gtest/gtest.h>
+
+#include <array>
 
 #include <chrono>
 #include <cmath>
@@ -179,6 +182,7 @@ TEST_F(WritersTest, LiggghtsDataParses) {
   std::getline(in, line); // title
   std::size_t declared = 0, atoms = 0;
   bool in_atoms = false, have_z = false;
+  std::vector<std::array<double, 3>> disks; // x, y, r
   while (std::getline(in, line)) {
     std::istringstream s(line);
     if (line.find(" atoms") != std::string::npos && !in_atoms) {
@@ -197,11 +201,13 @@ TEST_F(WritersTest, LiggghtsDataParses) {
       ASSERT_TRUE(s >> id >> type >> d >> rho >> x >> y >> z) << line;
       EXPECT_EQ(id, static_cast<long>(atoms + 1));
       EXPECT_EQ(type, 1);
-      EXPECT_EQ(rho, t.spec.density);
       EXPECT_EQ(z, 0.0);
+      // the grain's mass per metre, in a disk no larger than the grain's equal-area one
       const double area = polygonArea(t.grains, atoms);
       const double mass = rho * M_PI * d * d / 4;
-      EXPECT_NEAR(mass, rho * area, 1e-12 * rho * area);
+      EXPECT_NEAR(mass, t.spec.density * area, 1e-12 * t.spec.density * area);
+      EXPECT_GE(rho, t.spec.density * (1.0 - 1e-12));
+      disks.push_back({x, y, 0.5 * d});
       const Point c = centroid(t.grains.x.data() + t.grains.offset[atoms],
                                t.grains.y.data() + t.grains.offset[atoms], t.grains.corners(atoms));
       EXPECT_EQ(x, c.x);
@@ -212,6 +218,15 @@ TEST_F(WritersTest, LiggghtsDataParses) {
   EXPECT_TRUE(have_z);
   EXPECT_EQ(declared, t.grains.size());
   EXPECT_EQ(atoms, t.grains.size());
+  // No two disks overlap: a DEM target made of them starts at rest.
+  for (std::size_t i = 0; i < disks.size(); ++i) {
+    double gap = INFINITY;
+    for (std::size_t j = 0; j < disks.size(); ++j)
+      if (j != i)
+        gap = std::min(gap, std::hypot(disks[i][0] - disks[j][0], disks[i][1] - disks[j][1]) -
+                                disks[i][2] - disks[j][2]);
+    EXPECT_GE(gap, -1e-12 * disks[i][2]) << "disk " << i;
+  }
 }
 
 TEST_F(WritersTest, YadeSpheres) {
@@ -293,4 +308,29 @@ TEST(H5File, ErrorsNameFileAndObject) {
   EXPECT_EQ(h5.readStringAttribute("/g/v", "unit"), "");
   EXPECT_THROW(h5.read<double>("/g/nothing"), std::runtime_error);
   fs::remove(path);
+}
+
+// Two squares 1 um apart (their equal-area disks would overlap by 11 um) and a third beside them:
+// as disks they share the distance between centres; next to a meshed square a disk keeps out of
+// it; every disk keeps its grain's mass.
+TEST(GrainDisks, TouchWithoutOverlapAndKeepOutOfMeshedGrains) {
+  Polygons grains;
+  const double s = 50e-6, gap = 1e-6;
+  for (int k = 0; k < 3; ++k) {
+    const double x0 = 10e-6 + k * (s + gap);
+    grains.add({x0, x0 + s, x0 + s, x0}, {10e-6, 10e-6, 10e-6 + s, 10e-6 + s});
+  }
+  const double rho = 2650.0, r_equal = s / std::sqrt(M_PI), pitch = s + gap;
+  const Disks all = grainDisks(grains, rho);
+  ASSERT_EQ(all.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i)
+    EXPECT_NEAR(all.density[i] * M_PI * all.radius[i] * all.radius[i], rho * s * s, 1e-12 * rho * s * s);
+  EXPECT_NEAR(all.radius[0], 0.5 * pitch, 1e-15); // shares the distance with its equal neighbour
+  EXPECT_LT(all.radius[0], r_equal);
+  // the middle grain meshed: its neighbours' disks reach its faces, no farther
+  const Disks beside = grainDisks(grains, rho, {0, 1, 0});
+  ASSERT_EQ(beside.size(), 2u);
+  EXPECT_EQ(beside.grain[1], 2u);
+  EXPECT_NEAR(beside.radius[0], 0.5 * s + gap, 1e-15);
+  EXPECT_NEAR(beside.radius[1], 0.5 * s + gap, 1e-15);
 }
