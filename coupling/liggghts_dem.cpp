@@ -6,12 +6,14 @@
 #include "lammps.h"
 #include "library.h"
 #include "modify.h"
+#include "integrate.h"
 #include "update.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <stdexcept>
@@ -40,6 +42,21 @@ void command(void *lmp, const std::string &text) {
 
 } // namespace
 
+void ensureMpi() {
+  int initialised = 0, finalised = 0;
+  MPI_Initialized(&initialised);
+  MPI_Finalized(&finalised);
+  if (initialised || finalised)
+    return;
+  MPI_Init(nullptr, nullptr);
+  std::atexit([] {
+    int done = 0;
+    MPI_Finalized(&done);
+    if (!done)
+      MPI_Finalize();
+  });
+}
+
 LiggghtsDem::LiggghtsDem(const std::string &script,
                          std::vector<std::pair<std::string, std::string>> variables,
                          const std::string &log, MPI_Comm comm) {
@@ -50,9 +67,13 @@ LiggghtsDem::LiggghtsDem(const std::string &script,
   for (const auto &[name, value] : variables) {
     if (!isName(name))
       throw std::invalid_argument("LIGGGHTS variable name '" + name + "': only a-z, 0-9 and _");
-    if (name == "data" ? !fs::is_regular_file(value) : !isNumber(value))
+    if (name == "data" ? !fs::is_regular_file(value) ||
+                             value.find_first_of(" \t\n\"'$#&") != std::string::npos
+                       : !isNumber(value))
       throw std::invalid_argument("LIGGGHTS variable " + name + " = '" + value + "': " +
-                                  (name == "data" ? "no such file" : "not a finite number"));
+                                  (name == "data" ? "no such file, or a path with a space or one "
+                                                    "of \"'$#&"
+                                                  : "not a finite number"));
     if (name == "kn")
       kn_ = std::strtod(value.c_str(), nullptr);
     args.insert(args.end(), {"-var", name, value});
@@ -127,17 +148,21 @@ void LiggghtsDem::callback(void *self, std::int64_t step, int n, int *id, double
 }
 
 void LiggghtsDem::advance(double dt, const Exchange &exchange) {
-  // A new step needs the integrator set up again (its dt/2 and dt factors are taken in init).
-  const bool new_step = dt != dt_;
-  if (new_step) {
-    char text[64];
-    std::snprintf(text, sizeof text, "timestep %.17g", dt);
-    command(lmp_, text);
+  // A new step length is handed to the integrator and the fixes as LAMMPS's `timestep` does between
+  // runs (update->dt, then every fix's reset_dt): a `timestep` command would need the next run set
+  // up again, which rebuilds the neighbour lists (a third of a hybrid run's time when the FE step
+  // changes every window).
+  if (dt != dt_) {
+    LAMMPS_NS::LAMMPS *lmp = lammps(lmp_);
+    lmp->update->dt = dt;
+    for (int i = 0; i < lmp->modify->nfix; ++i)
+      lmp->modify->fix[i]->reset_dt();
+    lmp->update->integrate->reset_dt();
     dt_ = dt;
   }
   exchange_ = &exchange;
   exchange_step_ = lammps(lmp_)->update->ntimestep + 1;
-  command(lmp_, new_step ? "run 1 pre yes post no" : "run 1 pre no post no");
+  command(lmp_, "run 1 pre no post no");
   exchange_ = nullptr;
   read();
 }

@@ -18,6 +18,9 @@
 
 namespace mesopen::coupling {
 
+// MPI initialised (once, for LIGGGHTS), and finalised when the program exits.
+void ensureMpi();
+
 class LiggghtsDem : public DemParticipant {
 public:
   // `variables` as the script's -var name value pairs; every value a finite number or an existing

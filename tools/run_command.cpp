@@ -2,6 +2,10 @@
 // integrated in time; run.h5 (series and frames), vtk/run.pvd, summary.json.
 #include "commands.hpp"
 #include "contact.hpp"
+#include "coupling.hpp"
+#include "liggghts_dem.hpp"
+#include "measures.hpp"
+#include "writers.hpp"
 #include "generator.hpp"
 #include "output.hpp"
 #include "projectile.hpp"
@@ -40,11 +44,15 @@ Scene prepareRun(const RunOptions &options) {
   if (scene.run.grains && scene.target.mesh == MeshKind::none)
     throw InputError(options.scene + ": target.mesh = \"none\" leaves the grains without elements; "
                                      "allowed: \"quality\" or \"fan\" (or run.grains = false)");
+  if (!scene.run.grains && scene.run.representation != Representation::fe)
+    throw InputError(options.scene + ": run.representation = \"dem\" or \"hybrid\" needs the "
+                                     "grains; allowed with run.grains = false: \"fe\"");
   if (!scene.projectile.enabled)
     throw InputError(options.scene +
                      ": projectile.enabled = false; `mesopen run` needs the projectile");
   const std::string &dir = options.out_dir;
-  prepareOutputDirectory(dir, {"summary.json", "run.h5", "run.h5.tmp", "vtk/run.pvd"});
+  prepareOutputDirectory(dir, {"summary.json", "run.h5", "run.h5.tmp", "vtk/run.pvd", "dem.data",
+                               "liggghts.log"});
   std::error_code ec;
   for (const auto &f : fs::directory_iterator(dir + "/vtk", ec))
     if (f.path().filename().string().starts_with("frame_"))
@@ -54,9 +62,29 @@ Scene prepareRun(const RunOptions &options) {
   return scene;
 }
 
-// The projectile's and the grains' meshes as one: the projectile is body 0, the target's grain g is
-// body g + 1 (its node indices shifted past the projectile's).
-Meshes runMeshes(const Target *target, const PlacedProjectile &p) {
+// Which grains are meshed: every one (fe), none (dem), or those whose centroids lie within the
+// band around the projectile's axis (hybrid).
+std::vector<char> meshedGrains(const Scene &scene, const Target &target, const PlacedProjectile &p) {
+  const std::size_t n = target.grains.size();
+  switch (scene.run.representation) {
+  case Representation::fe:
+    return std::vector<char>(n, 1);
+  case Representation::dem:
+    return std::vector<char>(n, 0);
+  case Representation::hybrid:
+    break;
+  }
+  const double half = scene.run.band_half_width > 0.0 ? scene.run.band_half_width : p.shape.diameter;
+  const GrainFigures f = grainFigures(target.grains);
+  std::vector<char> meshed(n);
+  for (std::size_t g = 0; g < n; ++g)
+    meshed[g] = std::abs(f.centroid_x[g] - p.offset_x) <= half;
+  return meshed;
+}
+
+// The projectile's and the meshed grains' meshes as one: the projectile is body 0, the meshed grains
+// follow in order (their node indices shifted past those before).
+Meshes runMeshes(const Target *target, const PlacedProjectile &p, const std::vector<char> &meshed) {
   Meshes all;
   all.x = p.mesh.x, all.y = p.mesh.y, all.tri = p.mesh.tri;
   all.node_offset.push_back(all.x.size());
@@ -64,15 +92,16 @@ Meshes runMeshes(const Target *target, const PlacedProjectile &p) {
   if (!target)
     return all;
   const Meshes &g = target->mesh;
-  const std::uint32_t nodes = static_cast<std::uint32_t>(all.x.size());
-  const std::uint64_t triangles = all.tri_offset.back();
-  all.x.insert(all.x.end(), g.x.begin(), g.x.end());
-  all.y.insert(all.y.end(), g.y.begin(), g.y.end());
-  for (std::uint32_t a : g.tri)
-    all.tri.push_back(a + nodes);
-  for (std::size_t b = 1; b <= g.bodies(); ++b) {
-    all.node_offset.push_back(g.node_offset[b] + nodes);
-    all.tri_offset.push_back(g.tri_offset[b] + triangles);
+  for (std::size_t b = 0; b < g.bodies(); ++b) {
+    if (!meshed[b])
+      continue;
+    const auto shift = static_cast<std::uint32_t>(all.x.size() - g.node_offset[b]);
+    all.x.insert(all.x.end(), g.x.begin() + g.node_offset[b], g.x.begin() + g.node_offset[b + 1]);
+    all.y.insert(all.y.end(), g.y.begin() + g.node_offset[b], g.y.begin() + g.node_offset[b + 1]);
+    for (std::size_t k = 3 * g.tri_offset[b]; k < 3 * g.tri_offset[b + 1]; ++k)
+      all.tri.push_back(g.tri[k] + shift);
+    all.node_offset.push_back(all.x.size());
+    all.tri_offset.push_back(all.tri.size() / 3);
   }
   return all;
 }
@@ -89,13 +118,16 @@ fem::VelocityConstraint boxEdges(const fem::Model &model, const TargetSpec &box)
   return fixed;
 }
 
-// One model of the projectile (body 0, "projectile") and every grain ("grain-<g>"), with the
-// scene's materials, the projectile's initial velocity (0, -v) and spin, and the fixed box edges.
-fem::Model buildRunModel(const Scene &scene, const Target *target, const PlacedProjectile &p) {
-  const Meshes all = runMeshes(target, p);
+// One model of the projectile (body 0, "projectile") and the meshed grains ("grain-<g>", g the
+// grain's number in the target), with the scene's materials, the projectile's initial velocity
+// (0, -v) and spin, and the fixed box edges.
+fem::Model buildRunModel(const Scene &scene, const Target *target, const PlacedProjectile &p,
+                         const std::vector<char> &meshed) {
+  const Meshes all = runMeshes(target, p, meshed);
   std::vector<std::string> names{"projectile"};
-  for (std::size_t g = 0; g + 1 < all.bodies(); ++g)
-    names.push_back("grain-" + std::to_string(g));
+  for (std::size_t g = 0; g < meshed.size(); ++g)
+    if (meshed[g])
+      names.push_back("grain-" + std::to_string(g));
   std::vector<std::unique_ptr<fem::Material>> materials;
   materials.push_back(
       fem::makeMaterial(scene.projectile_material.name, scene.projectile_material.parameters));
@@ -109,6 +141,31 @@ fem::Model buildRunModel(const Scene &scene, const Target *target, const PlacedP
     model.constraints.push_back(boxEdges(model, scene.target));
   fem::setBodyVelocity(model, 0, 0.0, -scene.run.velocity, scene.run.spin);
   return model;
+}
+
+// The variables of liggghts-inputs/dem.in: the disks' data file, the [dem] law, [contact]'s
+// friction between grains, the box's walls.
+std::vector<std::pair<std::string, std::string>> demVariables(const Scene &scene,
+                                                              const std::string &data) {
+  const DemSpec &d = scene.dem;
+  auto text = [](double v) {
+    char s[32];
+    std::snprintf(s, sizeof s, "%.17g", v);
+    return std::string(s);
+  };
+  const double skin = d.skin > 0.0 ? d.skin : 0.1 * scene.target.meanDiameter();
+  return {{"data", data},
+          {"kn", text(d.stiffness)},
+          {"kt", text(d.tangential_stiffness)},
+          {"gn", text(d.damping)},
+          {"gt", text(d.tangential_damping)},
+          {"mu", text(scene.contact.friction)},
+          {"xlo", "0"},
+          {"xhi", text(scene.target.width)},
+          {"ylo", "0"},
+          {"skin", text(skin)},
+          {"gravity", "0"},
+          {"dt", "1e-9"}};
 }
 
 // Contact of the scene: Coulomb coefficients per pair of materials (0 the projectile's, 1 the
@@ -310,17 +367,37 @@ int simulate(const Scene &scene, const RunOptions &options, Clock::time_point st
   const Polygons no_grains;
   const PlacedProjectile projectile = placeProjectile(
       scene.projectile, scene.target.mesh_size, scene.target, target ? target->grains : no_grains);
-  fem::Model model = buildRunModel(scene, target.get(), projectile);
+  const std::vector<char> meshed =
+      target ? meshedGrains(scene, *target, projectile) : std::vector<char>{};
+  fem::Model model = buildRunModel(scene, target.get(), projectile, meshed);
   const bool walls = target != nullptr;
+  // The grains not meshed are LIGGGHTS's disks, coupled to the FE bodies.
+  std::unique_ptr<coupling::LiggghtsDem> dem;
+  std::unique_ptr<coupling::FeDemCoupling> coupled;
+  if (target && std::find(meshed.begin(), meshed.end(), 0) != meshed.end()) {
+    writeLiggghtsData(dir + "/dem.data", *target, meshed);
+    coupling::ensureMpi();
+    dem = std::make_unique<coupling::LiggghtsDem>(shareDirectory() + "/liggghts-inputs/dem.in",
+                                                  demVariables(scene, dir + "/dem.data"),
+                                                  dir + "/liggghts.log", MPI_COMM_WORLD);
+  }
   target.reset();
   fem::Solver solver(model, {.safety = run.safety,
                              .viscosity_linear = run.viscosity_linear,
                              .viscosity_quadratic = run.viscosity_quadratic,
-                             .anti_locking = run.anti_locking});
+                             .anti_locking = run.anti_locking,
+                             .max_dt = dem ? dem->stableStep() : HUGE_VAL});
   std::unique_ptr<fem::Contact> contact;
   if (scene.contact.enabled) {
     contact = std::make_unique<fem::Contact>(model, contactSettings(scene, walls));
     solver.addForceProvider(contact.get());
+  }
+  if (dem) {
+    coupling::DiskContactSettings disk{scene.contact.stiffness, scene.contact.damping, {}};
+    disk.friction.assign(model.bodies.size(), scene.contact.friction);
+    disk.friction[0] = scene.contact.projectile_friction;
+    coupled = std::make_unique<coupling::FeDemCoupling>(model, *dem, disk);
+    solver.addForceProvider(coupled.get());
   }
 
   catchStopSignals(true); // from the moment run.h5.tmp exists to the end of the loop

@@ -179,6 +179,8 @@ const std::vector<Key> &keys() {
     auto c = &Scene::contact;
     using M = ModalSpec;
     auto m = &Scene::modal;
+    using D = DemSpec;
+    auto d = &Scene::dem;
     return std::vector<Key>{
         real("target", "width", t, &T::width, "m", 0, true, 10, "box width W"),
         real("target", "height", t, &T::height, "m", 0, true, 10, "box height H"),
@@ -228,6 +230,12 @@ const std::vector<Key> &keys() {
              "triangle edge length; 0 takes target.mesh_size"),
         real("projectile", "min_angle", p, &P::min_angle, "deg", 5, false, 20.7,
              "smallest triangle angle"),
+        choice("run", "representation", r, &R::representation, representation_names,
+               "the grains: all meshed (fe), all LIGGGHTS disks (dem), or meshed within a band "
+               "around the projectile's path and disks beyond (hybrid)"),
+        real("run", "band_half_width", r, &R::band_half_width, "m", 0, false, 10,
+             "hybrid: grains whose centres lie within this distance of the projectile's axis are "
+             "meshed; 0: one projectile diameter"),
         real("run", "end_time", r, &R::end_time, "s", 0, true, 1, "simulated time"),
         real("run", "velocity", r, &R::velocity, "m/s", 0, false, 1e4,
              "projectile's initial speed, downward (thesis: 500-1500)"),
@@ -264,6 +272,16 @@ const std::vector<Key> &keys() {
              "penalty kappa: normal stiffness kappa m_eff / dt^2 per node (stable up to about 0.6)"),
         real("contact", "damping", c, &C::damping, "", 0, false, 2,
              "damping of the contact spring, a fraction of its critical damping"),
+        real("dem", "stiffness", d, &D::stiffness, "N/m^2", 0, true, 1e16,
+             "normal stiffness k_n of the disks' contacts, per metre of thickness (docs/coupling.md)"),
+        real("dem", "tangential_stiffness", d, &D::tangential_stiffness, "N/m^2", 0, true, 1e16,
+             "tangential stiffness k_t"),
+        real("dem", "damping", d, &D::damping, "N s/m^2", 0, false, 1e6,
+             "normal damping g_n (absolute): f_n = k_n d - g_n v_n"),
+        real("dem", "tangential_damping", d, &D::tangential_damping, "N s/m^2", 0, false, 1e6,
+             "tangential damping g_t (absolute)"),
+        real("dem", "skin", d, &D::skin, "m", 0, false, 1,
+             "LIGGGHTS's neighbour skin; 0: a tenth of the mean grain diameter"),
         choice("modal", "body", m, &M::body, modal_body_names,
                "what `mesopen modal` analyses: the projectile above, or a rectangular beam "
                "(thesis appendix B); both of the material of [materials.projectile]"),

@@ -13,8 +13,18 @@
 
 namespace mesopen {
 
+// How the grains are modelled: every grain meshed (fe), every grain a LIGGGHTS disk (dem), or the
+// grains whose centres lie within a band around the projectile's path meshed and the rest disks
+// (hybrid).
+enum class Representation { fe, dem, hybrid };
+inline constexpr Named<Representation> representation_names[] = {
+    {"fe", Representation::fe}, {"dem", Representation::dem}, {"hybrid", Representation::hybrid}};
+
 // What `mesopen run` does with the target and the projectile (table [run]).
 struct RunSpec {
+  Representation representation = Representation::fe;
+  double band_half_width = 0.0;    // hybrid: meshed grains' centres within this of the axis [m];
+                                   // 0: one projectile diameter
   double end_time = 1e-6;          // simulated time [s]
   double velocity = 1000.0;        // projectile's initial speed, downward [m/s]
   double spin = 0.0;               // projectile's initial spin about its centre of mass [rad/s]
@@ -38,6 +48,17 @@ struct ContactSpec {
   double projectile_friction = 0.3; // between the projectile and grains or walls
   double stiffness = 0.5;           // penalty kappa: k = kappa m_eff / dt^2
   double damping = 0.5;             // fraction of the contact spring's critical damping
+};
+
+// The DEM grains (table [dem]): LIGGGHTS's hooke/stiffness law per metre of thickness, f_n =
+// k_n d - g_n v_n (liggghts-inputs/dem.in), between disks and with the walls; the disks meet the FE
+// bodies with the FE contact law (coupling/disk_contact.hpp) and [contact]'s friction.
+struct DemSpec {
+  double stiffness = 1e10;            // k_n [N/m per m]
+  double tangential_stiffness = 1e10; // k_t [N/m per m]
+  double damping = 0.0;               // g_n, absolute [N s/m per m]
+  double tangential_damping = 0.0;    // g_t [N s/m per m]
+  double skin = 0.0;                  // neighbour skin [m]; 0: a tenth of the mean diameter
 };
 
 // What `mesopen modal` analyses (table [modal]): the scene's projectile, free, or a rectangular
@@ -76,6 +97,7 @@ struct Scene {
   ProjectileSpec projectile;
   RunSpec run;
   ContactSpec contact;
+  DemSpec dem;
   ModalSpec modal;
   MaterialChoice projectile_material{"steel", {}}, grain_material{"quartz", {}};
 };
