@@ -117,11 +117,3 @@ TEST(Liggghts, DiskHittingABlockMatchesTheFakeParticipant) {
     EXPECT_NEAR(v[k], v_fake[k], 1e-9 * 100.0);
   EXPECT_NEAR(v[2], v_fake[2], 1e-9 * std::abs(v_fake[2]));
 }
-
-int main(int argc, char **argv) {
-  MPI_Init(&argc, &argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  const int result = RUN_ALL_TESTS();
-  MPI_Finalize();
-  return result;
-}
