@@ -11,11 +11,15 @@ FeDemCoupling::FeDemCoupling(const fem::Model &model, DemParticipant &dem,
 
 void FeDemCoupling::addForces(fem::Model &model, double time, double dt) {
   ++window_;
+  reactions_.clear();
   dem_.advance(dt, [&](const Particles &particles, ParticleForces &forces) {
     data_[0].window = window_; // read: positions at n+1, velocities at n+1/2
-    contact_.addForces(model, particles, forces, dt);
-    data_[1].window = data_[2].window = window_; // written
+    contact_.addForces(model, particles, forces, reactions_, dt);
+    data_[1].window = window_; // written
   });
+  dem_.gatherReactions(reactions_);
+  DiskContact::apply(model, reactions_);
+  data_[2].window = window_;
   for (const Data &d : data_)
     if (d.window != window_)
       throw fem::RunFailure("coupling: " + d.name + " on " + d.mesh + " (" + d.writer + " to " +

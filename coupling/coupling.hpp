@@ -43,6 +43,7 @@ private:
   DiskContact contact_;
   std::uint64_t window_ = 0;
   std::vector<Data> data_; // the particles' state, the forces on them, the reactions on FE nodes
+  std::vector<Reaction> reactions_;
 };
 
 } // namespace mesopen::coupling

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <vector>
 
@@ -32,6 +33,12 @@ struct ParticleForces {
   void reset(std::size_t n) { fx.assign(n, 0.0), fy.assign(n, 0.0), torque.assign(n, 0.0); }
 };
 
+// A reaction of the disks on an FE node [N/m], with its frictional part.
+struct Reaction {
+  std::uint32_t node, body;
+  double fx, fy, friction_x, friction_y;
+};
+
 // A DEM solver as a participant. advance() takes one time window of length dt as velocity
 // Verlet: v(n+1/2) = v(n) + dt/2 f(n)/m, x(n+1) = x(n) + dt v(n+1/2); then its own forces at x(n+1)
 // and `exchange`, which reads the particles there (positions at n+1, velocities at n+1/2) and
@@ -45,6 +52,9 @@ public:
   // The largest stable time step of its own contacts [s].
   virtual double stableStep() const = 0;
   virtual void advance(double dt, const Exchange &exchange) = 0;
+  // Over MPI ranks each holding part of the disks, the reactions of every rank's disks, in rank
+  // order, so that every rank loads its copy of the FE nodes alike (one rank: as they are).
+  virtual void gatherReactions(std::vector<Reaction> &) const {}
 };
 
 } // namespace mesopen::coupling

@@ -87,9 +87,18 @@ DiskContact::Closest DiskContact::closest(const fem::Model &model, std::size_t b
   return c;
 }
 
-void DiskContact::addForces(fem::Model &model, const Particles &disks, ParticleForces &forces,
-                            double dt) {
-  fem::Nodes &nd = model.nodes;
+void DiskContact::apply(fem::Model &model, const std::vector<Reaction> &reactions) {
+  std::uint32_t woken = std::numeric_limits<std::uint32_t>::max();
+  for (const Reaction &r : reactions) {
+    model.nodes.addExternal(r.node, r.fx, r.fy, r.friction_x, r.friction_y);
+    if (r.body != woken)
+      model.wake(r.body), woken = r.body;
+  }
+}
+
+void DiskContact::addForces(const fem::Model &model, const Particles &disks,
+                            ParticleForces &forces, std::vector<Reaction> &reactions, double dt) {
+  const fem::Nodes &nd = model.nodes;
   const std::size_t n = disks.size();
   stats_.contacts = 0;
   if (n == 0 || fe_bodies_.empty())
@@ -163,9 +172,8 @@ void DiskContact::addForces(fem::Model &model, const Particles &disks, ParticleF
           const double fx = fn * c.nx - ft * tx, fy = fn * c.ny - ft * ty;
           const double torque = -r * (c.nx * fy - c.ny * fx);
           forces.fx[i] += fx, forces.fy[i] += fy, forces.torque[i] += torque;
-          nd.addExternal(c.s1, -w1 * fx, -w1 * fy, w1 * ft * tx, w1 * ft * ty);
-          nd.addExternal(c.s2, -w2 * fx, -w2 * fy, w2 * ft * tx, w2 * ft * ty);
-          model.wake(b);
+          reactions.push_back({c.s1, b, -w1 * fx, -w1 * fy, w1 * ft * tx, w1 * ft * ty});
+          reactions.push_back({c.s2, b, -w2 * fx, -w2 * fy, w2 * ft * tx, w2 * ft * ty});
           stats_.work_on_disks += dt * (fx * disks.vx[i] + fy * disks.vy[i] + torque * om);
           stats_.deepest = std::max(stats_.deepest, depth / size_[b]);
           ++stats_.contacts;

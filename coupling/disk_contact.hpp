@@ -39,9 +39,13 @@ class DiskContact {
 public:
   DiskContact(const fem::Model &model, DiskContactSettings settings);
   // The contact forces of every disk with every FE body: onto the disks into `forces`, the
-  // reactions into the FE nodes (Nodes::addExternal, with their frictional part; loaded bodies
-  // woken). Positions at x(n+1), velocities at n+1/2 on both sides.
-  void addForces(fem::Model &model, const Particles &disks, ParticleForces &forces, double dt);
+  // reactions on the FE nodes appended to `reactions`. Positions at x(n+1), velocities at n+1/2
+  // on both sides.
+  void addForces(const fem::Model &model, const Particles &disks, ParticleForces &forces,
+                 std::vector<Reaction> &reactions, double dt);
+  // The reactions into the FE nodes (Nodes::addExternal, with their frictional part), their
+  // bodies woken.
+  static void apply(fem::Model &model, const std::vector<Reaction> &reactions);
   // The reaction node forces lie in model.nodes.external; the boundaries of eroded bodies change.
   void boundaryChanged(const fem::Model &model);
   const DiskContactStatistics &statistics() const { return stats_; }

@@ -57,9 +57,25 @@ void ensureMpi() {
   });
 }
 
+World world(bool needed) {
+  if (!needed && !std::getenv("OMPI_COMM_WORLD_SIZE"))
+    return {};
+  ensureMpi();
+  World w;
+  MPI_Comm_rank(MPI_COMM_WORLD, &w.rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &w.size);
+  return w;
+}
+
+void World::barrier() const {
+  if (size > 1)
+    MPI_Barrier(MPI_COMM_WORLD);
+}
+
 LiggghtsDem::LiggghtsDem(const std::string &script,
                          std::vector<std::pair<std::string, std::string>> variables,
-                         const std::string &log, MPI_Comm comm) {
+                         const std::string &log, MPI_Comm comm)
+    : comm_(comm) {
   namespace fs = std::filesystem;
   if (!fs::is_regular_file(script))
     throw std::invalid_argument("LIGGGHTS input script " + script + " not found");
@@ -165,6 +181,23 @@ void LiggghtsDem::advance(double dt, const Exchange &exchange) {
   command(lmp_, "run 1 pre no post no");
   exchange_ = nullptr;
   read();
+}
+
+// Every rank's reactions, gathered in rank order (as bytes: a Reaction is plain data).
+void LiggghtsDem::gatherReactions(std::vector<Reaction> &reactions) const {
+  int ranks = 1;
+  MPI_Comm_size(comm_, &ranks);
+  if (ranks == 1)
+    return;
+  const int mine = static_cast<int>(reactions.size() * sizeof(Reaction));
+  std::vector<int> sizes(ranks), starts(ranks + 1, 0);
+  MPI_Allgather(&mine, 1, MPI_INT, sizes.data(), 1, MPI_INT, comm_);
+  for (int r = 0; r < ranks; ++r)
+    starts[r + 1] = starts[r] + sizes[r];
+  std::vector<Reaction> all(static_cast<std::size_t>(starts[ranks]) / sizeof(Reaction));
+  MPI_Allgatherv(reactions.data(), mine, MPI_BYTE, all.data(), sizes.data(), starts.data(),
+                 MPI_BYTE, comm_);
+  reactions.swap(all);
 }
 
 } // namespace mesopen::coupling

@@ -20,6 +20,13 @@ namespace mesopen::coupling {
 
 // MPI initialised (once, for LIGGGHTS), and finalised when the program exits.
 void ensureMpi();
+// This process's rank among the processes mpirun started, and their number: MPI is initialised if
+// mpirun (Open MPI) started the program or `needed`; else rank 0 of 1.
+struct World {
+  int rank = 0, size = 1;
+  void barrier() const;
+};
+World world(bool needed);
 
 class LiggghtsDem : public DemParticipant {
 public:
@@ -34,11 +41,13 @@ public:
   const Particles &particles() const override { return p_; }
   double stableStep() const override;
   void advance(double dt, const Exchange &exchange) override;
+  void gatherReactions(std::vector<Reaction> &reactions) const override;
 
 private:
   static void callback(void *self, std::int64_t step, int n, int *id, double **x, double **f);
   void read(); // the particles' state from LIGGGHTS's arrays into p_
   void *lmp_ = nullptr;
+  MPI_Comm comm_;
   Particles p_;
   ParticleForces forces_;
   const Exchange *exchange_ = nullptr; // set during a window

@@ -35,8 +35,7 @@ double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// The scene, checked for what a run needs, and the output directory cleared of an earlier run's
-// files (frames included). Throws InputError.
+// The scene, checked for what a run needs. Throws InputError.
 Scene prepareRun(const RunOptions &options) {
   Scene scene = readScene(options.scene);
   if (options.seed)
@@ -50,7 +49,11 @@ Scene prepareRun(const RunOptions &options) {
   if (!scene.projectile.enabled)
     throw InputError(options.scene +
                      ": projectile.enabled = false; `mesopen run` needs the projectile");
-  const std::string &dir = options.out_dir;
+  return scene;
+}
+
+// The output directory cleared of an earlier run's files (frames included).
+void clearOutput(const Scene &scene, const std::string &dir) {
   prepareOutputDirectory(dir, {"summary.json", "run.h5", "run.h5.tmp", "vtk/run.pvd", "dem.data",
                                "liggghts.log"});
   std::error_code ec;
@@ -59,7 +62,6 @@ Scene prepareRun(const RunOptions &options) {
       fs::remove(f.path(), ec);
   if (scene.run.vtk && scene.run.frame_interval > 0)
     prepareOutputDirectory(dir + "/vtk", {});
-  return scene;
 }
 
 // Which grains are meshed: every one (fe), none (dem), or those whose centroids lie within the
@@ -357,9 +359,14 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
 }
 
 // Everything a run does once the scene is read: target, model, time loop, files.
-int simulate(const Scene &scene, const RunOptions &options, Clock::time_point start) {
+int simulate(const Scene &scene, const RunOptions &options, const coupling::World &world,
+             Clock::time_point start) {
   const RunSpec &run = scene.run;
-  const std::string &dir = options.out_dir, h5_path = dir + "/run.h5";
+  const bool writer = world.rank == 0; // the other ranks write a scratch run.h5, removed after
+  const std::string &dir = options.out_dir;
+  const std::string h5_path =
+      writer ? dir + "/run.h5"
+             : (fs::temp_directory_path() / ("mesopen-rank-" + std::to_string(getpid()) + ".h5")).string();
   GeneratorReport report;
   std::unique_ptr<Target> target;
   if (run.grains)
@@ -375,8 +382,9 @@ int simulate(const Scene &scene, const RunOptions &options, Clock::time_point st
   std::unique_ptr<coupling::LiggghtsDem> dem;
   std::unique_ptr<coupling::FeDemCoupling> coupled;
   if (target && std::find(meshed.begin(), meshed.end(), 0) != meshed.end()) {
-    writeLiggghtsData(dir + "/dem.data", *target, meshed);
-    coupling::ensureMpi();
+    if (writer)
+      writeLiggghtsData(dir + "/dem.data", *target, meshed);
+    world.barrier();
     dem = std::make_unique<coupling::LiggghtsDem>(shareDirectory() + "/liggghts-inputs/dem.in",
                                                   demVariables(scene, dir + "/dem.data"),
                                                   dir + "/liggghts.log", MPI_COMM_WORLD);
@@ -403,8 +411,9 @@ int simulate(const Scene &scene, const RunOptions &options, Clock::time_point st
   catchStopSignals(true); // from the moment run.h5.tmp exists to the end of the loop
   H5File h5 = H5File::create(h5_path + ".tmp");
   Series series(model);
-  Frames frames(h5, model, run.frame_interval, run.vtk ? dir + "/vtk" : std::string());
-  Progress progress(!options.quiet && isatty(STDERR_FILENO), run.end_time,
+  Frames frames(h5, model, writer ? run.frame_interval : 0.0,
+                run.vtk && writer ? dir + "/vtk" : std::string());
+  Progress progress(writer && !options.quiet && isatty(STDERR_FILENO), run.end_time,
                     run.end_depth * scene.projectile.length);
   const LoopResult loop = timeLoop(scene, model, solver, series, frames, progress);
   catchStopSignals(false);
@@ -422,11 +431,31 @@ int simulate(const Scene &scene, const RunOptions &options, Clock::time_point st
         {"projectile_length", scene.projectile.length}})
     h5.attribute("/", name, value);
   h5.close();
+  if (!writer) { // the files are rank 0's
+    fs::remove(h5_path + ".tmp");
+    return loop.failure.empty() ? 0 : loop.interrupted ? 128 + static_cast<int>(stop_signal) : 1;
+  }
   fs::rename(h5_path + ".tmp", h5_path);
   frames.writeCollection();
   const double wall = secondsSince(start);
-  writeJson(dir + "/summary.json",
-            runSummary(scene, options, model, solver, series, frames, loop, contact.get(), wall));
+  nlohmann::json summary =
+      runSummary(scene, options, model, solver, series, frames, loop, contact.get(), wall);
+  summary["representation"] = scene.run.representation == Representation::fe    ? "fe"
+                              : scene.run.representation == Representation::dem ? "dem"
+                                                                                 : "hybrid";
+  summary["ranks"] = world.size;
+  if (coupled) {
+    const coupling::DiskContactStatistics &c = coupled->contact().statistics();
+    summary["dem"] = {{"disks", dem->particles().size()},
+                      {"fe_dem_contacts_last_step", c.contacts},
+                      {"deepest_fe_dem_overlap_over_element_size", c.deepest},
+                      {"work_on_disks", c.work_on_disks},
+                      {"disks_kinetic_energy", dem->particles().kineticEnergy()},
+                      {"windows", coupled->windows()}};
+    summary["files"].push_back("dem.data");
+    summary["files"].push_back("liggghts.log");
+  }
+  writeJson(dir + "/summary.json", summary);
 
   if (loop.interrupted) {
     std::cerr << "mesopen run: " << loop.failure << ", t = " << solver.time()
@@ -453,16 +482,22 @@ int simulate(const Scene &scene, const RunOptions &options, Clock::time_point st
 int runCommand(const RunOptions &options) {
   const auto start = Clock::now();
   Scene scene;
+  coupling::World world;
   try {
     scene = prepareRun(options);
+    // Under mpirun every rank runs the scene; rank 0 writes the files.
+    world = coupling::world(scene.run.grains && scene.run.representation != Representation::fe);
+    if (world.rank == 0)
+      clearOutput(scene, options.out_dir);
   } catch (const InputError &e) {
     std::cerr << "mesopen run: " << e.what() << '\n';
     return 2;
   }
+  world.barrier();
   if (options.threads)
     omp_set_num_threads(*options.threads);
   try {
-    return simulate(scene, options, start);
+    return simulate(scene, options, world, start);
   } catch (const std::exception &e) {
     // Before the time loop (target, model) or while writing the files: no run.h5, a summary.
     std::error_code ec;

@@ -48,7 +48,9 @@ TEST(Coupling, ExchangedForcesBalance) {
   coupling::ParticleForces f;
   f.reset(p.size());
   model.nodes.clearExternal();
-  contact.addForces(model, p, f, 1e-9);
+  std::vector<coupling::Reaction> reactions;
+  contact.addForces(model, p, f, reactions, 1e-9);
+  coupling::DiskContact::apply(model, reactions);
   EXPECT_EQ(contact.statistics().contacts, 4u);
   double sx = 0.0, sy = 0.0, largest = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i)
