@@ -4,6 +4,7 @@
 #pragma once
 
 #include "projectile.hpp"
+#include "spring_dashpot.hpp"
 #include "target.hpp"
 
 #include <cstdint>
@@ -53,11 +54,12 @@ struct ContactSpec {
 // The DEM grains (table [dem]): LIGGGHTS's hooke/stiffness law per metre of thickness, f_n =
 // k_n d - g_n v_n (liggghts-inputs/dem.in), between disks and with the walls; the disks meet the FE
 // bodies with the FE contact law (coupling/disk_contact.hpp) and [contact]'s friction.
+// The defaults: quartz grains' law, calibrated against pairs of meshed grains (docs/coupling.md).
 struct DemSpec {
-  double stiffness = 1e10;            // k_n [N/m per m]
-  double tangential_stiffness = 1e10; // k_t [N/m per m]
-  double damping = 0.0;               // g_n, absolute [N s/m per m]
-  double tangential_damping = 0.0;    // g_t [N s/m per m]
+  double stiffness = coupling::quartz_grains.kn;            // k_n [N/m per m]
+  double tangential_stiffness = coupling::quartz_grains.kt; // k_t [N/m per m]
+  double damping = coupling::quartz_grains.gn;              // g_n, absolute [N s/m per m]
+  double tangential_damping = coupling::quartz_grains.gt;   // g_t [N s/m per m]
   double skin = 0.0;                  // neighbour skin [m]; 0: a tenth of the mean diameter
 };
 
