@@ -72,6 +72,18 @@ void World::barrier() const {
     MPI_Barrier(MPI_COMM_WORLD);
 }
 
+double World::sum(double value) const {
+  if (size > 1)
+    MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  return value;
+}
+
+double World::max(double value) const {
+  if (size > 1)
+    MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  return value;
+}
+
 LiggghtsDem::LiggghtsDem(const std::string &script,
                          std::vector<std::pair<std::string, std::string>> variables,
                          const std::string &log, MPI_Comm comm)

@@ -25,6 +25,8 @@ void ensureMpi();
 struct World {
   int rank = 0, size = 1;
   void barrier() const;
+  double sum(double value) const; // over the ranks
+  double max(double value) const;
 };
 World world(bool needed);
 

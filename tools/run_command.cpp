@@ -431,6 +431,17 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
         {"projectile_length", scene.projectile.length}})
     h5.attribute("/", name, value);
   h5.close();
+  nlohmann::json dem_figures; // over all ranks' disks: every rank takes part
+  if (coupled) {
+    const coupling::DiskContactStatistics &c = coupled->contact().statistics();
+    dem_figures = {
+        {"disks", std::llround(world.sum(static_cast<double>(dem->particles().size())))},
+        {"fe_dem_contacts_last_step", std::llround(world.sum(static_cast<double>(c.contacts)))},
+        {"deepest_fe_dem_overlap_over_element_size", world.max(c.deepest)},
+        {"work_on_disks", world.sum(c.work_on_disks)},
+        {"disks_kinetic_energy", world.sum(dem->particles().kineticEnergy())},
+        {"windows", coupled->windows()}};
+  }
   if (!writer) { // the files are rank 0's
     fs::remove(h5_path + ".tmp");
     return loop.failure.empty() ? 0 : loop.interrupted ? 128 + static_cast<int>(stop_signal) : 1;
@@ -445,13 +456,7 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
                                                                                  : "hybrid";
   summary["ranks"] = world.size;
   if (coupled) {
-    const coupling::DiskContactStatistics &c = coupled->contact().statistics();
-    summary["dem"] = {{"disks", dem->particles().size()},
-                      {"fe_dem_contacts_last_step", c.contacts},
-                      {"deepest_fe_dem_overlap_over_element_size", c.deepest},
-                      {"work_on_disks", c.work_on_disks},
-                      {"disks_kinetic_energy", dem->particles().kineticEnergy()},
-                      {"windows", coupled->windows()}};
+    summary["dem"] = dem_figures;
     summary["files"].push_back("dem.data");
     summary["files"].push_back("liggghts.log");
   }
