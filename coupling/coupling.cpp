@@ -1,5 +1,7 @@
 #include "coupling.hpp"
 
+#include <chrono>
+
 namespace mesopen::coupling {
 
 FeDemCoupling::FeDemCoupling(const fem::Model &model, DemParticipant &dem,
@@ -10,6 +12,7 @@ FeDemCoupling::FeDemCoupling(const fem::Model &model, DemParticipant &dem,
             {"Reaction-Force", "FE-Boundary", "FE", "FE"}} {}
 
 void FeDemCoupling::addForces(fem::Model &model, double time, double dt) {
+  const auto start = std::chrono::steady_clock::now();
   ++window_;
   reactions_.clear();
   dem_.advance(dt, [&](const Particles &particles, ParticleForces &forces) {
@@ -20,6 +23,7 @@ void FeDemCoupling::addForces(fem::Model &model, double time, double dt) {
   dem_.gatherReactions(reactions_);
   DiskContact::apply(model, reactions_);
   data_[2].window = window_;
+  seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   for (const Data &d : data_)
     if (d.window != window_)
       throw fem::RunFailure("coupling: " + d.name + " on " + d.mesh + " (" + d.writer + " to " +

@@ -36,12 +36,14 @@ public:
   const DiskContact &contact() const { return contact_; }
   const DemParticipant &dem() const { return dem_; }
   std::uint64_t windows() const { return window_; }
+  double seconds() const { return seconds_; } // in the windows: the DEM step and the exchange
   const std::vector<Data> &data() const { return data_; }
 
 private:
   DemParticipant &dem_;
   DiskContact contact_;
   std::uint64_t window_ = 0;
+  double seconds_ = 0.0;
   std::vector<Data> data_; // the particles' state, the forces on them, the reactions on FE nodes
   std::vector<Reaction> reactions_;
 };

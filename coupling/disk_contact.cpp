@@ -103,17 +103,33 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
   stats_.contacts = 0;
   if (n == 0 || fe_bodies_.empty())
     return;
-  // The disks in a grid of cells as wide as the largest disk.
-  double r_max = 0.0, x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
-  for (std::size_t i = 0; i < n; ++i) {
+  // The FE bodies' boxes, and the region they cover widened by the largest disk: only the disks
+  // whose centres lie in it can touch a body (disks thrown far off do not widen the grid).
+  double r_max = 0.0;
+  for (std::size_t i = 0; i < n; ++i)
     r_max = std::max(r_max, disks.radius[i]);
-    x0 = std::min(x0, disks.x[i]), x1 = std::max(x1, disks.x[i]);
-    y0 = std::min(y0, disks.y[i]), y1 = std::max(y1, disks.y[i]);
+  boxes_.resize(fe_bodies_.size());
+  Box region{INFINITY, INFINITY, -INFINITY, -INFINITY};
+  for (std::size_t k = 0; k < fe_bodies_.size(); ++k) {
+    Box box{INFINITY, INFINITY, -INFINITY, -INFINITY};
+    for (const std::uint32_t a : model.bodies[fe_bodies_[k]].boundary)
+      box = {std::min(box.x0, nd.x[a]), std::min(box.y0, nd.y[a]), std::max(box.x1, nd.x[a]),
+             std::max(box.y1, nd.y[a])};
+    boxes_[k] = box;
+    region = {std::min(region.x0, box.x0 - r_max), std::min(region.y0, box.y0 - r_max),
+              std::max(region.x1, box.x1 + r_max), std::max(region.y1, box.y1 + r_max)};
   }
+  auto inRegion = [&](std::size_t i) {
+    return region.x0 <= disks.x[i] && disks.x[i] <= region.x1 && region.y0 <= disks.y[i] &&
+           disks.y[i] <= region.y1;
+  };
+  // Those disks in a grid of cells as wide as the largest disk.
+  const double x0 = region.x0, y0 = region.y0;
   double cell = std::max(2.0 * r_max, 1e-12);
   std::size_t gx = 0, gy = 0;
   for (;; cell *= 2.0) {
-    gx = static_cast<std::size_t>((x1 - x0) / cell) + 1, gy = static_cast<std::size_t>((y1 - y0) / cell) + 1;
+    gx = static_cast<std::size_t>((region.x1 - x0) / cell) + 1;
+    gy = static_cast<std::size_t>((region.y1 - y0) / cell) + 1;
     if (gx * gy <= max_cells)
       break;
   }
@@ -124,25 +140,22 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
   };
   cell_start_.assign(gx * gy + 1, 0);
   for (std::size_t i = 0; i < n; ++i)
-    ++cell_start_[cellOf(i) + 1];
+    if (inRegion(i))
+      ++cell_start_[cellOf(i) + 1];
   for (std::size_t c = 0; c < gx * gy; ++c)
     cell_start_[c + 1] += cell_start_[c];
-  cell_disks_.resize(n);
+  cell_disks_.resize(cell_start_.back());
   {
     std::vector<std::size_t> fill(cell_start_.begin(), cell_start_.end() - 1);
     for (std::size_t i = 0; i < n; ++i)
-      cell_disks_[fill[cellOf(i)]++] = static_cast<std::uint32_t>(i);
+      if (inRegion(i))
+        cell_disks_[fill[cellOf(i)]++] = static_cast<std::uint32_t>(i);
   }
 
   const double kappa = 2.0 * s_.stiffness, zeta_c = 2.0 * s_.damping * std::sqrt(kappa);
-  for (const std::uint32_t b : fe_bodies_) {
-    const auto &edges = model.bodies[b].boundary;
-    Box box{INFINITY, INFINITY, -INFINITY, -INFINITY};
-    for (const std::uint32_t a : edges)
-      box = {std::min(box.x0, nd.x[a]), std::min(box.y0, nd.y[a]), std::max(box.x1, nd.x[a]),
-             std::max(box.y1, nd.y[a])};
-    if (box.x1 + r_max < x0 || box.x0 - r_max > x1 || box.y1 + r_max < y0 || box.y0 - r_max > y1)
-      continue;
+  for (std::size_t kb = 0; kb < fe_bodies_.size(); ++kb) {
+    const std::uint32_t b = fe_bodies_[kb];
+    const Box &box = boxes_[kb];
     const auto ix0 = static_cast<std::size_t>(std::max(0.0, (box.x0 - r_max - x0) / cell));
     const auto iy0 = static_cast<std::size_t>(std::max(0.0, (box.y0 - r_max - y0) / cell));
     const auto ix1 = std::min(gx - 1, static_cast<std::size_t>(std::max(0.0, (box.x1 + r_max - x0) / cell)));

@@ -64,6 +64,7 @@ private:
   DiskContactSettings s_;
   std::vector<double> size_;                   // per body: longest boundary edge [m]
   std::vector<std::uint32_t> fe_bodies_;       // bodies with a boundary
+  std::vector<Box> boxes_;                     // theirs, this step
   std::vector<std::size_t> cell_start_;        // grid of disks: first disk of each cell
   std::vector<std::uint32_t> cell_disks_;
   DiskContactStatistics stats_;

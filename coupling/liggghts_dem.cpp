@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -149,30 +150,25 @@ void LiggghtsDem::read() {
 }
 
 // Called by `fix external` where the forces go in: within a window's step, after the drift (the
-// exchange); and when a run sets up (the step length changed), where the forces at x(n) are taken
-// again for the first half kick: those of the last exchange, by particle id (LIGGGHTS may have
-// reordered its particles since).
-void LiggghtsDem::callback(void *self, std::int64_t step, int n, int *id, double **, double **f) {
+// exchange); and once when the run is set up (in the constructor: no forces yet).
+void LiggghtsDem::callback(void *self, std::int64_t step, int n, int *, double **, double **f) {
   auto *dem = static_cast<LiggghtsDem *>(self);
+  if (!dem->exchange_ || step != dem->exchange_step_) {
+    for (int i = 0; i < n; ++i)
+      f[i][0] = f[i][1] = f[i][2] = 0.0;
+    return;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  dem->read(); // x(n+1), v(n+1/2)
+  dem->forces_.reset(dem->p_.size());
+  (*dem->exchange_)(dem->p_, dem->forces_);
   double **torque = lammps(dem->lmp_)->atom->torque;
-  if (dem->exchange_ && step == dem->exchange_step_) {
-    dem->read(); // x(n+1), v(n+1/2)
-    dem->forces_.reset(dem->p_.size());
-    (*dem->exchange_)(dem->p_, dem->forces_);
-    for (int i = 0; i < n; ++i) {
-      const auto tag = static_cast<std::size_t>(id[i]);
-      if (dem->by_id_.size() <= tag)
-        dem->by_id_.resize(tag + 1, {0.0, 0.0, 0.0});
-      dem->by_id_[tag] = {dem->forces_.fx[i], dem->forces_.fy[i], dem->forces_.torque[i]};
-    }
-  }
   for (int i = 0; i < n; ++i) {
-    const auto tag = static_cast<std::size_t>(id[i]);
-    const std::array<double, 3> last =
-        tag < dem->by_id_.size() ? dem->by_id_[tag] : std::array<double, 3>{0.0, 0.0, 0.0};
-    f[i][0] = last[0], f[i][1] = last[1], f[i][2] = 0.0;
-    torque[i][2] += last[2];
+    f[i][0] = dem->forces_.fx[i], f[i][1] = dem->forces_.fy[i], f[i][2] = 0.0;
+    torque[i][2] += dem->forces_.torque[i];
   }
+  dem->exchange_seconds_ +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void LiggghtsDem::advance(double dt, const Exchange &exchange) {
@@ -188,11 +184,25 @@ void LiggghtsDem::advance(double dt, const Exchange &exchange) {
     lmp->update->integrate->reset_dt();
     dt_ = dt;
   }
+  // One step of the integrator, as `run 1` takes it but without the run's set-up, which would
+  // compute every force once more at x(n) (LAMMPS's setup_minimal): the forces of the last step are
+  // still there for the first half kick. No output is due (the set-up run's last step is behind).
+  const auto start = std::chrono::steady_clock::now();
+  LAMMPS_NS::Update *update = lammps(lmp_)->update;
+  update->nsteps = 1;
+  update->firststep = update->beginstep = update->ntimestep;
+  update->laststep = update->endstep = update->ntimestep + 1;
+  update->whichflag = 1;
   exchange_ = &exchange;
-  exchange_step_ = lammps(lmp_)->update->ntimestep + 1;
-  command(lmp_, "run 1 pre no post no");
+  exchange_step_ = update->ntimestep + 1;
+  update->integrate->run(1);
   exchange_ = nullptr;
+  update->whichflag = 0;
+  const auto stepped = std::chrono::steady_clock::now();
   read();
+  const auto end = std::chrono::steady_clock::now();
+  window_seconds_ += std::chrono::duration<double>(end - start).count();
+  exchange_seconds_ += std::chrono::duration<double>(end - stepped).count();
 }
 
 // Every rank's reactions, gathered in rank order (as bytes: a Reaction is plain data).

@@ -10,7 +10,6 @@
 
 #include <mpi.h>
 
-#include <array>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -44,6 +43,12 @@ public:
   double stableStep() const override;
   void advance(double dt, const Exchange &exchange) override;
   void gatherReactions(std::vector<Reaction> &reactions) const override;
+  // The LIGGGHTS instance, for library.h calls (benchmarks).
+  void *handle() const { return lmp_; }
+  // Time in the windows [s]: all of it, and the part spent in the exchange (the state read, the
+  // FE-DEM contact, the forces put in, the state read at the window's end).
+  double windowSeconds() const { return window_seconds_; }
+  double exchangeSeconds() const { return exchange_seconds_; }
 
 private:
   static void callback(void *self, std::int64_t step, int n, int *id, double **x, double **f);
@@ -54,8 +59,8 @@ private:
   ParticleForces forces_;
   const Exchange *exchange_ = nullptr; // set during a window
   std::int64_t exchange_step_ = 0;     // LIGGGHTS's step number of the window's step
-  std::vector<std::array<double, 3>> by_id_; // the last exchange's force and torque, by id
   double dt_ = 0.0, kn_ = 0.0;
+  double window_seconds_ = 0.0, exchange_seconds_ = 0.0;
 };
 
 } // namespace mesopen::coupling
