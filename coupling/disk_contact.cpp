@@ -32,18 +32,26 @@ void DiskContact::boundaryChanged(const fem::Model &model) {
   }
 }
 
-// The closest point of the body's boundary to (cx, cy), and the side: at a segment's inside by
-// its outward normal (the tangent turned right: boundaries run counter-clockwise), at a vertex by
-// the vertex's pseudo-normal, the sum of its two segments' normals.
+// The closest point of the body's boundary to (cx, cy) among the segments within `reach` (the
+// disk's radius: the closest of all when it is that near; distance infinite when none is), and the
+// side: at a segment's inside by its outward normal (the tangent turned right: boundaries run
+// counter-clockwise), at a vertex by the vertex's pseudo-normal, the sum of its two segments'
+// normals. A disk wholly inside a body (its centre more than its radius behind the boundary) is
+// not seen: the penalty keeps overlaps to a few percent of a radius.
 DiskContact::Closest DiskContact::closest(const fem::Model &model, std::size_t body, double cx,
-                                          double cy) const {
+                                          double cy, double reach) const {
   const fem::Nodes &nd = model.nodes;
   const auto &edges = model.bodies[body].boundary;
   double best = std::numeric_limits<double>::infinity(), best_t = 0.0, best_length = 0.0;
-  std::size_t best_edge = 0;
+  std::size_t best_edge = edges.size();
   for (std::size_t e = 0; e < edges.size(); e += 2) {
     const double ax = nd.x[edges[e]], ay = nd.y[edges[e]];
-    const double dx = nd.x[edges[e + 1]] - ax, dy = nd.y[edges[e + 1]] - ay;
+    const double bx = nd.x[edges[e + 1]], by = nd.y[edges[e + 1]];
+    // a segment whose box is farther than `reach` from the point is farther than that
+    if (std::max(ax, bx) < cx - reach || std::min(ax, bx) > cx + reach ||
+        std::max(ay, by) < cy - reach || std::min(ay, by) > cy + reach)
+      continue;
+    const double dx = bx - ax, dy = by - ay;
     const double length = std::sqrt(dx * dx + dy * dy);
     if (!(length > 0.0))
       continue;
@@ -54,6 +62,10 @@ DiskContact::Closest DiskContact::closest(const fem::Model &model, std::size_t b
       best = d2, best_t = t, best_length = length, best_edge = e;
   }
   Closest c;
+  if (best_edge == edges.size()) { // nothing within reach
+    c.distance = std::numeric_limits<double>::infinity();
+    return c;
+  }
   c.s1 = edges[best_edge], c.s2 = edges[best_edge + 1];
   c.w = best_t / best_length;
   c.distance = std::sqrt(best);
@@ -167,7 +179,7 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
           const double cx = disks.x[i], cy = disks.y[i], r = disks.radius[i];
           if (cx + r < box.x0 || cx - r > box.x1 || cy + r < box.y0 || cy - r > box.y1)
             continue;
-          const Closest c = closest(model, b, cx, cy);
+          const Closest c = closest(model, b, cx, cy, r);
           const double depth = r - c.distance; // c.distance < 0: the centre inside
           if (!(depth > 0.0))
             continue;

@@ -60,7 +60,8 @@ private:
     double w = 0.0;         // weight of s2
     double distance = 0.0, nx = 0.0, ny = 0.0; // |c - q|, unit normal out of the body
   };
-  Closest closest(const fem::Model &model, std::size_t body, double cx, double cy) const;
+  Closest closest(const fem::Model &model, std::size_t body, double cx, double cy,
+                  double reach) const;
   DiskContactSettings s_;
   std::vector<double> size_;                   // per body: longest boundary edge [m]
   std::vector<std::uint32_t> fe_bodies_;       // bodies with a boundary
