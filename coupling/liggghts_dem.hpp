@@ -1,9 +1,9 @@
 // The DEM participant run by LIGGGHTS 3.8 through its library interface (library.h): the input
-// script liggghts-inputs/dem.in with its variables, one `run 1` per time window, the FE bodies'
-// forces put in by `fix external pf/callback` (inside the step, after the drift: exactly the
-// velocity-Verlet step DemParticipant describes; writing the forces between runs instead gives
-// half the impulse) and their torques added in the same callback. The only file, with its .cpp,
-// that includes LIGGGHTS headers.
+// script liggghts-inputs/dem.in with its variables, one step of LIGGGHTS's integrator per time
+// window, the FE bodies' forces put in by `fix external pf/callback` (inside the step, after the
+// drift: exactly the velocity-Verlet step DemParticipant describes; writing the forces between runs
+// instead gives half the impulse) and their torques added in the same callback. The only file,
+// with its .cpp, that includes LIGGGHTS headers.
 #pragma once
 
 #include "dem.hpp"
