@@ -5,6 +5,7 @@
 #include "coupling.hpp"
 #include "liggghts_dem.hpp"
 #include "measures.hpp"
+#include "mesh.hpp"
 #include "writers.hpp"
 #include "generator.hpp"
 #include "output.hpp"
@@ -84,19 +85,34 @@ std::vector<char> meshedGrains(const Scene &scene, const Target &target, const P
   return meshed;
 }
 
-// The projectile's and the meshed grains' meshes as one: the projectile is body 0, the meshed grains
-// follow in order (their node indices shifted past those before).
-Meshes runMeshes(const Target *target, const PlacedProjectile &p, const std::vector<char> &meshed) {
+// The meshes of the grains marked in `meshed`, in grain order: the target's own when every grain is
+// (it was generated meshed), else those grains meshed now (the generator made polygons only).
+Meshes grainMeshes(const Scene &scene, const Target &target, const std::vector<char> &meshed) {
+  if (std::find(meshed.begin(), meshed.end(), 0) == meshed.end())
+    return target.mesh;
+  Polygons chosen;
+  for (std::size_t g = 0; g < meshed.size(); ++g)
+    if (meshed[g]) {
+      const auto first = target.grains.x.begin() + static_cast<long>(target.grains.offset[g]);
+      const auto last = target.grains.x.begin() + static_cast<long>(target.grains.offset[g + 1]);
+      const auto first_y = target.grains.y.begin() + static_cast<long>(target.grains.offset[g]);
+      chosen.add(std::vector<double>(first, last),
+                 std::vector<double>(first_y, first_y + (last - first)));
+    }
+  return meshGrains(chosen, scene.target.mesh, scene.target.mesh_size, scene.target.min_angle);
+}
+
+// The projectile's and the grains' meshes as one: the projectile is body 0, the grains follow in
+// order (their node indices shifted past those before).
+Meshes runMeshes(const Meshes *grains, const PlacedProjectile &p) {
   Meshes all;
   all.x = p.mesh.x, all.y = p.mesh.y, all.tri = p.mesh.tri;
   all.node_offset.push_back(all.x.size());
   all.tri_offset.push_back(all.tri.size() / 3);
-  if (!target)
+  if (!grains)
     return all;
-  const Meshes &g = target->mesh;
+  const Meshes &g = *grains;
   for (std::size_t b = 0; b < g.bodies(); ++b) {
-    if (!meshed[b])
-      continue;
     const auto shift = static_cast<std::uint32_t>(all.x.size() - g.node_offset[b]);
     all.x.insert(all.x.end(), g.x.begin() + g.node_offset[b], g.x.begin() + g.node_offset[b + 1]);
     all.y.insert(all.y.end(), g.y.begin() + g.node_offset[b], g.y.begin() + g.node_offset[b + 1]);
@@ -125,7 +141,8 @@ fem::VelocityConstraint boxEdges(const fem::Model &model, const TargetSpec &box)
 // (0, -v) and spin, and the fixed box edges.
 fem::Model buildRunModel(const Scene &scene, const Target *target, const PlacedProjectile &p,
                          const std::vector<char> &meshed) {
-  const Meshes all = runMeshes(target, p, meshed);
+  const Meshes grains = target ? grainMeshes(scene, *target, meshed) : Meshes{};
+  const Meshes all = runMeshes(target ? &grains : nullptr, p);
   std::vector<std::string> names{"projectile"};
   for (std::size_t g = 0; g < meshed.size(); ++g)
     if (meshed[g])
@@ -369,8 +386,13 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
              : (fs::temp_directory_path() / ("mesopen-rank-" + std::to_string(getpid()) + ".h5")).string();
   GeneratorReport report;
   std::unique_ptr<Target> target;
-  if (run.grains)
-    target = std::make_unique<Target>(generateTarget(scene.target, report));
+  if (run.grains) {
+    // With disks, the grains to mesh are chosen first and meshed alone (grainMeshes).
+    TargetSpec spec = scene.target;
+    if (run.representation != Representation::fe)
+      spec.mesh = MeshKind::none;
+    target = std::make_unique<Target>(generateTarget(spec, report));
+  }
   const Polygons no_grains;
   const PlacedProjectile projectile = placeProjectile(
       scene.projectile, scene.target.mesh_size, scene.target, target ? target->grains : no_grains);
