@@ -20,6 +20,7 @@ DiskContact::DiskContact(const fem::Model &model, DiskContactSettings settings)
 
 void DiskContact::boundaryChanged(const fem::Model &model) {
   const fem::Nodes &nd = model.nodes;
+  boxes_.clear(); // taken anew
   size_.assign(model.bodies.size(), 0.0);
   fe_bodies_.clear();
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
@@ -120,14 +121,18 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
   double r_max = 0.0;
   for (std::size_t i = 0; i < n; ++i)
     r_max = std::max(r_max, disks.radius[i]);
+  // (a body at rest keeps its box: its nodes have not moved)
+  const bool all = boxes_.size() != fe_bodies_.size();
   boxes_.resize(fe_bodies_.size());
   Box region{INFINITY, INFINITY, -INFINITY, -INFINITY};
   for (std::size_t k = 0; k < fe_bodies_.size(); ++k) {
-    Box box{INFINITY, INFINITY, -INFINITY, -INFINITY};
-    for (const std::uint32_t a : model.bodies[fe_bodies_[k]].boundary)
-      box = {std::min(box.x0, nd.x[a]), std::min(box.y0, nd.y[a]), std::max(box.x1, nd.x[a]),
-             std::max(box.y1, nd.y[a])};
-    boxes_[k] = box;
+    Box &box = boxes_[k];
+    if (all || !model.bodies[fe_bodies_[k]].at_rest) {
+      box = {INFINITY, INFINITY, -INFINITY, -INFINITY};
+      for (const std::uint32_t a : model.bodies[fe_bodies_[k]].boundary)
+        box = {std::min(box.x0, nd.x[a]), std::min(box.y0, nd.y[a]), std::max(box.x1, nd.x[a]),
+               std::max(box.y1, nd.y[a])};
+    }
     region = {std::min(region.x0, box.x0 - r_max), std::min(region.y0, box.y0 - r_max),
               std::max(region.x1, box.x1 + r_max), std::max(region.y1, box.y1 + r_max)};
   }
