@@ -47,6 +47,15 @@ Scene prepareRun(const RunOptions &options) {
   if (!scene.run.grains && scene.run.representation != Representation::fe)
     throw InputError(options.scene + ": run.representation = \"dem\" or \"hybrid\" needs the "
                                      "grains; allowed with run.grains = false: \"fe\"");
+  // LIGGGHTS reads the disks from the output directory through a script variable: a path it
+  // would split or expand is refused before it starts (it exits the process on a bad command).
+  const std::string out = fs::absolute(options.out_dir).string();
+  if (scene.run.grains && scene.run.representation != Representation::fe &&
+      out.find_first_of(" \t\n\"'$#&") != std::string::npos)
+    throw InputError(options.scene + ": run.representation = \"" +
+                     (scene.run.representation == Representation::dem ? "dem" : "hybrid") +
+                     "\" needs an output directory without spaces or any of \"'$#& (LIGGGHTS "
+                     "reads the disks from it); it is '" + out + "'");
   if (!scene.projectile.enabled)
     throw InputError(options.scene +
                      ": projectile.enabled = false; `mesopen run` needs the projectile");

@@ -105,6 +105,11 @@ TEST(Run, BadInputNamesTheKey) {
       {"[materials.projectile]\nplastic = 1\n", "materials.projectile.plastic"},
       {"[materials.projectile]\npreset = \"steel\"\ntype = \"elastic\"\n", "not both"},
       {"[materials.sand]\n", "materials.sand"},
+      {"[run]\nrepresentation = \"disks\"\n", "run.representation"},
+      {"[run]\nband_half_width = -1e-3\n", "run.band_half_width"},
+      {"[dem]\nstiffness = 0\n", "dem.stiffness"},
+      {"[dem]\ndamping = -1\n", "dem.damping"},
+      {"[run]\nrepresentation = \"dem\"\ngrains = false\n", "run.representation"},
   };
   for (const auto &[text, key] : cases) {
     const auto r = runScene(dir, text);
@@ -112,6 +117,18 @@ TEST(Run, BadInputNamesTheKey) {
     EXPECT_NE(r.output.find(key), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("scene.toml"), std::string::npos) << r.output;
   }
+}
+
+// With disks, an output directory LIGGGHTS could not read from is bad input, named before any
+// run starts.
+TEST(Run, DiskRunNeedsAPlainOutputPath) {
+  ScratchDir dir("run-dem-path");
+  test::writeFile(dir / "scene.toml", tinyScene("representation = \"dem\"\n"));
+  const auto r = test::runMesopen("run " + (dir / "scene.toml") + " -o '" + (dir / "out put") +
+                                  "' --quiet");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("run.representation"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("out put"), std::string::npos) << r.output;
 }
 
 // A frame that cannot be written (its name taken by a directory) stops the run: exit 1, and
