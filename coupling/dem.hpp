@@ -55,6 +55,8 @@ public:
   // Over MPI ranks each holding part of the disks, the reactions of every rank's disks, in rank
   // order, so that every rank loads its copy of the FE nodes alike (one rank: as they are).
   virtual void gatherReactions(std::vector<Reaction> &) const {}
+  // Every rank's disks on rank 0 (every rank calls it), in the order of their ids; elsewhere empty.
+  virtual void gatherParticles(Particles &all) const { all = particles(); }
 };
 
 } // namespace mesopen::coupling

@@ -222,4 +222,45 @@ void LiggghtsDem::gatherReactions(std::vector<Reaction> &reactions) const {
   reactions.swap(all);
 }
 
+// The disks of every rank on rank 0, ordered by id (the same order on any number of ranks).
+void LiggghtsDem::gatherParticles(Particles &all) const {
+  LAMMPS_NS::Atom *atom = lammps(lmp_)->atom;
+  const int n = static_cast<int>(p_.size());
+  int ranks = 1, rank = 0;
+  MPI_Comm_size(comm_, &ranks);
+  MPI_Comm_rank(comm_, &rank);
+  std::vector<int> counts(ranks), starts(ranks + 1, 0);
+  MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm_);
+  for (int r = 0; r < ranks; ++r)
+    starts[r + 1] = starts[r] + counts[r];
+  const int total = rank == 0 ? starts[ranks] : 0;
+  std::vector<double> ids(n), all_ids(total);
+  for (int i = 0; i < n; ++i)
+    ids[i] = static_cast<double>(atom->tag[i]);
+  auto gather = [&](const std::vector<double> &mine, std::vector<double> &out) {
+    out.resize(total);
+    MPI_Gatherv(mine.data(), n, MPI_DOUBLE, out.data(), counts.data(), starts.data(), MPI_DOUBLE,
+                0, comm_);
+  };
+  gather(ids, all_ids);
+  Particles gathered;
+  std::vector<double> Particles::*const fields[] = {&Particles::x,  &Particles::y,
+                                                    &Particles::vx, &Particles::vy,
+                                                    &Particles::omega, &Particles::radius,
+                                                    &Particles::mass};
+  for (auto field : fields)
+    gather(p_.*field, gathered.*field);
+  std::vector<int> order(total);
+  for (int i = 0; i < total; ++i)
+    order[i] = i;
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return all_ids[a] < all_ids[b]; });
+  all = Particles{};
+  for (auto field : fields) {
+    std::vector<double> &out = all.*field;
+    out.resize(total);
+    for (int i = 0; i < total; ++i)
+      out[i] = (gathered.*field)[order[i]];
+  }
+}
+
 } // namespace mesopen::coupling

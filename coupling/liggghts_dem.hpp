@@ -43,6 +43,7 @@ public:
   double stableStep() const override;
   void advance(double dt, const Exchange &exchange) override;
   void gatherReactions(std::vector<Reaction> &reactions) const override;
+  void gatherParticles(Particles &all) const override;
   // The LIGGGHTS instance, for library.h calls (benchmarks).
   void *handle() const { return lmp_; }
   // Time in the windows [s]: all of it, and the part spent in the exchange (the state read, the

@@ -68,7 +68,8 @@ void clearOutput(const Scene &scene, const std::string &dir) {
                                "liggghts.log"});
   std::error_code ec;
   for (const auto &f : fs::directory_iterator(dir + "/vtk", ec))
-    if (f.path().filename().string().starts_with("frame_"))
+    if (f.path().filename().string().starts_with("frame_") ||
+        f.path().filename().string().starts_with("disks_"))
       fs::remove(f.path(), ec);
   if (scene.run.vtk && scene.run.frame_interval > 0)
     prepareOutputDirectory(dir + "/vtk", {});
@@ -442,8 +443,10 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
   catchStopSignals(true); // from the moment run.h5.tmp exists to the end of the loop
   H5File h5 = H5File::create(h5_path + ".tmp");
   Series series(model);
-  Frames frames(h5, model, writer ? run.frame_interval : 0.0,
-                run.vtk && writer ? dir + "/vtk" : std::string());
+  // Every rank takes the frames (they gather the disks to rank 0); rank 0 writes the VTK files.
+  Frames frames(h5, model, run.frame_interval, run.vtk && writer ? dir + "/vtk" : std::string());
+  if (dem)
+    frames.addDisks(dem.get());
   Progress progress(writer && !options.quiet && isatty(STDERR_FILENO), run.end_time,
                     run.end_depth * scene.projectile.length);
   const LoopResult loop = timeLoop(scene, model, solver, series, frames, progress);

@@ -98,22 +98,29 @@ vtkNew<vtkDoubleArray> vtkArray(const char *name, const std::vector<double> &val
 }
 
 // One frame as a VTK unstructured grid (binary, appended), written whole or not at all.
-void writeFrameVtu(const std::string &path, const fem::Model &model, const FrameStress &s) {
-  const fem::Nodes &nd = model.nodes;
-  const fem::Elements &el = model.elements;
+// The grid's points (x, y, 0), with their velocities (vx, vy, 0) as the point array "velocity".
+void setPoints(vtkUnstructuredGrid *grid, const std::vector<double> &x, const std::vector<double> &y,
+               const std::vector<double> &vx, const std::vector<double> &vy) {
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
-  points->SetNumberOfPoints(static_cast<vtkIdType>(nd.size()));
+  points->SetNumberOfPoints(static_cast<vtkIdType>(x.size()));
   vtkNew<vtkDoubleArray> velocity;
   velocity->SetName("velocity");
   velocity->SetNumberOfComponents(3);
-  velocity->SetNumberOfTuples(static_cast<vtkIdType>(nd.size()));
-  for (std::size_t a = 0; a < nd.size(); ++a) {
-    points->SetPoint(static_cast<vtkIdType>(a), nd.x[a], nd.y[a], 0.0);
-    velocity->SetTuple3(static_cast<vtkIdType>(a), nd.vx[a], nd.vy[a], 0.0);
+  velocity->SetNumberOfTuples(static_cast<vtkIdType>(x.size()));
+  for (std::size_t a = 0; a < x.size(); ++a) {
+    points->SetPoint(static_cast<vtkIdType>(a), x[a], y[a], 0.0);
+    velocity->SetTuple3(static_cast<vtkIdType>(a), vx[a], vy[a], 0.0);
   }
-  vtkNew<vtkUnstructuredGrid> grid;
   grid->SetPoints(points);
+  grid->GetPointData()->AddArray(velocity);
+}
+
+void writeFrameVtu(const std::string &path, const fem::Model &model, const FrameStress &s) {
+  const fem::Nodes &nd = model.nodes;
+  const fem::Elements &el = model.elements;
+  vtkNew<vtkUnstructuredGrid> grid;
+  setPoints(grid, nd.x, nd.y, nd.vx, nd.vy);
   grid->AllocateExact(static_cast<vtkIdType>(el.size()), 3);
   vtkNew<vtkIntArray> body;
   body->SetName("body");
@@ -123,7 +130,6 @@ void writeFrameVtu(const std::string &path, const fem::Model &model, const Frame
     grid->InsertNextCell(el.eroded[e] ? VTK_EMPTY_CELL : VTK_TRIANGLE, el.eroded[e] ? 0 : 3, ids);
     body->SetValue(static_cast<vtkIdType>(e), static_cast<int>(el.body[e]));
   }
-  grid->GetPointData()->AddArray(velocity);
   vtkCellData *cells = grid->GetCellData();
   cells->AddArray(vtkArray("stress_xx", s.sxx));
   cells->AddArray(vtkArray("stress_yy", s.syy));
@@ -133,6 +139,20 @@ void writeFrameVtu(const std::string &path, const fem::Model &model, const Frame
   cells->AddArray(vtkArray("effective_stress", s.effective));
   cells->AddArray(vtkArray("plastic_strain", el.plastic_strain));
   cells->AddArray(body);
+  writeVtu(path, grid);
+}
+
+// The disks as points (VTK_VERTEX cells) with their radius, velocity and spin.
+void writeDisksVtu(const std::string &path, const coupling::Particles &d) {
+  vtkNew<vtkUnstructuredGrid> grid;
+  setPoints(grid, d.x, d.y, d.vx, d.vy);
+  grid->AllocateExact(static_cast<vtkIdType>(d.size()), 1);
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    const auto id = static_cast<vtkIdType>(i);
+    grid->InsertNextCell(VTK_VERTEX, 1, &id);
+  }
+  grid->GetPointData()->AddArray(vtkArray("radius", d.radius));
+  grid->GetPointData()->AddArray(vtkArray("omega", d.omega));
   writeVtu(path, grid);
 }
 
@@ -278,6 +298,16 @@ void Frames::take(const fem::Model &model, const fem::Solver &solver) {
                          {"plastic_strain", &el.plastic_strain}})
     h5_.write(g + "/" + name, *v);
   h5_.write(g + "/eroded", el.eroded);
+  if (dem_) {
+    coupling::Particles disks;
+    dem_->gatherParticles(disks); // every rank takes part; rank 0 holds them all
+    h5_.createGroup(g + "/disks");
+    for (auto [name, v] : {std::pair{"x", &disks.x}, {"y", &disks.y}, {"radius", &disks.radius},
+                           {"vx", &disks.vx}, {"vy", &disks.vy}, {"omega", &disks.omega}})
+      h5_.write(g + "/disks/" + name, *v);
+    if (!vtk_dir_.empty())
+      writeDisksVtu(vtk_dir_ + "/disks_" + frameName(times_.size()) + ".vtu", disks);
+  }
   times_.push_back(solver.time());
 }
 
@@ -288,9 +318,16 @@ void Frames::writeCollection() const {
                      "  <Collection>\n";
   for (std::size_t i = 0; i < times_.size(); ++i) {
     char line[160];
-    std::snprintf(line, sizeof line, "    <DataSet timestep=\"%.17g\" file=\"frame_%06zu.vtu\"/>\n",
+    std::snprintf(line, sizeof line,
+                  "    <DataSet timestep=\"%.17g\" part=\"0\" file=\"frame_%06zu.vtu\"/>\n",
                   times_[i], i);
     text += line;
+    if (dem_) {
+      std::snprintf(line, sizeof line,
+                    "    <DataSet timestep=\"%.17g\" part=\"1\" file=\"disks_%06zu.vtu\"/>\n",
+                    times_[i], i);
+      text += line;
+    }
   }
   text += "  </Collection>\n</VTKFile>\n";
   writeText(vtk_dir_ + "/run.pvd", text);

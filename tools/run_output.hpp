@@ -18,6 +18,7 @@
 // Body 0 is the projectile, body b >= 1 the grain b - 1 of the target.
 #pragma once
 
+#include "dem.hpp"
 #include "h5file.hpp"
 #include "model.hpp"
 #include "solver.hpp"
@@ -62,6 +63,11 @@ public:
   Frames(H5File &h5, const fem::Model &model, double interval, std::string vtk_dir);
   // A frame when the solver's time has reached the next multiple of the interval, or when `force`.
   void offer(const fem::Model &model, const fem::Solver &solver, bool force = false);
+  // The DEM participant's disks go into every frame too: /frames/NNNNNN/disks/{x, y, radius, vx,
+  // vy, omega} and vtk/disks_NNNNNN.vtu (points with radius, velocity and spin, as the second part
+  // of each time in run.pvd; in ParaView a Glyph of 2D circles scaled by radius shows them). Under
+  // MPI every rank takes the frames (the disks are gathered to rank 0, which writes them).
+  void addDisks(const coupling::DemParticipant *dem) { dem_ = dem; }
   // vtk/run.pvd listing the VTK frames written so far (nothing without VTK frames).
   void writeCollection() const;
   std::size_t size() const { return times_.size(); }
@@ -74,6 +80,7 @@ private:
   double interval_, next_ = 0.0;
   std::string vtk_dir_;
   std::vector<double> times_;
+  const coupling::DemParticipant *dem_ = nullptr;
 };
 
 } // namespace mesopen

@@ -1,4 +1,5 @@
 // `mesopen run` with disks: a tiny hybrid scene end to end.
+#include "h5file.hpp"
 #include "run.hpp"
 
 #include <gtest/gtest.h>
@@ -11,16 +12,17 @@ using namespace mesopen;
 using test::ScratchDir;
 
 // The tiny scene's grains near the path meshed, the others LIGGGHTS disks: the run completes,
-// writes run.h5, summary.json, the frames, dem.data and liggghts.log, and its summary counts the
-// disks, the meshed grains and the FE-DEM contacts; the FE energy balance closes (1e-2: a few
-// dozen steps of a stiff impact on a coarse mesh).
+// writes run.h5 (its frames with the disks), summary.json, the VTK frames of the FE bodies and of
+// the disks, dem.data and liggghts.log, and its summary counts the disks and the windows; the FE
+// energy balance closes (1e-2: a few dozen steps of a stiff impact on a coarse mesh).
 TEST(LiggghtsRun, TinyHybridRunWritesItsFiles) {
   ScratchDir dir("run-hybrid");
   test::writeFile(dir / "scene.toml", test::tinyScene("representation = \"hybrid\"\n"
                                                       "frame_interval = 1e-8\n"));
   const auto r = test::runMesopen("run " + (dir / "scene.toml") + " -o " + (dir / "out") + " --quiet");
   ASSERT_EQ(r.code, 0) << r.output;
-  for (const char *file : {"run.h5", "summary.json", "dem.data", "liggghts.log", "vtk/run.pvd"})
+  for (const char *file : {"run.h5", "summary.json", "dem.data", "liggghts.log", "vtk/run.pvd",
+                           "vtk/disks_000000.vtu"})
     EXPECT_TRUE(std::filesystem::exists(dir / (std::string("out/") + file))) << file;
   std::ifstream in(dir / "out/summary.json");
   const nlohmann::json s = nlohmann::json::parse(in);
@@ -30,4 +32,9 @@ TEST(LiggghtsRun, TinyHybridRunWritesItsFiles) {
   EXPECT_GT(s["model"]["bodies"].get<int>(), 1); // the projectile and meshed grains
   EXPECT_EQ(s["dem"]["windows"].get<int>(), s["steps"].get<int>());
   EXPECT_LT(std::abs(s["energy"]["balance_error"].get<double>()), 1e-2);
+  // every frame holds the disks
+  const H5File h5 = H5File::open(dir / "out/run.h5");
+  for (const char *frame : {"000000", "000001"})
+    EXPECT_EQ(h5.read<double>(std::string("/frames/") + frame + "/disks/radius").size(),
+              s["dem"]["disks"].get<std::size_t>());
 }
