@@ -4,6 +4,7 @@
 // m r^2 / 2 [kg m^2/m], forces [N/m], torques [N m/m].
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -27,6 +28,12 @@ struct Particles {
   }
 };
 
+// A step that takes ten steps over the contact time pi sqrt(m / k_n) of the lightest disk (mass
+// m) against a wall, the stiffest of its contacts; infinite without a contact stiffness.
+inline double contactStep(double lightest_mass, double kn) {
+  return kn > 0.0 && lightest_mass > 0.0 ? 0.1 * M_PI * std::sqrt(lightest_mass / kn) : INFINITY;
+}
+
 // Forces and torques on the disks [N/m, N m/m], written by the FE participant.
 struct ParticleForces {
   std::vector<double> fx, fy, torque;
@@ -49,7 +56,8 @@ public:
   using Exchange = std::function<void(const Particles &, ParticleForces &)>;
   virtual ~DemParticipant() = default;
   virtual const Particles &particles() const = 0;
-  // The largest stable time step of its own contacts [s].
+  // The largest stable time step of its own contacts [s] (contactStep; over MPI ranks, every rank
+  // calls it).
   virtual double stableStep() const = 0;
   virtual void advance(double dt, const Exchange &exchange) = 0;
   // Over MPI ranks each holding part of the disks, the reactions of every rank's disks, in rank

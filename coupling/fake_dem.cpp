@@ -19,12 +19,9 @@ FakeDem::FakeDem(Particles particles, FakeDemSettings settings)
     f_.fy[i] = -p_.mass[i] * s_.gravity;
 }
 
-// A tenth of the contact time pi sqrt(m_eff / k_n) of the lightest disk against a wall.
 double FakeDem::stableStep() const {
-  if (!(s_.stiffness > 0.0) || p_.size() == 0)
-    return INFINITY;
-  const double m = *std::min_element(p_.mass.begin(), p_.mass.end());
-  return 0.1 * M_PI * std::sqrt(m / s_.stiffness);
+  const auto lightest = std::min_element(p_.mass.begin(), p_.mass.end());
+  return contactStep(lightest == p_.mass.end() ? 0.0 : *lightest, s_.stiffness);
 }
 
 // The contact of disk i with disk j (j = size(): a wall), n the unit normal from j to i, depth the

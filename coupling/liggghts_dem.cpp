@@ -10,13 +10,10 @@
 #include "update.h"
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <limits>
 #include <stdexcept>
 
 namespace mesopen::coupling {
@@ -35,10 +32,6 @@ bool isName(const std::string &s) {
   return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) {
     return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
   });
-}
-
-void command(void *lmp, const std::string &text) {
-  lammps_command(lmp, const_cast<char *>(text.c_str()));
 }
 
 } // namespace
@@ -120,7 +113,7 @@ LiggghtsDem::LiggghtsDem(const std::string &script,
                                 " has no `fix mesopen all external pf/callback 1 1`");
   }
   static_cast<LAMMPS_NS::FixExternal *>(modify->fix[fix])->set_callback(callback, this);
-  command(lmp_, "run 0"); // set up; no exchange outside a window: the callback adds nothing
+  lammps_command(lmp_, const_cast<char *>("run 0")); // set up; no exchange: no forces yet
   dt_ = *static_cast<double *>(lammps_extract_global(lmp_, const_cast<char *>("dt")));
   read();
 }
@@ -130,11 +123,13 @@ LiggghtsDem::~LiggghtsDem() {
     lammps_close(lmp_);
 }
 
-// A tenth of the contact time pi sqrt(m / k_n) of the lightest disk against a wall.
+// The lightest disk of every rank's (so that every rank takes the same step).
 double LiggghtsDem::stableStep() const {
-  if (!(kn_ > 0.0) || p_.size() == 0)
-    return std::numeric_limits<double>::infinity();
-  return 0.1 * M_PI * std::sqrt(*std::min_element(p_.mass.begin(), p_.mass.end()) / kn_);
+  double lightest = INFINITY;
+  for (double m : p_.mass)
+    lightest = std::min(lightest, m);
+  MPI_Allreduce(MPI_IN_PLACE, &lightest, 1, MPI_DOUBLE, MPI_MIN, comm_);
+  return contactStep(std::isfinite(lightest) ? lightest : 0.0, kn_);
 }
 
 void LiggghtsDem::read() {

@@ -23,6 +23,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <unistd.h>
 
 namespace mesopen {
@@ -53,8 +54,7 @@ Scene prepareRun(const RunOptions &options) {
   if (scene.run.grains && scene.run.representation != Representation::fe &&
       out.find_first_of(" \t\n\"'$#&") != std::string::npos)
     throw InputError(options.scene + ": run.representation = \"" +
-                     (scene.run.representation == Representation::dem ? "dem" : "hybrid") +
-                     "\" needs an output directory without spaces or any of \"'$#& (LIGGGHTS "
+                     nameOf(scene.run.representation, representation_names) + "\" needs an output directory without spaces or any of \"'$#& (LIGGGHTS "
                      "reads the disks from it); it is '" + out + "'");
   if (!scene.projectile.enabled)
     throw InputError(options.scene +
@@ -389,11 +389,8 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
 int simulate(const Scene &scene, const RunOptions &options, const coupling::World &world,
              Clock::time_point start) {
   const RunSpec &run = scene.run;
-  const bool writer = world.rank == 0; // the other ranks write a scratch run.h5, removed after
-  const std::string &dir = options.out_dir;
-  const std::string h5_path =
-      writer ? dir + "/run.h5"
-             : (fs::temp_directory_path() / ("mesopen-rank-" + std::to_string(getpid()) + ".h5")).string();
+  const bool writer = world.rank == 0; // the files are rank 0's
+  const std::string &dir = options.out_dir, h5_path = dir + "/run.h5";
   GeneratorReport report;
   std::unique_ptr<Target> target;
   if (run.grains) {
@@ -441,10 +438,13 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
   }
 
   catchStopSignals(true); // from the moment run.h5.tmp exists to the end of the loop
-  H5File h5 = H5File::create(h5_path + ".tmp");
+  std::optional<H5File> h5;
+  if (writer)
+    h5.emplace(H5File::create(h5_path + ".tmp"));
   Series series(model);
-  // Every rank takes the frames (they gather the disks to rank 0); rank 0 writes the VTK files.
-  Frames frames(h5, model, run.frame_interval, run.vtk && writer ? dir + "/vtk" : std::string());
+  // Every rank takes the frames (they gather the disks to rank 0); rank 0 writes them.
+  Frames frames(h5 ? &*h5 : nullptr, model, run.frame_interval,
+                run.vtk && writer ? dir + "/vtk" : std::string());
   if (dem)
     frames.addDisks(dem.get());
   Progress progress(writer && !options.quiet && isatty(STDERR_FILENO), run.end_time,
@@ -453,18 +453,20 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
   catchStopSignals(false);
 
   // Whatever happened, the files hold everything computed so far and are whole.
-  series.write(h5);
-  h5.attribute("/", "format", std::string("mesopen-run"));
-  h5.attribute("/", "version", 1);
-  h5.attribute("/", "status", runStatus(loop));
-  h5.attribute("/", "seed", static_cast<std::uint64_t>(scene.target.seed));
-  for (auto [name, value] :
-       {std::pair{"velocity", run.velocity},
-        {"spin", run.spin},
-        {"end_time", run.end_time},
-        {"projectile_length", scene.projectile.length}})
-    h5.attribute("/", name, value);
-  h5.close();
+  if (writer) {
+    series.write(*h5);
+    h5->attribute("/", "format", std::string("mesopen-run"));
+    h5->attribute("/", "version", 1);
+    h5->attribute("/", "status", runStatus(loop));
+    h5->attribute("/", "seed", static_cast<std::uint64_t>(scene.target.seed));
+    for (auto [name, value] :
+         {std::pair{"velocity", run.velocity},
+          {"spin", run.spin},
+          {"end_time", run.end_time},
+          {"projectile_length", scene.projectile.length}})
+      h5->attribute("/", name, value);
+    h5->close();
+  }
   nlohmann::json dem_figures; // over all ranks' disks: every rank takes part
   if (coupled) {
     const coupling::DiskContactStatistics &c = coupled->contact().statistics();
@@ -476,18 +478,14 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
         {"disks_kinetic_energy", world.sum(dem->particles().kineticEnergy())},
         {"windows", coupled->windows()}};
   }
-  if (!writer) { // the files are rank 0's
-    fs::remove(h5_path + ".tmp");
+  if (!writer)
     return loop.failure.empty() ? 0 : loop.interrupted ? 128 + static_cast<int>(stop_signal) : 1;
-  }
   fs::rename(h5_path + ".tmp", h5_path);
   frames.writeCollection();
   const double wall = secondsSince(start);
   nlohmann::json summary =
       runSummary(scene, options, model, solver, series, frames, loop, contact.get(), wall);
-  summary["representation"] = scene.run.representation == Representation::fe    ? "fe"
-                              : scene.run.representation == Representation::dem ? "dem"
-                                                                                 : "hybrid";
+  summary["representation"] = nameOf(scene.run.representation, representation_names);
   summary["ranks"] = world.size;
   if (coupled) {
     summary["dem"] = dem_figures;
@@ -538,10 +536,13 @@ int runCommand(const RunOptions &options) {
   try {
     return simulate(scene, options, world, start);
   } catch (const std::exception &e) {
-    // Before the time loop (target, model) or while writing the files: no run.h5, a summary.
+    // Before the time loop (target, model) or while writing the files: no run.h5, a summary
+    // (rank 0's, the files' writer).
+    std::cerr << "mesopen run: failed: " << e.what() << '\n';
+    if (world.rank != 0)
+      return 1;
     std::error_code ec;
     fs::remove(options.out_dir + "/run.h5.tmp", ec);
-    std::cerr << "mesopen run: failed: " << e.what() << '\n';
     try {
       writeJson(options.out_dir + "/summary.json",
                 {{"command", "run"},

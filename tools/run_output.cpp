@@ -249,21 +249,23 @@ void Series::write(H5File &h5) const {
   }
 }
 
-Frames::Frames(H5File &h5, const fem::Model &model, double interval, std::string vtk_dir)
+Frames::Frames(H5File *h5, const fem::Model &model, double interval, std::string vtk_dir)
     : h5_(h5), interval_(interval), vtk_dir_(interval > 0 ? std::move(vtk_dir) : std::string()) {
+  if (!h5_)
+    return;
   const fem::Elements &el = model.elements;
   const std::vector<std::uint32_t> node_body(model.nodes.body.begin(), model.nodes.body.end());
-  h5_.createGroup("/mesh");
-  h5_.write("/mesh/x", model.nodes.x0);
-  h5_.write("/mesh/y", model.nodes.y0);
-  h5_.write("/mesh/triangles", el.node, el.size(), 3);
-  h5_.write("/mesh/element_body", el.body);
-  h5_.write("/mesh/node_body", node_body);
-  h5_.attribute(
+  h5->createGroup("/mesh");
+  h5->write("/mesh/x", model.nodes.x0);
+  h5->write("/mesh/y", model.nodes.y0);
+  h5->write("/mesh/triangles", el.node, el.size(), 3);
+  h5->write("/mesh/element_body", el.body);
+  h5->write("/mesh/node_body", node_body);
+  h5->attribute(
       "/mesh", "body_names",
       std::string("body 0: projectile; body b >= 1: grain-(b-1), the target's grain b - 1"));
   if (interval_ > 0)
-    h5_.createGroup("/frames");
+    h5->createGroup("/frames");
 }
 
 void Frames::offer(const fem::Model &model, const fem::Solver &solver, bool force) {
@@ -275,20 +277,28 @@ void Frames::offer(const fem::Model &model, const fem::Solver &solver, bool forc
 }
 
 void Frames::take(const fem::Model &model, const fem::Solver &solver) {
+  coupling::Particles disks;
+  if (dem_)
+    dem_->gatherParticles(disks); // every rank takes part; rank 0 holds them all
+  if (!h5_) {
+    times_.push_back(solver.time());
+    return;
+  }
+  H5File &h5 = *h5_;
   const fem::Nodes &nd = model.nodes;
   const fem::Elements &el = model.elements;
   const FrameStress s = frameStress(el);
   if (!vtk_dir_.empty())
     writeFrameVtu(vtk_dir_ + "/frame_" + frameName(times_.size()) + ".vtu", model, s);
   const std::string g = "/frames/" + frameName(times_.size());
-  h5_.createGroup(g);
-  h5_.attribute(g, "time", solver.time());
-  h5_.attribute(g, "step", static_cast<std::uint64_t>(solver.steps()));
-  h5_.attribute(g, "stress",
+  h5.createGroup(g);
+  h5.attribute(g, "time", solver.time());
+  h5.attribute(g, "step", static_cast<std::uint64_t>(solver.steps()));
+  h5.attribute(g, "stress",
                 std::string("total stress sigma = S - p I [Pa]; effective_stress: "
                             "von Mises sqrt(3/2 S:S) [Pa]; pressure compression positive"));
   for (auto [name, v] : {std::pair{"x", &nd.x}, {"y", &nd.y}, {"vx", &nd.vx}, {"vy", &nd.vy}})
-    h5_.write(g + "/" + name, *v);
+    h5.write(g + "/" + name, *v);
   for (auto [name, v] : {std::pair{"sxx", &s.sxx},
                          {"syy", &s.syy},
                          {"sxy", &s.sxy},
@@ -296,15 +306,13 @@ void Frames::take(const fem::Model &model, const fem::Solver &solver) {
                          {"pressure", &el.pressure},
                          {"effective_stress", &s.effective},
                          {"plastic_strain", &el.plastic_strain}})
-    h5_.write(g + "/" + name, *v);
-  h5_.write(g + "/eroded", el.eroded);
+    h5.write(g + "/" + name, *v);
+  h5.write(g + "/eroded", el.eroded);
   if (dem_) {
-    coupling::Particles disks;
-    dem_->gatherParticles(disks); // every rank takes part; rank 0 holds them all
-    h5_.createGroup(g + "/disks");
+    h5.createGroup(g + "/disks");
     for (auto [name, v] : {std::pair{"x", &disks.x}, {"y", &disks.y}, {"radius", &disks.radius},
                            {"vx", &disks.vx}, {"vy", &disks.vy}, {"omega", &disks.omega}})
-      h5_.write(g + "/disks/" + name, *v);
+      h5.write(g + "/disks/" + name, *v);
     if (!vtk_dir_.empty())
       writeDisksVtu(vtk_dir_ + "/disks_" + frameName(times_.size()) + ".vtu", disks);
   }

@@ -59,8 +59,10 @@ private:
 // files when a directory is given.
 class Frames {
 public:
-  // interval 0: no frames. vtk_dir empty: no VTK files. Writes /mesh at once.
-  Frames(H5File &h5, const fem::Model &model, double interval, std::string vtk_dir);
+  // interval 0: no frames. vtk_dir empty: no VTK files. Writes /mesh at once. h5 null: the frames
+  // are taken but nothing is written (an MPI rank other than 0: it takes part in gathering the
+  // disks).
+  Frames(H5File *h5, const fem::Model &model, double interval, std::string vtk_dir);
   // A frame when the solver's time has reached the next multiple of the interval, or when `force`.
   void offer(const fem::Model &model, const fem::Solver &solver, bool force = false);
   // The DEM participant's disks go into every frame too: /frames/NNNNNN/disks/{x, y, radius, vx,
@@ -76,7 +78,7 @@ public:
 private:
   void take(const fem::Model &model, const fem::Solver &solver);
 
-  H5File &h5_;
+  H5File *h5_;
   double interval_, next_ = 0.0;
   std::string vtk_dir_;
   std::vector<double> times_;
