@@ -25,7 +25,7 @@ namespace mesopen::coupling {
 
 struct DiskContactSettings {
   double stiffness = 0.5; // kappa of FE-FE contact
-  double damping = 0.5;   // zeta
+  double damping = 0.1;   // zeta of FE-FE contact
   std::vector<double> friction; // mu per FE body
 };
 

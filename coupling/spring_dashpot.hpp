@@ -83,9 +83,9 @@ struct GrainContactLaw {
 };
 inline constexpr GrainContactLaw quartz_grains{.diameter = 60e-6,
                                                .density = 2648.5,
-                                               .kn = 3.39e10,
-                                               .gn = 29.7,
-                                               .kt = 3.39e10 / 3.0,
-                                               .gt = 29.7 / 3.0};
+                                               .kn = 3.35e10,
+                                               .gn = 27.2,
+                                               .kt = 3.35e10 / 3.0,
+                                               .gt = 27.2 / 3.0};
 
 } // namespace mesopen::coupling

@@ -271,7 +271,7 @@ const std::vector<Key> &keys() {
         real("contact", "stiffness", c, &C::stiffness, "", 0, true, 2,
              "penalty kappa: normal stiffness kappa m_eff / dt^2 per node (stable up to about 0.6)"),
         real("contact", "damping", c, &C::damping, "", 0, false, 2,
-             "damping of the contact spring, a fraction of its critical damping"),
+             "damping of the contact spring, a fraction of its critical damping (stable up to about 0.1)"),
         real("dem", "stiffness", d, &D::stiffness, "N/m^2", 0, true, 1e16,
              "normal stiffness k_n of the disks' contacts, per metre of thickness (docs/coupling.md)"),
         real("dem", "tangential_stiffness", d, &D::tangential_stiffness, "N/m^2", 0, true, 1e16,

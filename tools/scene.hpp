@@ -48,7 +48,7 @@ struct ContactSpec {
   double friction = 0.3;            // Coulomb mu between grains, and grains and walls
   double projectile_friction = 0.3; // between the projectile and grains or walls
   double stiffness = 0.5;           // penalty kappa: k = kappa m_eff / dt^2
-  double damping = 0.5;             // fraction of the contact spring's critical damping
+  double damping = 0.1;             // fraction of the contact spring's critical damping
 };
 
 // The DEM grains (table [dem]): LIGGGHTS's hooke/stiffness law per metre of thickness, f_n =

@@ -70,8 +70,10 @@ TEST(Contact, SlidingBlockDeceleratesAtMuG) {
 
 // Two identical grains, one the mirror image of the other, meet head on: the motion stays a
 // mirror image and the total momentum stays zero. Tolerance: round-off accumulated over the steps
-// (1e-9 of the velocity scale; at 200 m/s the impact leaves the grains plastically deformed, at
-// 1500 m/s, the thesis's fastest, crushed). Their faces meet node on node: a node's closest point
+// (1e-8 of the velocity scale; at 200 m/s the impact leaves the grains plastically deformed, at
+// 1500 m/s, the thesis's fastest, crushed). The error stays below 1e-10 until the faces part: a
+// node whose force falls to zero (f_n = max(0, ...)) in one pass a step before its mirror image,
+// by round-off, then makes one jump of a few 1e-9 (3e-9 at 200 m/s at step 305 of 370). Their faces meet node on node: a node's closest point
 // is then a vertex of the other face, at the same distance from both its segments up to round-off;
 // before the vertex normal (Contact::atVertex) the pass took the first segment of its list, or by
 // round-off its corner, and the mirror error reached 2e-2. With contact stiffness kappa >= 0.7 the
@@ -123,7 +125,7 @@ TEST_P(HeadOn, StaysMirrorSymmetric) {
               solver.energy().plastic);
   EXPECT_GT(contact.statistics().max_depth, 0.0); // they did meet
   EXPECT_GT(fem::bodyMotion(model, 0).px, -0.9 * fem::bodyMotion(model, 0).mass * v);
-  EXPECT_LT(worst_mirror, 1e-9);
+  EXPECT_LT(worst_mirror, 1e-8);
   EXPECT_LT(worst_momentum, 1e-12 * mass * v);
 }
 INSTANTIATE_TEST_SUITE_P(Contact, HeadOn, ::testing::Values(200.0, 1500.0));
