@@ -133,6 +133,22 @@ bool plot(const std::string &out_dir, const std::vector<std::string> &jsons,
 
 } // namespace
 
+nlohmann::json analyzeRun(const std::string &dir) {
+  const std::string path = dir + "/run.h5";
+  if (!fs::is_regular_file(path))
+    throw InputError(path + ": no such file; allowed: directories written by `mesopen run`");
+  RunSeries series;
+  try {
+    series = readRunSeries(path);
+  } catch (const std::runtime_error &e) {
+    throw InputError(e.what());
+  }
+  nlohmann::json j = instabilityJson(dir, series, instability(series));
+  writeJson(dir + "/instability.json", j);
+  j.erase("curves"), j.erase("spectrum_scaled_depth"), j.erase("spectrum_time");
+  return j;
+}
+
 int analyzeCommand(const AnalyzeOptions &options) {
   const auto start = std::chrono::steady_clock::now();
   const std::string out_dir = options.out_dir.empty() ? options.dirs.front() : options.out_dir;

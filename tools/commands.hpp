@@ -2,7 +2,10 @@
 // message names file, key, value, allowed range), 1 a failure while running.
 #pragma once
 
+#include <nlohmann/json_fwd.hpp>
+
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -47,8 +50,31 @@ struct AnalyzeOptions {
 
 int analyzeCommand(const AnalyzeOptions &options);
 
+// The measures of instability of the run in `dir` from its run.h5: instability.json written there
+// (with the curves and spectra), its figures returned (without them). Throws InputError when
+// run.h5 is missing or not a run's.
+nlohmann::json analyzeRun(const std::string &dir);
+
+struct CampaignOptions {
+  std::string campaign;                // campaign file (TOML)
+  std::string out_dir;
+  std::optional<int> replicates;       // overrides campaign.replicates
+  std::optional<std::string> representation; // overrides campaign.representation
+  std::vector<std::string> only;       // run only these entries (by name); empty: all
+  std::optional<int> threads;          // per run
+  bool quiet = false;                  // no progress line
+};
+
+int campaignCommand(const CampaignOptions &options);
+
 // Where the program's data files are (build/share/mesopen beside build/bin/mesopen).
 std::string shareDirectory();
+
+// Runs a program (words[0], a path) with its arguments, without a shell, its standard output and
+// error into the file `output` (made anew); while it runs, `waiting` (if given) is called about five
+// times a second. Returns its exit code (128 + the signal if one ended it), -1 if it did not start.
+int runProgram(const std::vector<std::string> &words, const std::string &output,
+               const std::function<void()> &waiting = {});
 
 // Runs /usr/bin/python3 with a plot script of shareDirectory() and its arguments, without a shell
 // (paths stay paths) and with its output discarded; true when it exits with 0.

@@ -56,6 +56,22 @@ int main(int argc, char **argv) {
   modal_cmd->add_option("--threads", modal.threads, "threads (default: all cores)")
       ->check(CLI::Range(1, 1024));
 
+  mesopen::CampaignOptions campaign;
+  auto *campaign_cmd = app.add_subcommand(
+      "campaign", "run every scene of a campaign on its replicates (resumable), tabulate the "
+                  "measures of instability with 95 % intervals, test its trends, plot");
+  campaign_cmd->add_option("campaign", campaign.campaign, "campaign file (TOML)")->required();
+  campaign_cmd->add_option("-o,--output", campaign.out_dir, "output directory")->required();
+  campaign_cmd->add_option("--replicates", campaign.replicates,
+                           "target layouts per run (overrides campaign.replicates)")
+      ->check(CLI::Range(1, 1000));
+  campaign_cmd->add_option("--representation", campaign.representation,
+                           "fe, dem or hybrid for every run (overrides campaign.representation)");
+  campaign_cmd->add_option("--only", campaign.only, "run only these runs (names)")->delimiter(',');
+  campaign_cmd->add_option("--threads", campaign.threads, "threads of each run (default: all cores)")
+      ->check(CLI::Range(1, 1024));
+  campaign_cmd->add_flag("--quiet", campaign.quiet, "no progress line");
+
   auto *keys = app.add_subcommand("keys", "print every scene key with its default and allowed range");
 
   try {
@@ -72,6 +88,8 @@ int main(int argc, char **argv) {
     return mesopen::runCommand(run);
   if (*analyze_cmd)
     return mesopen::analyzeCommand(analyze);
+  if (*campaign_cmd)
+    return mesopen::campaignCommand(campaign);
   if (*modal_cmd)
     return mesopen::modalCommand(modal);
   return mesopen::targetCommand(target);

@@ -486,17 +486,21 @@ void readMaterials(Scene &scene, const toml::node &node) {
 
 } // namespace
 
-Scene readScene(const std::string &path) {
-  Scene scene;
-  scene.path = path;
-  toml::table root;
+toml::table parseToml(const std::string &path) {
   try {
-    root = toml::parse_file(path);
+    return toml::parse_file(path);
   } catch (const toml::parse_error &e) {
     const auto &b = e.source().begin;
     throw InputError(path + ":" + std::to_string(b.line) + ":" + std::to_string(b.column) +
                      ": not valid TOML: " + std::string(e.description()));
   }
+}
+
+Scene readScene(const std::string &path) { return readScene(parseToml(path), path); }
+
+Scene readScene(const toml::table &root, const std::string &path) {
+  Scene scene;
+  scene.path = path;
   for (const auto &[tname, tnode] : root) {
     const std::string table(tname.str());
     if (table == "materials") {

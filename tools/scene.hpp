@@ -7,6 +7,8 @@
 #include "spring_dashpot.hpp"
 #include "target.hpp"
 
+#include <toml++/toml.h>
+
 #include <cstdint>
 #include <map>
 #include <stdexcept>
@@ -112,6 +114,10 @@ public:
 
 // Read and validate a scene. Throws InputError.
 Scene readScene(const std::string &path);
+// The same from its tables; `path` names it in messages.
+Scene readScene(const toml::table &root, const std::string &path);
+// A TOML file's tables. Throws InputError naming the line of a syntax error.
+toml::table parseToml(const std::string &path);
 
 // The reference of every key (Markdown): table, key, type, default, allowed, meaning.
 std::string sceneKeysMarkdown();

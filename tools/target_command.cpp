@@ -17,6 +17,7 @@
 #include <future>
 #include <iostream>
 #include <fcntl.h>
+#include <cerrno>
 #include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -34,24 +35,42 @@ std::string shareDirectory() {
   return ec ? std::string("share/mesopen") : (exe.parent_path().parent_path() / "share" / "mesopen").string();
 }
 
+int runProgram(const std::vector<std::string> &words, const std::string &output,
+               const std::function<void()> &waiting) {
+  std::vector<std::string> copy = words;
+  std::vector<char *> argv;
+  for (std::string &w : copy)
+    argv.push_back(w.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t out;
+  posix_spawn_file_actions_init(&out);
+  posix_spawn_file_actions_addopen(&out, STDOUT_FILENO, output.c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&out, STDOUT_FILENO, STDERR_FILENO);
+  pid_t pid;
+  int status = -1;
+  const bool started = posix_spawn(&pid, argv[0], &out, nullptr, argv.data(), environ) == 0;
+  posix_spawn_file_actions_destroy(&out);
+  if (!started)
+    return -1;
+  while (true) {
+    const pid_t done = waitpid(pid, &status, waiting ? WNOHANG : 0);
+    if (done == pid)
+      break;
+    if (done < 0 && errno != EINTR)
+      return -1;
+    if (waiting) {
+      waiting();
+      usleep(200000);
+    }
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
 bool runPlotScript(const std::string &script, const std::vector<std::string> &args) {
   std::vector<std::string> words{"/usr/bin/python3", shareDirectory() + "/" + script};
   words.insert(words.end(), args.begin(), args.end());
-  std::vector<char *> argv;
-  for (std::string &w : words)
-    argv.push_back(w.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t quiet;
-  posix_spawn_file_actions_init(&quiet);
-  posix_spawn_file_actions_addopen(&quiet, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&quiet, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
-  pid_t pid;
-  int status = -1;
-  const bool started = posix_spawn(&pid, argv[0], &quiet, nullptr, argv.data(), environ) == 0;
-  posix_spawn_file_actions_destroy(&quiet);
-  if (started)
-    waitpid(pid, &status, 0);
-  return started && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  return runProgram(words, "/dev/null") == 0;
 }
 
 namespace {
