@@ -370,7 +370,8 @@ int campaignCommand(const CampaignOptions &options) {
                {"files", {"runs.csv", "table.csv", "table.md", "summary.json"}}};
     // The plots read the summary; then it lists them.
     writeJson(dir + "/summary.json", summary);
-    const char *plots[] = {"campaign-rotational-momentum.png", "campaign-trends.png"};
+    const char *plots[] = {"campaign-rotational-momentum.png", "campaign-trends.png",
+                           "campaign-trend-curves.png"};
     for (const char *f : plots)
       fs::remove(fs::path(dir) / f, ec);
     const bool plotted = completed > 0 && runPlotScript("campaign.py", {dir + "/summary.json", dir});
