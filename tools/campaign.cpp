@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <functional>
 #include <numeric>
 #include <set>
 #include <sstream>
@@ -14,7 +15,7 @@ namespace {
 
 // What a [[run]] entry holds besides scene tables.
 const std::set<std::string> run_fields = {"name", "label", "scene", "reference"};
-const std::set<std::string> trend_fields = {"name", "measure", "expect", "runs", "x"};
+const std::set<std::string> trend_fields = {"name", "measure", "expect", "runs", "x", "tolerance"};
 const std::set<std::string> campaign_fields = {"name",        "base",   "representation",
                                                "replicates",  "seed_stride", "frames"};
 
@@ -55,6 +56,16 @@ Campaign readCampaign(const std::string &path) {
   Campaign c;
   c.path = path;
   auto bad = [&](const std::string &what) -> InputError { return InputError(path + ": " + what); };
+  // A string value, or the default when the key is absent; any other type is bad input.
+  auto string = [&](const toml::table &t, const char *key, const std::string &where,
+                    const std::string &fallback) {
+    const toml::node *n = t.get(key);
+    if (!n)
+      return fallback;
+    if (!n->is_string())
+      throw bad(where + key + " = " + text(*n) + " is not a string");
+    return n->value_or(std::string());
+  };
   for (const auto &[key, node] : root)
     if (key != "campaign" && key != "run" && key != "trend")
       throw bad("unknown table [" + std::string(key.str()) + "]; known: [campaign], [[run]], [[trend]]");
@@ -62,14 +73,16 @@ Campaign readCampaign(const std::string &path) {
   auto file = [&](const std::string &name) { return (dir / name).lexically_normal().string(); };
 
   std::string base;
+  if (root.get("campaign") && !root["campaign"].is_table())
+    throw bad("campaign must be a table ([campaign])");
   if (const toml::table *t = root["campaign"].as_table()) {
     for (const auto &[key, node] : *t)
       if (!campaign_fields.count(std::string(key.str())))
         throw bad("unknown key campaign." + std::string(key.str()) +
                   "; known: name, base, representation, replicates, seed_stride, frames");
-    c.name = (*t)["name"].value_or(std::string());
-    if (auto b = (*t)["base"].value<std::string>())
-      base = file(*b);
+    c.name = string(*t, "name", "campaign.", "");
+    if (const std::string b = string(*t, "base", "campaign.", ""); !b.empty())
+      base = file(b);
     if (const toml::node *r = t->get("representation")) {
       const auto s = r->value<std::string>();
       const auto it = std::find_if(std::begin(representation_names), std::end(representation_names),
@@ -121,9 +134,9 @@ Campaign readCampaign(const std::string &path) {
     r.name = *name;
     if (!names.insert(r.name).second)
       throw bad("two runs are named \"" + r.name + "\"");
-    r.label = (*t)["label"].value_or(std::string());
-    if (auto s = (*t)["scene"].value<std::string>())
-      r.scene = file(*s);
+    r.label = string(*t, "label", "run \"" + r.name + "\": ", "");
+    if (const std::string scene = string(*t, "scene", "run \"" + r.name + "\": ", ""); !scene.empty())
+      r.scene = file(scene);
     else if (!base.empty())
       r.scene = base;
     else
@@ -131,6 +144,9 @@ Campaign readCampaign(const std::string &path) {
                 "scene = \"FILE\" in the run or base = \"FILE\" in [campaign]");
     if (!fs::is_regular_file(r.scene))
       throw bad("run \"" + r.name + "\": scene " + r.scene + " not found");
+    if (t->get("reference") && !(*t)["reference"].is_table())
+      throw bad("run \"" + r.name + "\": reference must be a table, e.g. reference = "
+                "{ average_lateral_force = 2950 }");
     if (const toml::table *ref = (*t)["reference"].as_table())
       for (const auto &[key, node] : *ref) {
         const auto v = node.value<double>();
@@ -159,8 +175,8 @@ Campaign readCampaign(const std::string &path) {
           throw bad(where + ": unknown key " + std::string(key.str()) +
                     "; known: name, measure, expect, runs, x");
       Trend tr;
-      tr.name = (*t)["name"].value_or(where);
-      tr.measure = (*t)["measure"].value_or(tr.measure);
+      tr.name = string(*t, "name", where + ": ", where);
+      tr.measure = string(*t, "measure", where + ": ", tr.measure);
       if (!isMeasure(tr.measure))
         throw bad(where + ": measure = \"" + tr.measure + "\" is not known; allowed: one of " +
                   measureNames());
@@ -172,12 +188,17 @@ Campaign readCampaign(const std::string &path) {
                   " is not known; allowed: one of \"rises\", \"falls\", \"differs\", \"similar\"");
       tr.expect = kind->value;
       if (const toml::array *rs = (*t)["runs"].as_array())
-        for (const auto &n : *rs)
-          if (auto s = n.value<std::string>())
-            tr.runs.push_back(*s);
-      for (const auto &rn : tr.runs)
-        if (!names.count(rn))
-          throw bad(where + ": runs holds \"" + rn + "\", which is no run of the campaign");
+        for (const auto &n : *rs) {
+          if (!n.is_string())
+            throw bad(where + ": runs holds " + text(n) + "; allowed: names of runs (strings)");
+          tr.runs.push_back(n.value_or(std::string()));
+        }
+      for (std::size_t k = 0; k < tr.runs.size(); ++k) {
+        if (!names.count(tr.runs[k]))
+          throw bad(where + ": runs holds \"" + tr.runs[k] + "\", which is no run of the campaign");
+        if (std::count(tr.runs.begin(), tr.runs.begin() + k, tr.runs[k]))
+          throw bad(where + ": runs names \"" + tr.runs[k] + "\" twice");
+      }
       if (tr.runs.size() < 2 || (tr.expect == TrendKind::differs && tr.runs.size() != 2))
         throw bad(where + ": runs must name " +
                   (tr.expect == TrendKind::differs ? std::string("exactly 2") : "at least 2") +
@@ -186,13 +207,24 @@ Campaign readCampaign(const std::string &path) {
         for (const auto &n : *xs)
           if (auto v = n.value<double>())
             tr.x.push_back(*v);
-        if (tr.x.size() != tr.runs.size() || tr.expect == TrendKind::differs ||
-            tr.expect == TrendKind::similar)
-          throw bad(where + ": x must give one number per run, for rises or falls only");
+        if (tr.x.size() != xs->size() || tr.x.size() != tr.runs.size() ||
+            tr.expect == TrendKind::differs || tr.expect == TrendKind::similar ||
+            std::adjacent_find(tr.x.begin(), tr.x.end(), std::greater_equal<double>()) != tr.x.end())
+          throw bad(where + ": x must give one number per run, increasing, for rises or falls only");
       } else {
         for (std::size_t k = 0; k < tr.runs.size(); ++k)
           tr.x.push_back(static_cast<double>(k + 1));
       }
+      if (const toml::node *tol = t->get("tolerance")) {
+        const auto v = tol->value<double>();
+        if (!v || !(*v > 0.0) || *v > 100.0 || tr.expect != TrendKind::similar)
+          throw bad(where + ": tolerance = " + text(*tol) + " is not allowed; allowed: a number, "
+                    "0 < tolerance <= 100, for expect = \"similar\" only");
+        tr.tolerance = *v;
+      }
+      if (tr.expect == TrendKind::similar && std::isnan(tr.tolerance))
+        throw bad(where + ": expect = \"similar\" needs tolerance (the largest difference that "
+                  "counts as alike, a fraction of the runs' mean, e.g. 0.5)");
       c.trends.push_back(std::move(tr));
     }
   }
@@ -217,16 +249,19 @@ std::string composeScene(const Campaign &campaign, const CampaignRun &run, int r
       scene.insert_or_assign(name, toml::table{});
     return *scene.get_as<toml::table>(name);
   };
-  const std::int64_t seed = table("target")["seed"].value_or<std::int64_t>(1);
-  table("target").insert_or_assign("seed", seed + replicate * campaign.seed_stride);
+  // (a seed that is no integer is left for readScene to report)
+  if (!table("target").get("seed") || table("target")["seed"].is_integer()) {
+    const auto seed = table("target")["seed"].value_or(static_cast<std::int64_t>(TargetSpec{}.seed));
+    table("target").insert_or_assign("seed", seed + replicate * campaign.seed_stride);
+  }
   if (campaign.representation)
     table("run").insert_or_assign("representation",
                                   std::string(nameOf(*campaign.representation, representation_names)));
   if (!campaign.frames)
     table("run").insert_or_assign("frame_interval", 0.0);
   std::ostringstream out;
-  out << "# " << campaign.path << ", run \"" << run.name << "\", replicate " << replicate + 1
-      << ": " << run.scene << " with the campaign's keys\n"
+  out << "# Run \"" << run.name << "\" of a campaign, replicate " << replicate + 1 << ": "
+      << fs::path(run.scene).filename().string() << " with the campaign's keys\n"
       << scene << "\n";
   return out.str();
 }
@@ -303,9 +338,10 @@ TrendResult testTrend(const Trend &trend, const std::vector<std::vector<double>>
     means.push_back(estimate(magnitudes(k)).mean);
   const bool up = std::is_sorted(means.begin(), means.end());
   const bool down = std::is_sorted(means.rbegin(), means.rend());
-  r.seen = means.size() < 2 ? "flat" : means.back() > means.front() ? (up ? "rises" : "rises overall")
-                                      : means.back() < means.front() ? (down ? "falls" : "falls overall")
-                                                                    : "flat";
+  r.seen = std::any_of(means.begin(), means.end(), [](double m) { return std::isnan(m); }) ? "n/a"
+           : means.back() > means.front() ? (up ? "rises" : "rises overall")
+           : means.back() < means.front() ? (down ? "falls" : "falls overall")
+                                          : "flat";
   const bool replicated = std::all_of(values.begin(), values.end(),
                                       [](const std::vector<double> &v) { return v.size() >= 2; });
   switch (trend.expect) {
@@ -330,18 +366,21 @@ TrendResult testTrend(const Trend &trend, const std::vector<std::vector<double>>
                                                           : "not confirmed";
     break;
   case TrendKind::similar: {
-    bool any = false;
-    r.effect = 0.0, r.half_width = 0.0;
+    const double margin = trend.tolerance * estimate(means).mean;
+    bool within = true, beyond = false;
+    double farthest = -1.0;
     for (std::size_t a = 0; a < values.size(); ++a)
       for (std::size_t b = a + 1; b < values.size(); ++b) {
         const auto [d, h] = pair(a, b, 0.0, 1.0);
-        if (std::abs(d) >= std::abs(r.effect))
-          r.effect = d, r.half_width = h;
-        any = any || std::abs(d) - h > 0.0;
+        if (std::abs(d) + h > farthest)
+          farthest = std::abs(d) + h, r.effect = d, r.half_width = h;
+        within = within && std::abs(d) + h <= margin;
+        beyond = beyond || std::abs(d) - h > margin;
       }
     r.verdict = !replicated || std::isnan(r.half_width) ? "not tested"
-                : any                                   ? "not confirmed"
-                                                        : "confirmed";
+                : within                                ? "confirmed"
+                : beyond                                ? "reversed"
+                                                        : "not confirmed";
     break;
   }
   }

@@ -37,7 +37,9 @@ struct Trend {
   std::string measure = "max_abs_rotational_momentum";
   TrendKind expect = TrendKind::rises;
   std::vector<std::string> runs; // in the order of the parameter
-  std::vector<double> x;         // the parameter's value per run (default 1, 2, ...)
+  std::vector<double> x;         // the parameter's value per run, increasing (default 1, 2, ...)
+  double tolerance = NAN;        // similar: the largest difference that counts as alike, as a
+                                 // fraction of the mean of |m| over the runs
 };
 
 struct Campaign {
@@ -86,13 +88,18 @@ Estimate estimate(const std::vector<double> &values);
 //     reversed if on the other, else not confirmed;
 //   differs: the same slope between two runs (x = 0, 1: the difference of means, pooled variance):
 //     confirmed if the interval excludes 0;
-//   similar: every pair of runs so: confirmed if no interval excludes 0.
+//   similar: an equivalence test over every pair of runs (intersection-union, two one-sided tests
+//     at 2.5 % each): confirmed if every pair's 95 % interval lies within +-tolerance times the mean
+//     of |m| over the runs; reversed if some pair's interval lies wholly beyond it (the runs differ);
+//     else not confirmed (too few replicates to tell).
 // Not tested with fewer than two replicates in some run. `effect` is the slope (per unit of x),
-// the difference, or the largest difference, with its interval's half-width.
+// the difference, or the pair's difference that decided (similar: the farthest interval end), with
+// its interval's half-width.
 struct TrendResult {
   std::string verdict; // confirmed, not confirmed, reversed, not tested
   double effect = NAN, half_width = NAN;
-  std::string seen;    // the direction the means show: rises, falls, or flat
+  std::string seen; // the means' direction with x: rises, falls (each step), rises overall, falls
+                    // overall (first to last), flat, n/a (a run without results)
 };
 TrendResult testTrend(const Trend &trend, const std::vector<std::vector<double>> &values);
 

@@ -45,22 +45,27 @@ struct Job {
   nlohmann::json measures; // analyzeRun's figures
 };
 
-std::string readText(const std::string &path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 nlohmann::json readJson(const std::string &path) {
   std::ifstream in(path);
   return nlohmann::json::parse(in, nullptr, false);
 }
 
-// SIGINT or SIGTERM: the run going on ends as `mesopen run` ends on it (its files written), and the
-// campaign stops after it with the tables of what is done.
+// SIGINT or SIGTERM: passed on to the run going on, which ends as `mesopen run` ends on it (its
+// files written, status interrupted); the campaign stops after it with the tables of what is done.
+// A second signal ends the campaign at once.
 volatile std::sig_atomic_t stop_signal = 0;
-extern "C" void requestCampaignStop(int signal) { stop_signal = signal; }
+extern "C" void requestCampaignStop(int signal) {
+  stop_signal = signal;
+  std::signal(signal, SIG_DFL);
+}
+
+// Markdown table cell: no '|' or line break of the text may end the cell.
+std::string cell(const std::string &text) {
+  std::string out;
+  for (char c : text)
+    out += c == '|' ? std::string("\\|") : c == '\n' || c == '\r' ? std::string(" ") : std::string(1, c);
+  return out;
+}
 
 std::string show(double v, int digits = 4) {
   if (std::isnan(v))
@@ -72,7 +77,7 @@ std::string show(double v, int digits = 4) {
 }
 
 std::string csvField(const std::string &s) {
-  if (s.find_first_of(",\"\n") == std::string::npos)
+  if (s.find_first_of(",\"\n\r") == std::string::npos)
     return s;
   std::string q = "\"";
   for (char c : s)
@@ -136,7 +141,7 @@ void writeTables(const std::string &dir, const Campaign &c, const std::vector<Jo
     const Estimate wall = estimate(walls);
     csv << csvField(r.name) << "," << csvField(r.label) << "," << replicates << "," << completed
         << "," << show(wall.mean, 6);
-    md << "| " << r.name << " | " << r.label << " | " << completed
+    md << "| " << cell(r.name) << " | " << cell(r.label) << " | " << completed
        << (completed < replicates ? " of " + std::to_string(replicates) : "") << " |";
     for (const auto &m : campaign_measures) {
       const Estimate e = estimate(valuesOf(jobs, &r, m.name));
@@ -170,8 +175,10 @@ void writeTables(const std::string &dir, const Campaign &c, const std::vector<Jo
               v.push_back(std::abs(x));
         means += (k ? ", " : "") + show(estimate(v).mean, 3);
       }
-      md << "| " << tr.name << " | " << tr.measure << " | " << nameOf(tr.expect, trend_kind_names)
-         << " | " << runs_text << " | " << means << " | " << trends[t].seen << " | "
+      md << "| " << cell(tr.name) << " | " << tr.measure << " | "
+         << nameOf(tr.expect, trend_kind_names)
+         << (tr.expect == TrendKind::similar ? " (within " + show(100 * tr.tolerance, 3) + " %)" : "")
+         << " | " << cell(runs_text) << " | " << means << " | " << trends[t].seen << " | "
          << show(trends[t].effect, 3)
          << (std::isnan(trends[t].half_width) ? "" : " ± " + show(trends[t].half_width, 2)) << " | "
          << trends[t].verdict << " |\n";
@@ -203,7 +210,9 @@ int campaignCommand(const CampaignOptions &options) {
     for (const std::string &name : options.only)
       if (std::none_of(c.runs.begin(), c.runs.end(), [&](const CampaignRun &r) { return r.name == name; }))
         throw InputError("--only " + name + ": no run of " + c.path + " has that name");
-    prepareOutputDirectory(dir, {"summary.json", "table.md", "table.csv", "runs.csv"});
+    prepareOutputDirectory(dir, {"summary.json", "table.md", "table.csv", "runs.csv",
+                                 "campaign-rotational-momentum.png", "campaign-trends.png",
+                                 "campaign-trend-curves.png"});
     for (const CampaignRun &r : c.runs) {
       const bool selected = options.only.empty() || std::find(options.only.begin(), options.only.end(),
                                                               r.name) != options.only.end();
@@ -212,11 +221,20 @@ int campaignCommand(const CampaignOptions &options) {
         j.run = &r, j.replicate = k;
         j.dir = dir + "/runs/" + r.name + "/r" + std::to_string(k + 1);
         j.scene = composeScene(c, r, k);
+        const std::string where = c.path + ", run \"" + r.name + "\", replicate " +
+                                  std::to_string(k + 1) + " (scene " + r.scene + ")";
         std::istringstream in(j.scene);
-        j.seed = readScene(toml::parse(in), j.dir).target.seed;
+        const toml::table scene = toml::parse(in);
+        j.seed = readScene(scene, where).target.seed;
+        // Done before: completed, its series there, the same scene (compared as tables: the
+        // comment line and the number format do not count).
         const nlohmann::json done = readJson(j.dir + "/summary.json");
-        j.reused = done.is_object() && done.value("status", "") == "completed" &&
-                   readText(j.dir + "/scene.toml") == j.scene;
+        if (done.is_object() && done.value("status", "") == "completed" &&
+            fs::is_regular_file(j.dir + "/run.h5"))
+          try {
+            j.reused = toml::parse_file(j.dir + "/scene.toml") == scene;
+          } catch (const toml::parse_error &) {
+          }
         j.status = "not run";
         j.selected = selected;
         jobs.push_back(std::move(j));
@@ -247,41 +265,57 @@ int campaignCommand(const CampaignOptions &options) {
   double ran_seconds = 0.0;
   for (Job &j : jobs) {
     if (j.selected && !j.reused && stop_signal == 0) {
-      fs::create_directories(j.dir, ec);
-      writeText(j.dir + "/scene.toml", j.scene);
-      std::vector<std::string> words{exe, "run", j.dir + "/scene.toml", "-o", j.dir, "--quiet"};
-      if (options.threads)
-        words.insert(words.end(), {"--threads", std::to_string(*options.threads)});
-      const auto run_start = Clock::now();
-      auto show_progress = [&] {
-        const double per_run = ran > 0 ? ran_seconds / ran : NAN;
-        const double eta = per_run * (pending - ran) - secondsSince(run_start);
-        std::fprintf(stderr,
-                     "\r\033[Kmesopen campaign: run %zu of %zu (%s, replicate %d): %.0f s; "
-                     "%zu failed; elapsed %.0f s%s",
-                     ran + 1, pending, j.run->name.c_str(), j.replicate + 1,
-                     secondsSince(run_start), failed, secondsSince(start),
-                     std::isnan(eta) ? "" : (", ETA " + show(std::max(eta, 0.0), 3) + " s").c_str());
-      };
-      const int code = runProgram(words, j.dir + "/log.txt",
-                                  terminal ? std::function<void()>(show_progress) : nullptr);
-      ran_seconds += secondsSince(run_start);
-      ++ran;
-      if (terminal)
-        std::fprintf(stderr, "\r\033[K");
-      const nlohmann::json summary = readJson(j.dir + "/summary.json");
-      j.status = summary.is_object() ? summary.value("status", "failed") : "failed";
-      if (code != 0 && j.status == "completed")
-        j.status = "failed";
-      if (j.status != "completed")
-        j.failure = summary.is_object() && summary.contains("failure")
-                        ? summary["failure"].get<std::string>()
-                        : "exit code " + std::to_string(code) + " (see " + j.dir + "/log.txt)";
-      if (!terminal || j.status != "completed")
-        std::printf("mesopen campaign: %s replicate %d: %s in %.0f s%s\n", j.run->name.c_str(),
-                    j.replicate + 1, j.status.c_str(), secondsSince(run_start),
-                    j.failure.empty() ? "" : (": " + j.failure).c_str());
-      std::fflush(stdout);
+      try {
+        // Nothing of an earlier run may pass for this one's if it fails before writing its own.
+        fs::create_directories(j.dir);
+        for (const char *f : {"summary.json", "run.h5", "run.h5.tmp", "instability.json"})
+          fs::remove(fs::path(j.dir) / f);
+        writeText(j.dir + "/scene.toml", j.scene);
+        std::vector<std::string> words{exe, "run", j.dir + "/scene.toml", "-o", j.dir, "--quiet"};
+        if (options.threads)
+          words.insert(words.end(), {"--threads", std::to_string(*options.threads)});
+        const auto run_start = Clock::now();
+        bool passed_on = false;
+        auto show_progress = [&]() -> int {
+          if (stop_signal != 0 && !passed_on) {
+            passed_on = true;
+            return stop_signal;
+          }
+          if (!terminal)
+            return 0;
+          const double per_run = ran > 0 ? ran_seconds / ran : NAN;
+          const double eta = per_run * (pending - ran) - secondsSince(run_start);
+          std::fprintf(stderr,
+                       "\r\033[Kmesopen campaign: run %zu of %zu (%s, replicate %d): %.0f s; "
+                       "%zu failed; elapsed %.0f s%s",
+                       ran + 1, pending, j.run->name.c_str(), j.replicate + 1,
+                       secondsSince(run_start), failed, secondsSince(start),
+                       std::isnan(eta) ? "" : (", ETA " + show(std::max(eta, 0.0), 3) + " s").c_str());
+          return 0;
+        };
+        const int code = runProgram(words, j.dir + "/log.txt", show_progress);
+        ran_seconds += secondsSince(run_start);
+        ++ran;
+        if (terminal)
+          std::fprintf(stderr, "\r\033[K");
+        const nlohmann::json summary = readJson(j.dir + "/summary.json");
+        j.status = summary.is_object() ? summary.value("status", "failed") : "failed";
+        if (code != 0 && j.status == "completed")
+          j.status = "failed";
+        if (j.status != "completed")
+          j.failure = summary.is_object() && summary.contains("failure")
+                          ? summary["failure"].get<std::string>()
+                          : "exit code " + std::to_string(code) + " (see " + j.dir + "/log.txt)";
+        if (!terminal || j.status != "completed")
+          std::printf("mesopen campaign: %s replicate %d: %s in %.0f s%s\n", j.run->name.c_str(),
+                      j.replicate + 1, j.status.c_str(), secondsSince(run_start),
+                      j.failure.empty() ? "" : (": " + j.failure).c_str());
+        std::fflush(stdout);
+      } catch (const std::exception &e) {
+        j.status = "failed", j.failure = e.what();
+        std::printf("mesopen campaign: %s replicate %d: failed: %s\n", j.run->name.c_str(),
+                    j.replicate + 1, e.what());
+      }
     } else if (j.reused) {
       j.status = "completed";
     }
@@ -295,7 +329,7 @@ int campaignCommand(const CampaignOptions &options) {
         j.status = "failed", j.failure = std::string("analysis: ") + e.what();
       }
     }
-    failed += j.status != "completed" && j.status != "not run";
+    failed += j.status != "completed" && j.status != "not run" && j.status != "interrupted";
   }
   for (int s : {SIGINT, SIGTERM})
     std::signal(s, SIG_DFL);
@@ -375,6 +409,9 @@ int campaignCommand(const CampaignOptions &options) {
     for (const char *f : plots)
       fs::remove(fs::path(dir) / f, ec);
     const bool plotted = completed > 0 && runPlotScript("campaign.py", {dir + "/summary.json", dir});
+    if (completed > 0 && !plotted)
+      std::cerr << "mesopen campaign: warning: no plots (needs /usr/bin/python3 with matplotlib, and "
+                << shareDirectory() << "/campaign.py)\n";
     for (const char *f : plots)
       if (fs::exists(fs::path(dir) / f))
         summary["files"].push_back(f);
@@ -387,7 +424,7 @@ int campaignCommand(const CampaignOptions &options) {
     std::cerr << "mesopen campaign: failed writing the tables in " << dir << ": " << e.what() << '\n';
     return 1;
   }
-  return failed > 0 || stop_signal != 0 ? 1 : 0;
+  return stop_signal != 0 ? 128 + stop_signal : failed > 0 ? 1 : 0;
 }
 
 } // namespace mesopen

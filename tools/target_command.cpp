@@ -18,6 +18,7 @@
 #include <iostream>
 #include <fcntl.h>
 #include <cerrno>
+#include <csignal>
 #include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -36,7 +37,7 @@ std::string shareDirectory() {
 }
 
 int runProgram(const std::vector<std::string> &words, const std::string &output,
-               const std::function<void()> &waiting) {
+               const std::function<int()> &waiting) {
   std::vector<std::string> copy = words;
   std::vector<char *> argv;
   for (std::string &w : copy)
@@ -47,10 +48,17 @@ int runProgram(const std::vector<std::string> &words, const std::string &output,
   posix_spawn_file_actions_addopen(&out, STDOUT_FILENO, output.c_str(),
                                    O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_adddup2(&out, STDOUT_FILENO, STDERR_FILENO);
+  // In a process group of its own: a terminal's Ctrl-C reaches the caller alone, which passes it on
+  // (through `waiting`) once.
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+  posix_spawnattr_setpgroup(&attributes, 0);
   pid_t pid;
   int status = -1;
-  const bool started = posix_spawn(&pid, argv[0], &out, nullptr, argv.data(), environ) == 0;
+  const bool started = posix_spawn(&pid, argv[0], &out, &attributes, argv.data(), environ) == 0;
   posix_spawn_file_actions_destroy(&out);
+  posix_spawnattr_destroy(&attributes);
   if (!started)
     return -1;
   while (true) {
@@ -60,7 +68,8 @@ int runProgram(const std::vector<std::string> &words, const std::string &output,
     if (done < 0 && errno != EINTR)
       return -1;
     if (waiting) {
-      waiting();
+      if (const int signal = waiting())
+        kill(pid, signal);
       usleep(200000);
     }
   }

@@ -51,8 +51,9 @@ TEST(Campaign, EstimateIsMeanAndInterval) {
   EXPECT_TRUE(std::isnan(estimate({7}).half_width));
 }
 
-// Verdicts on made-up magnitudes: a clear rise, the same reversed, overlapping noise, alike runs,
-// and a single replicate (not tested). The slope of two runs is their difference of means over
+// Verdicts on made-up magnitudes: a clear rise, the same reversed, overlapping noise, alike runs
+// (within a tolerance, shown; or too few replicates to show it; or clearly apart), and a single
+// replicate (not tested). The slope of two runs is their difference of means over
 // the difference of x.
 TEST(Campaign, TrendVerdicts) {
   Trend rises{"t", "average_lateral_force", TrendKind::rises, {"a", "b"}, {0.0, 2.0}};
@@ -66,11 +67,13 @@ TEST(Campaign, TrendVerdicts) {
   Trend falls = rises;
   falls.expect = TrendKind::falls;
   EXPECT_EQ(testTrend(falls, {{3.0, 3.1, 2.9}, {1.0, 1.1, 0.9}}).verdict, "confirmed");
-  Trend similar{"s", "tilt", TrendKind::similar, {"a", "b", "c"}, {1, 2, 3}};
-  EXPECT_EQ(testTrend(similar, {{1.0, 2.0, 3.0}, {1.5, 2.5, 2.0}, {2.0, 1.0, 3.0}}).verdict,
+  Trend similar{"s", "tilt", TrendKind::similar, {"a", "b", "c"}, {1, 2, 3}, 0.2};
+  EXPECT_EQ(testTrend(similar, {{1.0, 1.02, 0.98}, {1.01, 0.99, 1.0}, {1.0, 1.01, 0.99}}).verdict,
             "confirmed");
+  EXPECT_EQ(testTrend(similar, {{1.0, 2.0, 3.0}, {1.5, 2.5, 2.0}, {2.0, 1.0, 3.0}}).verdict,
+            "not confirmed"); // alike means, but the spread cannot show it
   EXPECT_EQ(testTrend(similar, {{1.0, 1.1, 0.9}, {1.0, 1.1, 0.9}, {5.0, 5.1, 4.9}}).verdict,
-            "not confirmed");
+            "reversed");
   Trend differs{"d", "tilt", TrendKind::differs, {"a", "b"}, {1, 2}};
   EXPECT_EQ(testTrend(differs, {{1.0, 1.1, 0.9}, {5.0, 5.1, 4.9}}).verdict, "confirmed");
 }
@@ -119,6 +122,18 @@ TEST(Campaign, BadInputNamesTheKey) {
       {"[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\n[[trend]]\nexpect = \"rises\"\n"
        "measure = \"speed\"\nruns = [\"a\"]\n",
        "measure = \"speed\""},
+      {"[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\n[[run]]\nname = \"b\"\n"
+       "[[trend]]\nexpect = \"similar\"\nruns = [\"a\", \"b\"]\n",
+       "needs tolerance"},
+      {"[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\n[[run]]\nname = \"b\"\n"
+       "[[trend]]\nexpect = \"rises\"\nruns = [\"a\", \"b\"]\nx = [2, 1]\n",
+       "increasing"},
+      {"[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\n"
+       "[[trend]]\nexpect = \"rises\"\nruns = [\"a\", \"a\"]\n",
+       "\"a\" twice"},
+      {"[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\nscene = 3\n", "scene = 3 is not a string"},
+      {"[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\nreference = 3\n",
+       "reference must be a table"},
   };
   for (const auto &[text, needle] : cases) {
     const std::string message = errorOf(dir, text);
@@ -135,7 +150,7 @@ TEST(Campaign, RunsEachReplicateOnce) {
   ScratchDir dir("campaign-run");
   mesopen::test::writeFile(dir / "base.toml", tiny_base);
   const std::string campaign = "[campaign]\nbase = \"base.toml\"\nreplicates = 2\n"
-                               "[[run]]\nname = \"slow\"\nrun.velocity = 500.0\n"
+                               "[[run]]\nname = \"slow\"\nlabel = \"a | b\"\nrun.velocity = 500.0\n"
                                "[[run]]\nname = \"fast\"\nrun.velocity = VELOCITY\n"
                                "[[trend]]\nexpect = \"rises\"\nruns = [\"slow\", \"fast\"]\n";
   auto write = [&](const std::string &v) {
@@ -158,9 +173,11 @@ TEST(Campaign, RunsEachReplicateOnce) {
                         "runs/fast/r2/scene.toml", "runs/fast/r2/instability.json"})
     EXPECT_TRUE(std::filesystem::exists(dir / ("out/" + std::string(f)))) << f;
   const std::string table = mesopen::test::readFile(dir / "out/table.md");
-  EXPECT_NE(table.find("| slow |  | 2 |"), std::string::npos) << table;
+  EXPECT_NE(table.find("| slow | a \\| b | 2 |"), std::string::npos) << table;
 
-  r = mesopen::test::runMesopen(cmd);
+  // Again, the campaign file named another way: nothing to run.
+  r = mesopen::test::runMesopen("campaign " + dir.path.string() + "/./c.toml -o " + (dir / "out") +
+                                " --threads 1");
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("0 to run now, 4 done before"), std::string::npos) << r.output;
 
