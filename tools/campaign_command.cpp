@@ -155,12 +155,13 @@ void writeTables(const std::string &dir, const Campaign &c, const std::vector<Jo
     md << " " << show(wall.mean, 3) << " |\n";
   }
   if (!c.trends.empty()) {
-    md << "\n## Trends\n\nOn the magnitude |m| of each replicate's measure. rises / falls: the "
-          "least-squares slope of |m| against the parameter x, with its 95 % interval; differs: "
-          "the difference of the two runs' means; similar: the largest difference between two "
-          "runs. Confirmed when the interval excludes 0 on the expected side (for similar: when no "
-          "interval does), reversed when it excludes it on the other, not tested with fewer than "
-          "two replicates of a run.\n\n"
+    md << "\n## Trends\n\nOn the magnitude |m| of each replicate's measure (docs/campaign.md). "
+          "rises / falls: the least-squares slope of |m| against the parameter x, with its 95 % "
+          "interval, confirmed when the interval excludes 0 on the expected side, reversed when on "
+          "the other; differs: the difference of the two runs' means, confirmed when its interval "
+          "excludes 0; similar: every pair's difference, confirmed when every interval lies within "
+          "the tolerance, reversed when one lies beyond it (the effect shown is the pair reaching "
+          "farthest). Not tested with fewer than two replicates of a run.\n\n"
        << "| trend | measure | expected | runs (x) | means of abs(m) | seen | effect ± 95 % | "
           "verdict |\n|---|---|---|---|---|---|---|---|\n";
     for (std::size_t t = 0; t < c.trends.size(); ++t) {
