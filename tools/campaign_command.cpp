@@ -17,6 +17,8 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 namespace mesopen {
@@ -211,6 +213,15 @@ int campaignCommand(const CampaignOptions &options) {
     for (const std::string &name : options.only)
       if (std::none_of(c.runs.begin(), c.runs.end(), [&](const CampaignRun &r) { return r.name == name; }))
         throw InputError("--only " + name + ": no run of " + c.path + " has that name");
+    std::error_code made;
+    fs::create_directories(dir, made);
+    // One campaign at a time in a directory: a second would run the same replicates into the same
+    // files. The lock goes with the process.
+    const int lock = open((fs::path(dir) / ".campaign.lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (lock >= 0 && flock(lock, LOCK_EX | LOCK_NB) != 0) {
+      std::cerr << "mesopen campaign: " << dir << " is in use by another mesopen campaign\n";
+      return 1;
+    }
     prepareOutputDirectory(dir, {"summary.json", "table.md", "table.csv", "runs.csv",
                                  "campaign-rotational-momentum.png", "campaign-trends.png",
                                  "campaign-trend-curves.png"});

@@ -10,6 +10,10 @@
 
 #include <sstream>
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 using namespace mesopen;
 using mesopen::test::ScratchDir;
 
@@ -185,4 +189,20 @@ TEST(Campaign, RunsEachReplicateOnce) {
   r = mesopen::test::runMesopen(cmd);
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("2 to run now, 2 done before"), std::string::npos) << r.output;
+}
+
+// A second campaign in a directory that one is using stops at once (exit 1), touching nothing.
+TEST(Campaign, OneCampaignADirectory) {
+  ScratchDir dir("campaign-lock");
+  mesopen::test::writeFile(dir / "base.toml", tiny_base);
+  mesopen::test::writeFile(dir / "c.toml", "[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\n");
+  std::filesystem::create_directories(dir / "out");
+  const int held = open((dir / "out/.campaign.lock").c_str(), O_RDWR | O_CREAT, 0644);
+  ASSERT_GE(held, 0);
+  ASSERT_EQ(flock(held, LOCK_EX | LOCK_NB), 0); // as a running campaign holds it
+  const auto r = mesopen::test::runMesopen("campaign " + (dir / "c.toml") + " -o " + (dir / "out"));
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("in use by another mesopen campaign"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/runs"));
+  close(held);
 }
