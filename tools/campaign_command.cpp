@@ -47,6 +47,15 @@ struct Job {
   nlohmann::json measures; // analyzeRun's figures
 };
 
+// The tables of a scene file written before (empty if it is missing or not TOML).
+toml::table readSceneText(const std::string &path) {
+  try {
+    return toml::parse_file(path);
+  } catch (const toml::parse_error &) {
+    return {};
+  }
+}
+
 nlohmann::json readJson(const std::string &path) {
   std::ifstream in(path);
   return nlohmann::json::parse(in, nullptr, false);
@@ -241,14 +250,19 @@ int campaignCommand(const CampaignOptions &options) {
         // Done before: completed, its series there, the same scene (compared as tables: the
         // comment line and the number format do not count).
         const nlohmann::json done = readJson(j.dir + "/summary.json");
-        if (done.is_object() && done.value("status", "") == "completed" &&
-            fs::is_regular_file(j.dir + "/run.h5"))
-          try {
-            j.reused = toml::parse_file(j.dir + "/scene.toml") == scene;
-          } catch (const toml::parse_error &) {
-          }
+        j.reused = done.is_object() && done.value("status", "") == "completed" &&
+                   fs::is_regular_file(j.dir + "/run.h5") &&
+                   readSceneText(j.dir + "/scene.toml") == scene;
         j.status = "not run";
         j.selected = selected;
+        // Not to run now (--only) but run before with this scene: as it ended then.
+        if (!selected && !j.reused && done.is_object() && done.contains("status") &&
+            readSceneText(j.dir + "/scene.toml") == scene) {
+          j.status = done.value("status", "failed");
+          j.failure = done.value("failure", "");
+          j.wall = done.value("wall_seconds", 0.0);
+          j.steps = done.value("steps", std::size_t{0});
+        }
         jobs.push_back(std::move(j));
       }
     }
@@ -273,7 +287,7 @@ int campaignCommand(const CampaignOptions &options) {
   stop_signal = 0;
   for (int s : {SIGINT, SIGTERM})
     std::signal(s, requestCampaignStop);
-  std::size_t ran = 0, failed = 0;
+  std::size_t ran = 0, failed = 0, failed_now = 0; // failed: also before, in runs not run now
   double ran_seconds = 0.0;
   for (Job &j : jobs) {
     if (j.selected && !j.reused && stop_signal == 0) {
@@ -341,7 +355,9 @@ int campaignCommand(const CampaignOptions &options) {
         j.status = "failed", j.failure = std::string("analysis: ") + e.what();
       }
     }
-    failed += j.status != "completed" && j.status != "not run" && j.status != "interrupted";
+    const bool bad = j.status != "completed" && j.status != "not run" && j.status != "interrupted";
+    failed += bad;
+    failed_now += bad && j.selected && !j.reused;
   }
   for (int s : {SIGINT, SIGTERM})
     std::signal(s, SIG_DFL);
@@ -436,7 +452,7 @@ int campaignCommand(const CampaignOptions &options) {
     std::cerr << "mesopen campaign: failed writing the tables in " << dir << ": " << e.what() << '\n';
     return 1;
   }
-  return stop_signal != 0 ? 128 + stop_signal : failed > 0 ? 1 : 0;
+  return stop_signal != 0 ? 128 + stop_signal : failed_now > 0 ? 1 : 0;
 }
 
 } // namespace mesopen
