@@ -3,7 +3,9 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace mesopen {
@@ -29,6 +31,14 @@ template <class Enum, std::size_t N> const char *nameOf(Enum value, const Named<
     if (n.value == value)
       return n.name;
   return "?";
+}
+// The value named `name`, if one is.
+template <class Enum, std::size_t N>
+std::optional<Enum> valueOf(std::string_view name, const Named<Enum> (&names)[N]) {
+  for (const auto &n : names)
+    if (name == n.name)
+      return n.value;
+  return std::nullopt;
 }
 
 // What the generator is asked for. Defaults are the scene's defaults (tools/scene.cpp lists them).

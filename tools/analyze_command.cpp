@@ -8,7 +8,6 @@
 
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -131,39 +130,38 @@ bool plot(const std::string &out_dir, const std::vector<std::string> &jsons,
   return false;
 }
 
-} // namespace
-
-nlohmann::json analyzeRun(const std::string &dir) {
+// The series of the run in `dir` (its run.h5). Throws InputError.
+RunSeries readRun(const std::string &dir) {
   const std::string path = dir + "/run.h5";
   if (!fs::is_regular_file(path))
     throw InputError(path + ": no such file; allowed: directories written by `mesopen run`");
-  RunSeries series;
   try {
-    series = readRunSeries(path);
+    return readRunSeries(path);
   } catch (const std::runtime_error &e) {
     throw InputError(e.what());
   }
+}
+
+// The measures of a run: instability.json written into `dir`, its figures returned (without the
+// curves and spectra).
+nlohmann::json writeInstability(const std::string &dir, const RunSeries &series) {
   nlohmann::json j = instabilityJson(dir, series, instability(series));
   writeJson(dir + "/instability.json", j);
   j.erase("curves"), j.erase("spectrum_scaled_depth"), j.erase("spectrum_time");
   return j;
 }
 
+} // namespace
+
+nlohmann::json analyzeRun(const std::string &dir) { return writeInstability(dir, readRun(dir)); }
+
 int analyzeCommand(const AnalyzeOptions &options) {
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   const std::string out_dir = options.out_dir.empty() ? options.dirs.front() : options.out_dir;
   std::vector<RunSeries> series;
   try {
-    for (const auto &dir : options.dirs) {
-      const std::string path = dir + "/run.h5";
-      if (!fs::is_regular_file(path))
-        throw InputError(path + ": no such file; allowed: directories written by `mesopen run`");
-      try {
-        series.push_back(readRunSeries(path));
-      } catch (const std::runtime_error &e) {
-        throw InputError(e.what());
-      }
-    }
+    for (const auto &dir : options.dirs)
+      series.push_back(readRun(dir));
     std::vector<std::string> stale(std::begin(plot_files), std::end(plot_files));
     prepareOutputDirectory(out_dir, {});
     for (const auto &f : stale)
@@ -177,9 +175,7 @@ int analyzeCommand(const AnalyzeOptions &options) {
     nlohmann::json runs = nlohmann::json::array();
     for (std::size_t r = 0; r < series.size(); ++r) {
       const std::string &dir = options.dirs[r];
-      const Instability m = instability(series[r]);
-      nlohmann::json j = instabilityJson(dir, series[r], m);
-      writeJson(dir + "/instability.json", j);
+      const nlohmann::json j = writeInstability(dir, series[r]);
       jsons.push_back(dir + "/instability.json");
       labels.push_back(fs::path(dir).lexically_normal().filename().string().empty()
                            ? fs::path(dir).lexically_normal().parent_path().filename().string()
@@ -190,9 +186,9 @@ int analyzeCommand(const AnalyzeOptions &options) {
                   dir.c_str(), j["final_depth_over_length"].get<double>(),
                   j["average_lateral_force"].get<double>(), j["lateral_impulse"].get<double>(),
                   j["lateral_displacement"].get<double>(), j["tilt"].get<double>(),
-                  j["max_abs_rotational_momentum"].get<double>(), m.in_depth.period,
-                  m.in_time.period);
-      j.erase("curves"), j.erase("spectrum_scaled_depth"), j.erase("spectrum_time");
+                  j["max_abs_rotational_momentum"].get<double>(),
+                  j["oscillation_period_scaled_depth"].get<double>(),
+                  j["oscillation_period_time"].get<double>());
       runs.push_back(j);
     }
     const bool plotted = !options.no_plot && plot(out_dir, jsons, labels);
@@ -207,8 +203,7 @@ int analyzeCommand(const AnalyzeOptions &options) {
           {{"command", "analyze"},
            {"runs", runs},
            {"files", files},
-           {"wall_seconds",
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}});
+           {"wall_seconds", secondsSince(start)}});
     }
     std::cout << "mesopen analyze: instability.json in each run's directory"
               << (plotted ? ", plots (instability-*.png) in " + out_dir : std::string()) << "\n";

@@ -19,12 +19,6 @@ const std::set<std::string> trend_fields = {"name", "measure", "expect", "runs",
 const std::set<std::string> campaign_fields = {"name",        "base",   "representation",
                                                "replicates",  "seed_stride", "frames"};
 
-std::string text(const toml::node &n) {
-  std::ostringstream s;
-  n.visit([&](const auto &v) { s << v; });
-  return s.str();
-}
-
 // Sets every key of `over` into `into`, table by table.
 void merge(toml::table &into, const toml::table &over) {
   for (const auto &[key, node] : over) {
@@ -63,7 +57,7 @@ Campaign readCampaign(const std::string &path) {
     if (!n)
       return fallback;
     if (!n->is_string())
-      throw bad(where + key + " = " + text(*n) + " is not a string");
+      throw bad(where + key + " = " + tomlText(*n) + " is not a string");
     return n->value_or(std::string());
   };
   for (const auto &[key, node] : root)
@@ -84,31 +78,28 @@ Campaign readCampaign(const std::string &path) {
     if (const std::string b = string(*t, "base", "campaign.", ""); !b.empty())
       base = file(b);
     if (const toml::node *r = t->get("representation")) {
-      const auto s = r->value<std::string>();
-      const auto it = std::find_if(std::begin(representation_names), std::end(representation_names),
-                                   [&](const auto &n) { return s && *s == n.name; });
-      if (it == std::end(representation_names))
-        throw bad("campaign.representation = " + text(*r) + " is not known; allowed: one of "
+      c.representation = valueOf(r->value_or(std::string()), representation_names);
+      if (!c.representation)
+        throw bad("campaign.representation = " + tomlText(*r) + " is not known; allowed: one of "
                   "\"fe\", \"dem\", \"hybrid\"");
-      c.representation = it->value;
     }
     if (const toml::node *r = t->get("replicates")) {
       const auto n = r->value<std::int64_t>();
       if (!n || *n < 1 || *n > 1000)
-        throw bad("campaign.replicates = " + text(*r) + " is out of range; allowed: an integer, "
+        throw bad("campaign.replicates = " + tomlText(*r) + " is out of range; allowed: an integer, "
                   "1 <= replicates <= 1000");
       c.replicates = static_cast<int>(*n);
     }
     if (const toml::node *r = t->get("seed_stride")) {
       const auto n = r->value<std::int64_t>();
       if (!n || *n < 1 || *n > 1000000000)
-        throw bad("campaign.seed_stride = " + text(*r) + " is out of range; allowed: an integer, "
+        throw bad("campaign.seed_stride = " + tomlText(*r) + " is out of range; allowed: an integer, "
                   "1 <= seed_stride <= 1e9");
       c.seed_stride = *n;
     }
     if (const toml::node *f = t->get("frames")) {
       if (!f->is_boolean())
-        throw bad("campaign.frames = " + text(*f) + " is not a boolean; allowed: true or false");
+        throw bad("campaign.frames = " + tomlText(*f) + " is not a boolean; allowed: true or false");
       c.frames = f->value_or(false);
     }
   }
@@ -128,7 +119,7 @@ Campaign readCampaign(const std::string &path) {
         !std::all_of(name->begin(), name->end(), [](char ch) {
           return std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '_' || ch == '.';
         }) || (*name)[0] == '.')
-      throw bad(where + ": name = " + ((*t)["name"] ? text(*t->get("name")) : "(none)") +
+      throw bad(where + ": name = " + ((*t)["name"] ? tomlText(*t->get("name")) : "(none)") +
                 " is not allowed; allowed: a name of letters, digits, '-', '_' and '.' (it names "
                 "the run's directory)");
     r.name = *name;
@@ -152,7 +143,7 @@ Campaign readCampaign(const std::string &path) {
         const auto v = node.value<double>();
         if (!isMeasure(std::string(key.str())) || !v)
           throw bad("run \"" + r.name + "\": reference." + std::string(key.str()) + " = " +
-                    text(node) + " is not allowed; allowed: numbers for " + measureNames());
+                    tomlText(node) + " is not allowed; allowed: numbers for " + measureNames());
         r.reference[std::string(key.str())] = *v;
       }
     for (const auto &[key, node] : *t)
@@ -181,16 +172,15 @@ Campaign readCampaign(const std::string &path) {
         throw bad(where + ": measure = \"" + tr.measure + "\" is not known; allowed: one of " +
                   measureNames());
       const auto expect = (*t)["expect"].value<std::string>();
-      const auto kind = std::find_if(std::begin(trend_kind_names), std::end(trend_kind_names),
-                                     [&](const auto &n) { return expect && *expect == n.name; });
-      if (kind == std::end(trend_kind_names))
-        throw bad(where + ": expect = " + (t->get("expect") ? text(*t->get("expect")) : "(none)") +
+      const auto kind = valueOf(expect.value_or(""), trend_kind_names);
+      if (!kind)
+        throw bad(where + ": expect = " + (t->get("expect") ? tomlText(*t->get("expect")) : "(none)") +
                   " is not known; allowed: one of \"rises\", \"falls\", \"differs\", \"similar\"");
-      tr.expect = kind->value;
+      tr.expect = *kind;
       if (const toml::array *rs = (*t)["runs"].as_array())
         for (const auto &n : *rs) {
           if (!n.is_string())
-            throw bad(where + ": runs holds " + text(n) + "; allowed: names of runs (strings)");
+            throw bad(where + ": runs holds " + tomlText(n) + "; allowed: names of runs (strings)");
           tr.runs.push_back(n.value_or(std::string()));
         }
       for (std::size_t k = 0; k < tr.runs.size(); ++k) {
@@ -218,7 +208,7 @@ Campaign readCampaign(const std::string &path) {
       if (const toml::node *tol = t->get("tolerance")) {
         const auto v = tol->value<double>();
         if (!v || !(*v > 0.0) || *v > 100.0 || tr.expect != TrendKind::similar)
-          throw bad(where + ": tolerance = " + text(*tol) + " is not allowed; allowed: a number, "
+          throw bad(where + ": tolerance = " + tomlText(*tol) + " is not allowed; allowed: a number, "
                     "0 < tolerance <= 100, for expect = \"similar\" only");
         tr.tolerance = *v;
       }
@@ -334,8 +324,10 @@ TrendResult testTrend(const Trend &trend, const std::vector<std::vector<double>>
     return slopeOf(x, y);
   };
   std::vector<double> means;
-  for (std::size_t k = 0; k < values.size(); ++k)
-    means.push_back(estimate(magnitudes(k)).mean);
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    r.magnitudes.push_back(estimate(magnitudes(k)));
+    means.push_back(r.magnitudes.back().mean);
+  }
   const bool up = std::is_sorted(means.begin(), means.end());
   const bool down = std::is_sorted(means.rbegin(), means.rend());
   r.seen = std::any_of(means.begin(), means.end(), [](double m) { return std::isnan(m); }) ? "n/a"

@@ -100,6 +100,7 @@ struct TrendResult {
   double effect = NAN, half_width = NAN;
   std::string seen; // the means' direction with x: rises, falls (each step), rises overall, falls
                     // overall (first to last), flat, n/a (a run without results)
+  std::vector<Estimate> magnitudes; // of |m|, per run
 };
 TrendResult testTrend(const Trend &trend, const std::vector<std::vector<double>> &values);
 

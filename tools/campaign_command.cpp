@@ -10,7 +10,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -27,10 +26,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 // One replicate of one run.
 struct Job {
@@ -180,12 +175,7 @@ void writeTables(const std::string &dir, const Campaign &c, const std::vector<Jo
       std::string runs_text, means;
       for (std::size_t k = 0; k < tr.runs.size(); ++k) {
         runs_text += (k ? ", " : "") + tr.runs[k] + " (" + show(tr.x[k]) + ")";
-        std::vector<double> v;
-        for (const CampaignRun &r : c.runs)
-          if (r.name == tr.runs[k])
-            for (double x : valuesOf(jobs, &r, tr.measure))
-              v.push_back(std::abs(x));
-        means += (k ? ", " : "") + show(estimate(v).mean, 3);
+        means += (k ? ", " : "") + show(trends[t].magnitudes[k].mean, 3);
       }
       md << "| " << cell(tr.name) << " | " << tr.measure << " | "
          << nameOf(tr.expect, trend_kind_names)
@@ -212,12 +202,10 @@ int campaignCommand(const CampaignOptions &options) {
     if (options.replicates)
       c.replicates = *options.replicates;
     if (options.representation) {
-      const auto it = std::find_if(std::begin(representation_names), std::end(representation_names),
-                                   [&](const auto &n) { return *options.representation == n.name; });
-      if (it == std::end(representation_names))
+      c.representation = valueOf(*options.representation, representation_names);
+      if (!c.representation)
         throw InputError("--representation " + *options.representation +
                          " is not known; allowed: fe, dem, hybrid");
-      c.representation = it->value;
     }
     for (const std::string &name : options.only)
       if (std::none_of(c.runs.begin(), c.runs.end(), [&](const CampaignRun &r) { return r.name == name; }))
@@ -250,14 +238,13 @@ int campaignCommand(const CampaignOptions &options) {
         // Done before: completed, its series there, the same scene (compared as tables: the
         // comment line and the number format do not count).
         const nlohmann::json done = readJson(j.dir + "/summary.json");
-        j.reused = done.is_object() && done.value("status", "") == "completed" &&
-                   fs::is_regular_file(j.dir + "/run.h5") &&
-                   readSceneText(j.dir + "/scene.toml") == scene;
+        const bool same_scene = readSceneText(j.dir + "/scene.toml") == scene;
+        j.reused = same_scene && done.is_object() && done.value("status", "") == "completed" &&
+                   fs::is_regular_file(j.dir + "/run.h5");
         j.status = "not run";
         j.selected = selected;
         // Not to run now (--only) but run before with this scene: as it ended then.
-        if (!selected && !j.reused && done.is_object() && done.contains("status") &&
-            readSceneText(j.dir + "/scene.toml") == scene) {
+        if (!selected && !j.reused && same_scene && done.is_object() && done.contains("status")) {
           j.status = done.value("status", "failed");
           j.failure = done.value("failure", "");
           j.wall = done.value("wall_seconds", 0.0);
@@ -392,15 +379,8 @@ int campaignCommand(const CampaignOptions &options) {
     for (std::size_t t = 0; t < c.trends.size(); ++t) {
       const Trend &tr = c.trends[t];
       nlohmann::json means = nlohmann::json::array(), intervals = nlohmann::json::array();
-      for (const std::string &name : tr.runs)
-        for (const CampaignRun &r : c.runs)
-          if (r.name == name) {
-            std::vector<double> v = valuesOf(jobs, &r, tr.measure);
-            for (double &x : v)
-              x = std::abs(x);
-            const Estimate e = estimate(v);
-            means.push_back(orNull(e.mean)), intervals.push_back(orNull(e.half_width));
-          }
+      for (const Estimate &e : trends[t].magnitudes)
+        means.push_back(orNull(e.mean)), intervals.push_back(orNull(e.half_width));
       trend_list.push_back({{"name", tr.name},
                             {"measure", tr.measure},
                             {"expect", nameOf(tr.expect, trend_kind_names)},

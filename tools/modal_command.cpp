@@ -22,7 +22,6 @@
 #include <vtkUnstructuredGrid.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -285,7 +284,7 @@ nlohmann::json modesJson(const ModalOptions &options, const ModalProblem &p,
 } // namespace
 
 int modalCommand(const ModalOptions &options) {
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   ModalProblem problem;
   try {
     const std::string ext = fs::path(options.input).extension().string();
@@ -308,7 +307,7 @@ int modalCommand(const ModalOptions &options) {
     writeJson(options.out_dir + "/modes.json", modes);
     writeModesVtu(options.out_dir + "/modes.vtu", problem.mesh, result);
     const double wall =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        secondsSince(start);
     nlohmann::json summary = {{"command", "modal"},
                               {"input", modes["input"]},
                               {"body", problem.body},

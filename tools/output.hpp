@@ -1,5 +1,5 @@
-// What the commands share about their output directory: made before any work, cleared of an
-// earlier run's files, JSON written whole.
+// What the commands share about their output: the directory made before any work and cleared of
+// an earlier run's files, JSON written whole, wall times.
 #pragma once
 
 #include "atomic_file.hpp"
@@ -7,12 +7,18 @@
 
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <filesystem>
 #include <initializer_list>
 #include <string>
 #include <system_error>
 
 namespace mesopen {
+
+using Clock = std::chrono::steady_clock;
+inline double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
 
 inline void writeJson(const std::string &path, const nlohmann::json &j) {
   writeText(path, j.dump(2) + "\n");

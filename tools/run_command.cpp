@@ -29,13 +29,8 @@
 namespace mesopen {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 namespace {
-
-double secondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 // The scene, checked for what a run needs. Throws InputError.
 Scene prepareRun(const RunOptions &options) {

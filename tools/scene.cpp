@@ -31,11 +31,6 @@ std::string show(double v) {
   return s.str();
 }
 
-std::string quoted(const toml::node &n) {
-  std::ostringstream s;
-  n.visit([&](const auto &v) { s << v; });
-  return s.str();
-}
 
 std::string allowed(const Key &k) {
   if (!k.choices.empty()) {
@@ -64,9 +59,9 @@ double number(const Key &k, const toml::node &n, const std::string &where) {
   else if (auto i = n.as_integer())
     v = static_cast<double>(i->get());
   else
-    fail(where, k, quoted(n), "is not a number");
+    fail(where, k, tomlText(n), "is not a number");
   if (!std::isfinite(v) || v < k.lo || (k.lo_open && v == k.lo) || v > k.hi)
-    fail(where, k, quoted(n), "is out of range");
+    fail(where, k, tomlText(n), "is out of range");
   return v;
 }
 
@@ -88,9 +83,9 @@ Key integer(std::string table, std::string name, Spec Scene::*part, Int Spec::*f
   k.set = [k, part, field](Scene &s, const toml::node &n, const std::string &where) {
     auto i = n.as_integer();
     if (!i)
-      fail(where, k, quoted(n), "is not an integer");
+      fail(where, k, tomlText(n), "is not an integer");
     if (static_cast<double>(i->get()) < k.lo || static_cast<double>(i->get()) > k.hi)
-      fail(where, k, quoted(n), "is out of range");
+      fail(where, k, tomlText(n), "is out of range");
     (s.*part).*field = static_cast<Int>(i->get());
   };
   k.get = [part, field](const Scene &s) { return std::to_string((s.*part).*field); };
@@ -109,13 +104,13 @@ Key choice(std::string table, std::string name, Spec Scene::*part, Enum Spec::*f
   k.set = [k, part, field, options](Scene &s, const toml::node &n, const std::string &where) {
     auto str = n.as_string();
     if (!str)
-      fail(where, k, quoted(n), "is not a string");
+      fail(where, k, tomlText(n), "is not a string");
     for (const auto &o : options)
       if (o.first == str->get()) {
         (s.*part).*field = o.second;
         return;
       }
-    fail(where, k, quoted(n), "is not known");
+    fail(where, k, tomlText(n), "is not known");
   };
   k.get = [part, field, options](const Scene &s) {
     for (const auto &o : options)
@@ -132,7 +127,7 @@ Key boolean(std::string table, std::string name, Spec Scene::*part, bool Spec::*
   k.set = [k, part, field](Scene &s, const toml::node &n, const std::string &where) {
     auto b = n.as_boolean();
     if (!b)
-      fail(where, k, quoted(n), "is not true or false");
+      fail(where, k, tomlText(n), "is not true or false");
     (s.*part).*field = b->get();
   };
   k.get = [part, field](const Scene &s) { return std::string((s.*part).*field ? "true" : "false"); };
@@ -148,10 +143,10 @@ Key diameter() {
   k.set = [k](Scene &s, const toml::node &n, const std::string &where) {
     if (auto a = n.as_array()) {
       if (a->size() != 2)
-        fail(where, k, quoted(n), "is not one number or a pair [min, max]");
+        fail(where, k, tomlText(n), "is not one number or a pair [min, max]");
       const double lo = number(k, *a->get(0), where), hi = number(k, *a->get(1), where);
       if (lo > hi)
-        fail(where, k, quoted(n), "has min > max");
+        fail(where, k, tomlText(n), "has min > max");
       s.target.diameter_min = lo, s.target.diameter_max = hi;
     } else {
       s.target.diameter_min = s.target.diameter_max = number(k, n, where);
@@ -407,7 +402,7 @@ std::string materialName(const std::string &where, const toml::table &tab,
     if (!str || !(preset ? fem::findMaterialPreset(str->get()) != nullptr
                          : fem::findMaterialType(str->get()) != nullptr))
       throw InputError(
-          where + "." + key + " = " + quoted(*node) + " is not known; allowed: one of " +
+          where + "." + key + " = " + tomlText(*node) + " is not known; allowed: one of " +
           (preset ? quotedNames(fem::materialPresets()) : quotedNames(fem::materialTypes())));
     return str->get();
   }
@@ -431,7 +426,7 @@ double parameterValue(const std::string &where, const fem::MaterialType &type,
       info = &p;
   }
   if (!info)
-    throw InputError(where + "." + key + " = " + quoted(node) + ": material type \"" + type.name +
+    throw InputError(where + "." + key + " = " + tomlText(node) + ": material type \"" + type.name +
                      "\" has no such parameter; known: preset, type" + known);
   double value = NAN;
   if (const auto *b = node.as_boolean(); b && info->boolean)
@@ -441,11 +436,11 @@ double parameterValue(const std::string &where, const fem::MaterialType &type,
   else if (const auto *i = node.as_integer(); i && !info->boolean)
     value = static_cast<double>(i->get());
   else
-    throw InputError(where + "." + key + " = " + quoted(node) + " is not " +
+    throw InputError(where + "." + key + " = " + tomlText(node) + " is not " +
                      (info->boolean ? "true or false" : "a number") +
                      "; allowed: " + parameterAllowed(*info));
   if (!(value >= info->lo && value <= info->hi))
-    throw InputError(where + "." + key + " = " + quoted(node) +
+    throw InputError(where + "." + key + " = " + tomlText(node) +
                      " is out of range; allowed: " + parameterAllowed(*info));
   return value;
 }
@@ -485,6 +480,12 @@ void readMaterials(Scene &scene, const toml::node &node) {
 }
 
 } // namespace
+
+std::string tomlText(const toml::node &n) {
+  std::ostringstream s;
+  n.visit([&](const auto &v) { s << v; });
+  return s.str();
+}
 
 toml::table parseToml(const std::string &path) {
   try {

@@ -10,7 +10,6 @@
 #include <nlohmann/json.hpp>
 #include <omp.h>
 
-#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -103,7 +102,7 @@ bool plotHistogram(const std::string &dir) {
 } // namespace
 
 int targetCommand(const TargetOptions &options) {
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   Scene scene;
   try {
     scene = readScene(options.scene);
@@ -149,7 +148,7 @@ int targetCommand(const TargetOptions &options) {
     writeYadeSpheres(dir + "/target.spheres", target);
     for (auto &w : writes)
       w.get(); // passes on the first failure
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = secondsSince(start);
 
     const TargetSpec &t = scene.target;
     // What the run could not meet is said, on the terminal and in the files.
