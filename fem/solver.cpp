@@ -158,7 +158,9 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
       m_.wake(el.body[e]);
   m_.nodes.clearExternal();
   updateActivity();
+  failed_.assign(el.size(), 0);
   internalForces(0.0);
+  erode_below_ = s_.erode_dt_ratio * refine_below_ / refine_margin; // the shortest element step
   dt_ = std::min(next_dt_, s_.max_dt);
   for (const Range &r : node_ranges_)
     for (std::size_t a = r.begin; a < r.end; ++a)
@@ -546,8 +548,8 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   alignas(64) double shear_share[max_chunk];
   MaterialOutput out{cs, shear_share};
   chunk.material->update(in, state, out);
-  // Elements that failed (hasFailed) leave the model after this step (erode): their step does not
-  // count.
+  // Elements that failed (hasFailed, or a step below erode_below_) leave the model after this step
+  // (erode): their step does not count.
   const double erosion = chunk.material->erosionStrain() > 0.0 ? chunk.material->erosionStrain() : HUGE_VAL;
   const double *plastic_strain = state.plastic_strain;
   long failing = 0;
@@ -562,6 +564,8 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   const double cl = s_.viscosity_linear, cq = s_.viscosity_quadratic;
   double internal = 0.0, viscous = 0.0, dt_min = HUGE_VAL;
   alignas(64) double fx[3][max_chunk], fy[3][max_chunk], step[max_chunk];
+  alignas(64) std::uint8_t fail[max_chunk];
+  const double erode_below = erode_below_;
   const double rho0 = chunk.material->density();
   const double *sxx_ = el.sxx.data() + e0, *syy_ = el.syy.data() + e0, *sxy_ = el.sxy.data() + e0;
   const double *pressure = el.pressure.data() + e0;
@@ -583,12 +587,17 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
       fy[k][i] = -0.5 * (sxy * gx[k][i] + syy * gy[k][i]);
     }
     const double ls = (2.0 / 3.0) * len[i], Q = cl * cs[i] + cq * ls * comp;
-    const bool fails = hasFailed(plastic_strain[i], area[i], area0[i], erosion);
+    const double stable = ls / (Q + std::sqrt(Q * Q + cs[i] * cs[i]));
+    const bool fails = hasFailed(plastic_strain[i], area[i], area0[i], erosion) || stable < erode_below;
+    fail[i] = fails;
     failing += fails;
-    step[i] = fails ? HUGE_VAL : ls / (Q + std::sqrt(Q * Q + cs[i] * cs[i]));
+    step[i] = fails ? HUGE_VAL : stable;
     dt_min = std::min(dt_min, step[i]);
   }
   sums.eroding = failing > 0;
+  if (failing > 0)
+    for (std::size_t i = 0; i < n; ++i)
+      failed_[e0 + i] = fail[i];
   // The elements whose step is near the shortest of the last pass (refine_below_) take the exact
   // element bound for their material's state: L_s / c times criticalStepGain, the damping factor
   // unchanged.
@@ -614,19 +623,17 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   sums.dt_min = dt_min;
 }
 
-// The elements that failed in this step's pass (hasFailed) are removed
+// The elements that failed in this step's pass (flagged in failed_ by elementPass) are removed
 // (erodeElements): their internal energy is booked as eroded, the element chunks are laid out
 // anew and the providers take the new boundaries. Their forces leave f(n+1), which the next
 // half-kick uses; the step to come was taken without them (elementPass).
 void Solver::erode() {
   std::vector<std::uint32_t> failed;
   for (std::size_t i = 0; i < chunks_.size(); ++i)
-    if (sums_[i].eroding) {
-      const double limit = chunks_[i].material->erosionStrain();
+    if (sums_[i].eroding)
       for (std::size_t e = chunks_[i].begin; e < chunks_[i].end; ++e)
-        if (hasFailed(m_.elements.plastic_strain[e], m_.elements.area[e], m_.elements.area0[e], limit))
-          failed.push_back(static_cast<std::uint32_t>(e));
-    }
+        if (failed_[e])
+          failed_[e] = 0, failed.push_back(static_cast<std::uint32_t>(e));
   if (failed.empty())
     return;
   // Their forces leave f(n+1) with them: f_k = -A B_k^T sigma, as in elementPass.

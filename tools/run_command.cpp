@@ -418,7 +418,8 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
                              .viscosity_linear = run.viscosity_linear,
                              .viscosity_quadratic = run.viscosity_quadratic,
                              .anti_locking = run.anti_locking,
-                             .max_dt = dem ? dem->stableStep() : HUGE_VAL});
+                             .max_dt = dem ? dem->stableStep() : HUGE_VAL,
+                             .erode_dt_ratio = run.erode_step_ratio});
   std::unique_ptr<fem::Contact> contact;
   if (scene.contact.enabled) {
     contact = std::make_unique<fem::Contact>(model, contactSettings(scene, walls));

@@ -247,6 +247,9 @@ const std::vector<Key> &keys() {
         boolean("run", "anti_locking", r, &R::anti_locking,
                 "averaged nodal volume in bodies with plastic flow (against volumetric locking); off "
                 "by default: under a penetrator it lets crushed elements collapse (docs/solver.md)"),
+        real("run", "erode_step_ratio", r, &R::erode_step_ratio, "", 0, false, 1,
+             "an element whose stable step falls below this fraction of the shortest element step "
+             "at the start is eroded (a collapsed element; docs/solver.md); 0: never"),
         integer("run", "series_interval", r, &R::series_interval, 1, 1e9,
                 "steps between samples of the series in run.h5"),
         real("run", "end_depth", r, &R::end_depth, "", 0, false, 100,
