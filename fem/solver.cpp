@@ -588,8 +588,9 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
     }
     const double ls = (2.0 / 3.0) * len[i], Q = cl * cs[i] + cq * ls * comp;
     const double stable = ls / (Q + std::sqrt(Q * Q + cs[i] * cs[i]));
-    const bool fails = hasFailed(plastic_strain[i], area[i], area0[i], erosion) || stable < erode_below;
-    fail[i] = fails;
+    const bool collapsed = stable < erode_below;
+    const bool fails = hasFailed(plastic_strain[i], area[i], area0[i], erosion) || collapsed;
+    fail[i] = fails ? 1 + collapsed : 0;
     failing += fails;
     step[i] = fails ? HUGE_VAL : stable;
     dt_min = std::min(dt_min, step[i]);
@@ -632,8 +633,10 @@ void Solver::erode() {
   for (std::size_t i = 0; i < chunks_.size(); ++i)
     if (sums_[i].eroding)
       for (std::size_t e = chunks_[i].begin; e < chunks_[i].end; ++e)
-        if (failed_[e])
+        if (failed_[e]) {
+          collapsed_elements_ += failed_[e] == 2;
           failed_[e] = 0, failed.push_back(static_cast<std::uint32_t>(e));
+        }
   if (failed.empty())
     return;
   // Their forces leave f(n+1) with them: f_k = -A B_k^T sigma, as in elementPass.

@@ -88,6 +88,8 @@ public:
   // Elements updated in the last step (bodies at rest and eroded elements are skipped).
   std::size_t activeElements() const { return active_elements_; }
   std::size_t erodedElements() const { return eroded_elements_; } // over the run
+  // Of those, the ones eroded for a collapsed step (erode_dt_ratio).
+  std::size_t collapsedElements() const { return collapsed_elements_; }
 
   // The element pass alone, as the time loop calls it: stresses and forces at the current
   // positions with the current velocities over a step dt (for benchmarks).
@@ -155,12 +157,12 @@ private:
   std::vector<KickSums> kick_sums_; // per node block (first half-kick) or unit (second)
   std::vector<double> inv_mass_;
   std::vector<char> body_active_seen_;
-  std::size_t active_elements_ = 0, eroded_elements_ = 0;
+  std::size_t active_elements_ = 0, eroded_elements_ = 0, collapsed_elements_ = 0;
   double time_ = 0.0, dt_ = 0.0, next_dt_ = 0.0;
   double step_scale_ = 1.0; // sqrt(1 - kappa_n / 4) for the providers' stiffness kappa_n
   double first_dt_ = 0.0;   // the first step (after the providers' scaling)
   double erode_below_ = 0.0; // an element step below this erodes (erode_dt_ratio; see elementPass)
-  std::vector<std::uint8_t> failed_; // per element: failed in this step's pass (see erode)
+  std::vector<std::uint8_t> failed_; // per element: failed in this step's pass, 2 for a collapsed step
   double refine_below_ = std::numeric_limits<double>::infinity(); // see elementPass
   std::size_t steps_ = 0;
   Energy energy_;

@@ -354,6 +354,7 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
                  {"external", e.external}, {"eroded", e.eroded},       {"initial", e.initial},
                  {"balance_error", e.balance_error}};
   j["eroded_elements"] = solver.erodedElements();
+  j["collapsed_elements"] = solver.collapsedElements(); // of those, eroded for a collapsed step
   if (contact) {
     const fem::ContactStatistics &c = contact->statistics();
     j["contact"] = {{"seconds", c.seconds},

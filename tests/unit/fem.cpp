@@ -182,6 +182,7 @@ TEST(StableStep, CollapsedElementErodes) {
     shortest = std::min(shortest, solver.dt());
   }
   ASSERT_EQ(solver.erodedElements(), 1u);
+  EXPECT_EQ(solver.collapsedElements(), 1u);
   EXPECT_EQ(model.elements.eroded[0], 1);
   EXPECT_GT(shortest, 0.45 * first) << "no step taken from the collapsed element";
   EXPECT_NE(solver.energy().eroded, 0.0);
