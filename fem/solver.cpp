@@ -160,7 +160,7 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
   updateActivity();
   failed_.assign(el.size(), 0);
   internalForces(0.0);
-  erode_below_ = s_.erode_dt_ratio * refine_below_ / refine_margin; // the shortest element step
+  erode_below_ = s_.erode_dt_ratio * shortest_step_;
   dt_ = std::min(next_dt_, s_.max_dt);
   for (const Range &r : node_ranges_)
     for (std::size_t a = r.begin; a < r.end; ++a)
@@ -420,7 +420,7 @@ void Solver::forces(double dt, bool kick) {
     dt_min = std::min(dt_min, sums_[i].dt_min);
   }
   next_dt_ = s_.safety * step_scale_ * dt_min;
-  refine_below_ = refine_margin * dt_min;
+  shortest_step_ = dt_min;
 }
 
 // The active element with the shortest altitude, and what it has become: for the message of a
@@ -599,13 +599,14 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   if (failing > 0)
     for (std::size_t i = 0; i < n; ++i)
       failed_[e0 + i] = fail[i];
-  // The elements whose step is near the shortest of the last pass (refine_below_) take the exact
+  // The elements whose step is near the shortest of the last pass (refine_below) take the exact
   // element bound for their material's state: L_s / c times criticalStepGain, the damping factor
   // unchanged.
-  if (dt_min < refine_below_) {
+  const double refine_below = refine_margin * shortest_step_;
+  if (dt_min < refine_below) {
     dt_min = HUGE_VAL;
     for (std::size_t i = 0; i < n; ++i) {
-      if (step[i] < refine_below_) {
+      if (step[i] < refine_below) {
         const double g_x[3] = {gx[0][i], gx[1][i], gx[2][i]}, g_y[3] = {gy[0][i], gy[1][i], gy[2][i]};
         step[i] *= criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i], shear_share[i]);
       }

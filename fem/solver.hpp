@@ -161,9 +161,11 @@ private:
   double time_ = 0.0, dt_ = 0.0, next_dt_ = 0.0;
   double step_scale_ = 1.0; // sqrt(1 - kappa_n / 4) for the providers' stiffness kappa_n
   double first_dt_ = 0.0;   // the first step (after the providers' scaling)
-  double erode_below_ = 0.0; // an element step below this erodes (erode_dt_ratio; see elementPass)
+  double erode_below_ = 0.0; // erode_dt_ratio times the shortest element step at the start
   std::vector<std::uint8_t> failed_; // per element: failed in this step's pass, 2 for a collapsed step
-  double refine_below_ = std::numeric_limits<double>::infinity(); // see elementPass
+  // The shortest element step of the last element pass, before the safety factor and the
+  // providers' scaling (elementPass refines the steps near it)
+  double shortest_step_ = std::numeric_limits<double>::infinity();
   std::size_t steps_ = 0;
   Energy energy_;
   // Work of this step: constraints and gravity; providers' forces; their frictional part.
