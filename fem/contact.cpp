@@ -22,6 +22,7 @@ constexpr double search_margin = 1.0; // pairs of bodies: margin / the median el
 constexpr std::size_t runs_per_thread = 4; // runs of pairs: a thread takes the next one free
 constexpr std::size_t owner_blocks = 16;   // blocks of bodies, each adding its nodes' forces
 constexpr double release_steps = 200.0;    // an overlap erosion laid bare opens over this many steps
+constexpr double step_margin = 0.005; // a contact deepens in a step by its approach or this (of h)
 
 double sq(double x) { return x * x; }
 } // namespace
@@ -56,6 +57,7 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
     size_.push_back(longest);
   }
   boxes_.resize(n_bodies);
+  pushed_.assign(model.nodes.size(), 0.0);
   travel_.assign(n_bodies, 0.0);
   travel_searched_.assign(n_bodies, 0.0);
   listed_.assign(n_bodies, 0);
@@ -90,6 +92,7 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
     hits.loads.resize(owner_blocks);
   arenas_.resize(runs);
   block_loaded_.resize(owner_blocks);
+  block_pushed_.resize(owner_blocks);
   for (std::size_t b = 0; b < n_bodies; ++b)
     block_.push_back(static_cast<std::uint8_t>(b * owner_blocks / n_bodies));
 }
@@ -127,8 +130,6 @@ void Contact::boundaryChanged(const Model &model, const std::vector<std::uint32_
   takeBoundaries(model);
   for (std::size_t b = 0; b < model.bodies.size(); ++b)
     measure(model, b);
-  if (allowance_.empty())
-    allowance_.assign(model.nodes.size(), 0.0);
   for (std::uint32_t C : bodies)
     allowOverlaps(C, std::vector<std::uint32_t>(before.begin() + before_begin[C],
                                                  before.begin() + before_begin[C + 1]));
@@ -139,16 +140,6 @@ void Contact::boundaryChanged(const Model &model, const std::vector<std::uint32_
 // C's newly bare nodes (not in `before`, its boundary nodes before) inside them, deeper than a
 // contact gets in a step (check_depth of an element): each such node's depth is allowed for.
 void Contact::allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &before) {
-  auto allow = [&](std::uint32_t node, double depth) {
-    if (depth <= allowance_[node])
-      return;
-    if (allowance_[node] == 0.0)
-      allowed_.push_back({node, 0.0});
-    allowance_[node] = depth;
-    for (Allowance &a : allowed_)
-      if (a.node == node)
-        a.rate = depth / release_steps;
-  };
   Scratch scratch;
   for (const Pair &pair : pairs_) {
     if (pair.a != C && pair.b != C)
@@ -165,6 +156,20 @@ void Contact::allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &bef
         if (const double d = penetration(B, points_[k].x, points_[k].y, scratch); d > check_depth * size_[B])
           allow(nodes_[k], d);
   }
+}
+
+// Node's depth up to `depth` is allowed for, and let go over release_steps steps.
+void Contact::allow(std::uint32_t node, double depth) {
+  if (allowance_.empty())
+    allowance_.assign(pushed_.size(), 0.0);
+  if (depth <= allowance_[node])
+    return;
+  if (allowance_[node] == 0.0)
+    allowed_.push_back({node, 0.0});
+  allowance_[node] = depth;
+  for (Allowance &a : allowed_)
+    if (a.node == node)
+      a.rate = depth / release_steps;
 }
 
 // How deep (px, py) lies inside body B: its distance to B's boundary, 0 outside.
@@ -260,6 +265,7 @@ void Contact::addForces(Model &model, double, double dt) {
 
 void Contact::Hits::clear() {
   found.clear();
+  sudden.clear();
   for (auto &block : loads)
     block.clear();
   count = deep = 0;
@@ -283,8 +289,17 @@ void Contact::addHits(Model &model) {
 #pragma omp parallel for schedule(static, 1) if (n_loads > 1024)
   for (long k = 0; k < blocks; ++k) {
     std::uint32_t woken = no_node;
+    // the depths the block's nodes are pushed at, for the next step's hits
+    for (std::uint32_t p : block_pushed_[k])
+      pushed_[p] = 0.0;
+    block_pushed_[k].clear();
     for (const Hits &hits : run_hits_)
       for (const Load &l : hits.loads[k]) {
+        if (l.depth > pushed_[l.node]) {
+          if (pushed_[l.node] == 0.0)
+            block_pushed_[k].push_back(l.node);
+          pushed_[l.node] = l.depth;
+        }
         nd.addExternal(l.node, l.fx, l.fy, l.friction_x, l.friction_y, block_loaded_[k]);
         if (l.body != woken) // the loads of a body come together
           model.wake(l.body), woken = l.body;
@@ -293,6 +308,12 @@ void Contact::addHits(Model &model) {
   for (auto &loaded : block_loaded_) {
     nd.loaded.insert(nd.loaded.end(), loaded.begin(), loaded.end());
     loaded.clear();
+  }
+  // The sudden depths are allowed for, run by run.
+  for (const Hits &hits : run_hits_) {
+    for (auto [p, excess] : hits.sudden)
+      allow(p, excess);
+    stats_.sudden += hits.sudden.size();
   }
   stats_.contacts = contacts;
   stats_.depth = deepest;
@@ -755,7 +776,8 @@ void Contact::walls(const Model &model, double dt, Hits &hits) const {
 // The force of a contact (the first `touching` h of the depth is free), relative velocities at
 // mid-step; the reaction goes to the segment's nodes by weights 1 - w2, w2.
 void Contact::hit(const Model &model, const Found &f, double dt, Hits &hits) const {
-  const auto [A, k, B, k1, k2, w2, nx, ny, depth, h, mu] = f;
+  const auto [A, k, B, k1, k2, w2, nx, ny, found_depth, h, mu] = f;
+  double depth = found_depth;
   const Nodes &nd = model.nodes;
   const double w1 = 1.0 - w2;
   const std::uint32_t p = nodes_[k];
@@ -768,6 +790,14 @@ void Contact::hit(const Model &model, const Found &f, double dt, Hits &hits) con
     vy -= w1 * nd.vy[s1] + w2 * nd.vy[s2];
   }
   const double vn = vx * nx + vy * ny; // > 0: separating
+  // A contact deepens in a step by its approach, (-vn) dt, from the depth its node was pushed at
+  // the step before. Found deeper than that (with a margin: twice the approach, at least
+  // step_margin h), the node was not reached by approach: B's boundary folded over it, or a new
+  // closest segment took over in a dented body. Pushed out at once it would leave at depth / dt;
+  // the excess is allowed for instead and let go over release_steps steps, as erosion's overlaps.
+  const double reach = pushed_[p] + std::max(step_margin * h, -2.0 * vn * dt);
+  if (depth > reach)
+    hits.sudden.emplace_back(p, depth - reach), depth = reach;
   // Two nodes that meet are pushed apart by both passes, a wall contact by one: the walls take
   // twice the stiffness (kappa 1 by default, the one-step constraint).
   const double kappa = k1 == no_node ? 2.0 * s_.stiffness : s_.stiffness;
@@ -777,15 +807,15 @@ void Contact::hit(const Model &model, const Found &f, double dt, Hits &hits) con
   const double ft = slip > 0.0 ? std::min(mu * fn, m_eff * slip / dt) / slip : 0.0;
   const double fx = fn * nx - ft * tx, fy = fn * ny - ft * ty, friction_x = -ft * tx,
                friction_y = -ft * ty;
-  hits.loads[block_[A]].push_back({p, A, fx, fy, friction_x, friction_y});
+  hits.loads[block_[A]].push_back({p, A, fx, fy, friction_x, friction_y, depth});
   if (k1 != no_node) {
     std::vector<Load> &loads = hits.loads[block_[B]];
     for (auto [s, w] : {std::pair{k1, w1}, {k2, w2}})
-      loads.push_back({nodes_[s], B, -w * fx, -w * fy, -w * friction_x, -w * friction_y});
+      loads.push_back({nodes_[s], B, -w * fx, -w * fy, -w * friction_x, -w * friction_y, 0.0});
   }
   ++hits.count;
-  hits.depth = std::max(hits.depth, depth / h);
-  hits.deep += depth / h > deep;
+  hits.depth = std::max(hits.depth, found_depth / h);
+  hits.deep += found_depth / h > deep;
 }
 
 } // namespace mesopen::fem

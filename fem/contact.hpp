@@ -72,6 +72,7 @@ struct ContactStatistics {
   std::size_t searches = 0;              // over the run: searches for pairs of bodies
   std::size_t sides = 0, skipped = 0;    // over the run: sides of overlapping pairs, skipped as clear
   std::size_t partial = 0;               // over the run: sides whose hot nodes alone were looked at
+  std::size_t sudden = 0;                // over the run: contacts found deeper than a step's approach
   double seconds = 0.0;                  // wall time spent in contact, over the run
 };
 
@@ -135,6 +136,7 @@ private:
 
   void takeBoundaries(const Model &model);
   void allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &before);
+  void allow(std::uint32_t node, double depth);
   void measure(const Model &model, std::size_t body);
   void addHits(Model &model);
   void findPairs();
@@ -149,10 +151,10 @@ private:
     bool corner = false;
   };
   // A contact force on a node (or a segment's node's share of the reaction), with its frictional
-  // part; `body` is the node's.
+  // part; `body` is the node's; the depth the node was pushed at (0 for a reaction).
   struct Load {
     std::uint32_t node, body;
-    double fx, fy, friction_x, friction_y;
+    double fx, fy, friction_x, friction_y, depth;
   };
   // A contact: boundary node k (index into nodes_) of body A, pushed out along (nx, ny) by
   // `depth` from the segment k1-k2 of body B (at weight w2 from k1) or from a wall (k1 = no_node);
@@ -167,6 +169,8 @@ private:
   struct Hits {
     std::vector<Found> found;
     std::vector<std::vector<Load>> loads; // per block of bodies
+    // the nodes (model indices) found suddenly deep, and by how much (see hit)
+    std::vector<std::pair<std::uint32_t, double>> sudden;
     std::size_t count = 0, deep = 0;
     double depth = 0.0;
     void clear();
@@ -242,16 +246,21 @@ private:
   std::vector<Hits> run_hits_;
   std::vector<std::uint8_t> block_;                      // per body: its block of bodies
   std::vector<std::vector<std::uint32_t>> block_loaded_; // per block of bodies: nodes it loaded
+  std::vector<std::vector<std::uint32_t>> block_pushed_; // per block of bodies: nodes pushed_ holds
   ContactStatistics stats_;
-  // Overlaps that erosion laid bare: a node already inside another body when the elements that
-  // held it out left. Its depth then [m] is not pushed against (per model node), and is let go
-  // over release_steps steps, so that the overlap opens at a bounded speed instead of in one step.
+  // Overlaps that erosion laid bare (a node already inside another body when the elements that
+  // held it out left), and contacts found deeper than a step's approach can make (see hit): the
+  // node's depth then [m] is not pushed against (per model node), and is let go over
+  // release_steps steps, so that the overlap opens at a bounded speed instead of in one step.
   struct Allowance {
     std::uint32_t node;
     double rate; // [m per step]
   };
   std::vector<double> allowance_;
   std::vector<Allowance> allowed_;
+  // The depth each model node was pushed at in the last step (the deepest of its contacts; 0 if
+  // none; the nodes where it is not 0 are in block_pushed_).
+  std::vector<double> pushed_;
 };
 
 } // namespace mesopen::fem

@@ -361,6 +361,7 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
                     {"share_of_steps", c.seconds / std::max(loop.solver_seconds, 1e-9)},
                     {"deepest_penetration_over_element_size", c.max_depth},
                     {"deep_node_steps", c.deep},
+                    {"sudden_contacts", c.sudden},
                     {"last_step_pairs", c.pairs},
                     {"pair_sides_skipped_as_clear",
                      static_cast<double>(c.skipped) / std::max<double>(c.sides, 1.0)},

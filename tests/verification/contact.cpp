@@ -204,3 +204,50 @@ TEST(Contact, ErodingBarKeepsContactAndEnergyBalance) {
   EXPECT_EQ(contact.statistics().deep, 0u);
   EXPECT_LT(contact.statistics().max_depth, 0.5);
 }
+
+// Two grains closing at 2 m/s that overlap by 0.3 of an element at the start, as a node a folded grain
+// closes over, or a boundary that a change of closest segment puts deep at once: the contact is
+// found deeper than any step's approach could make it. Pushed out in one step the nodes would
+// leave at about kappa d / dt (1,000 m/s here); the excess depth is allowed for and let go over
+// release_steps (200) steps, so the grains part at about d / (200 dt). Bound: no node faster
+// than a twentieth of d / dt (the one-step push is ten times that); the overlap has opened
+// (deepest contact below check_depth, 5 % of an element) after 300 steps; momentum stays zero to
+// round-off.
+TEST(Contact, SuddenDeepOverlapOpensGently) {
+  const double h = 10e-6, overlap = 0.3 * h;
+  TestMesh mesh;
+  mesh.addRectangle(-6 * h, 0.0, 6 * h, 6 * h, 6, 6, 0.2, 7);
+  mesh.addRectangle(-overlap, 0.5 * h, 6 * h, 6 * h, 6, 6, 0.2, 8);
+  fem::Model model = mesh.model(test::oneMaterial("quartz"));
+  fem::setBodyVelocity(model, 0, 1.0, 0.0); // closing slowly (bodies at rest are not computed)
+  fem::setBodyVelocity(model, 1, -1.0, 0.0);
+  fem::ContactSettings cs;
+  cs.friction = {0.0};
+  fem::Contact contact(model, cs);
+  fem::Solver solver(model, {});
+  solver.addForceProvider(&contact);
+  const fem::Nodes &nd = model.nodes;
+  double mass = 0.0, fastest = 0.0, worst_momentum = 0.0, dt = HUGE_VAL;
+  for (std::size_t a = 0; a < nd.size(); ++a)
+    mass += nd.mass[a];
+  for (int step = 0; step < 300; ++step) {
+    solver.step();
+    dt = std::min(dt, solver.dt());
+    double px = 0.0, py = 0.0;
+    for (std::size_t a = 0; a < nd.size(); ++a) {
+      fastest = std::max(fastest, std::hypot(nd.vx[a], nd.vy[a]));
+      px += nd.mass[a] * nd.vx[a], py += nd.mass[a] * nd.vy[a];
+    }
+    worst_momentum = std::max({worst_momentum, std::abs(px), std::abs(py)});
+  }
+  const double one_step = overlap / dt;
+  std::printf("sudden overlap of %.2f elements: %zu contacts found deeper than a step's approach, "
+              "fastest node %.3g m/s (d / dt = %.3g m/s), deepest at the end %.4f elements, "
+              "momentum %.2e of m d / dt\n",
+              overlap / h, contact.statistics().sudden, fastest, one_step,
+              contact.statistics().depth, worst_momentum / (mass * one_step));
+  EXPECT_GT(contact.statistics().sudden, 0u);
+  EXPECT_LT(fastest, one_step / 20.0);
+  EXPECT_LT(contact.statistics().depth, 0.05);
+  EXPECT_LT(worst_momentum, 1e-12 * mass * one_step);
+}
