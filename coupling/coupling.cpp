@@ -1,35 +1,162 @@
 #include "coupling.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 
 namespace mesopen::coupling {
 
 FeDemCoupling::FeDemCoupling(const fem::Model &model, DemParticipant &dem,
-                             DiskContactSettings settings)
+                             DiskContactSettings settings, double window)
     : dem_(dem), contact_(model, std::move(settings)),
       data_{{"Particle-State", "DEM-Particles", "DEM", "FE"},
-            {"Particle-Force", "DEM-Particles", "FE", "DEM"},
-            {"Reaction-Force", "FE-Boundary", "FE", "FE"}} {}
+            {"Particle-Motion", "DEM-Particles", "FE", "DEM"},
+            {"Reaction-Force", "FE-Boundary", "FE", "FE"}} {
+  const double stable = dem.stableStep(); // every rank calls it
+  planned_ = window > 0.0 ? window : std::isfinite(stable) ? stable : 0.0;
+}
 
-void FeDemCoupling::addForces(fem::Model &model, double time, double dt) {
+// The disks' state read, their slow half kick (taken where used: v_h = v + P/2 f/m), no motion
+// yet; the disks that hold the last forces of the window before are near, with those forces.
+void FeDemCoupling::startWindow(double dt) {
+  const Particles &p = dem_.particles();
+  // A whole number of steps like the first: the window ends near where the disks' slow path
+  // assumed (the FE step changes little over a window)
+  length_ = planned_ > dt ? std::floor(planned_ / dt) * dt : dt;
+  const std::size_t n = p.size();
+  for (auto *v : {&motion_.dx, &motion_.dy, &motion_.dvx, &motion_.dvy, &motion_.domega})
+    v->assign(n, 0.0);
+  is_near_.assign(n, 0);
+  near_.clear();
+  fast_.reset(0);
+  r_max_ = 0.0;
+  for (double r : p.radius)
+    r_max_ = std::max(r_max_, r);
+  if (!carried_.empty()) {
+    // the disks' places by id (ids run from 1 to about the number of disks)
+    std::int64_t top = 0;
+    for (std::int64_t id : p.id)
+      top = std::max(top, id);
+    place_.assign(static_cast<std::size_t>(top) + 1, -1);
+    for (std::size_t i = 0; i < n; ++i)
+      place_[p.id[i]] = static_cast<std::int64_t>(i);
+    for (const DiskForce &f : carried_) {
+      if (f.id < 0 || f.id > top || place_[f.id] < 0)
+        continue; // another rank's
+      const auto i = static_cast<std::size_t>(place_[f.id]);
+      near_.push_back(static_cast<std::uint32_t>(i));
+      is_near_[i] = 1;
+      fast_.fx.push_back(f.fx), fast_.fy.push_back(f.fy), fast_.torque.push_back(f.torque);
+    }
+  }
+  elapsed_ = 0.0;
+  open_ = true;
+  data_[0].window = window_ + 1;
+}
+
+// The disks that may touch an FE body before the window ends: those whose slow path from now to
+// the window's end (and a step beyond) comes into the region the bodies may reach by then, moving
+// at up to twice the fastest boundary node's speed now (plus half the largest radius). A disk
+// left out feels no FE force and is exactly on its slow path; if the bodies leave that region,
+// the choice is made again.
+void FeDemCoupling::choose(const DiskContact::Region &now, double dt) {
+  const Particles &p = dem_.particles();
+  const double left = std::max(length_ - elapsed_, 0.0) + 2.0 * dt;
+  const double margin = 2.0 * now.fastest * left + 0.5 * r_max_;
+  allowed_ = {now.x0 - margin, now.y0 - margin, now.x1 + margin, now.y1 + margin, now.fastest};
+  const double half = 0.5 * length_;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (is_near_[i])
+      continue;
+    const double vx = p.vx[i] + half * p.fx[i] / p.mass[i], vy = p.vy[i] + half * p.fy[i] / p.mass[i];
+    const double xa = p.x[i] + elapsed_ * vx, ya = p.y[i] + elapsed_ * vy;
+    const double xb = xa + left * vx, yb = ya + left * vy;
+    if (std::max(xa, xb) < allowed_.x0 || std::min(xa, xb) > allowed_.x1 ||
+        std::max(ya, yb) < allowed_.y0 || std::min(ya, yb) > allowed_.y1)
+      continue;
+    near_.push_back(static_cast<std::uint32_t>(i));
+    is_near_[i] = 1;
+    fast_.fx.push_back(0.0), fast_.fy.push_back(0.0), fast_.torque.push_back(0.0);
+  }
+}
+
+void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
   const auto start = std::chrono::steady_clock::now();
-  ++window_;
+  const bool first = !open_;
+  if (first)
+    startWindow(dt);
+  const Particles &p = dem_.particles();
+  WindowMotion &m = motion_;
+  // The near disks under the FE bodies' forces of the last step: half kick, drift.
+  auto kick = [&](std::size_t c, double half_dt) {
+    const std::uint32_t i = near_[c];
+    m.dvx[i] += half_dt * fast_.fx[c] / p.mass[i], m.dvy[i] += half_dt * fast_.fy[c] / p.mass[i];
+    m.domega[i] += half_dt * fast_.torque[c] / p.inertia(i);
+  };
+  for (std::size_t c = 0; c < near_.size(); ++c) {
+    kick(c, 0.5 * dt);
+    m.dx[near_[c]] += dt * m.dvx[near_[c]], m.dy[near_[c]] += dt * m.dvy[near_[c]];
+  }
+  elapsed_ += dt;
+  const DiskContact::Region now = contact_.measure(model, r_max_);
+  if (first || now.x0 < allowed_.x0 || now.y0 < allowed_.y0 || now.x1 > allowed_.x1 ||
+      now.y1 > allowed_.y1)
+    choose(now, dt);
+  // Their state now (velocities at the step's middle, as the FE nodes'), the FE-DEM contact, and
+  // the second half kick of its forces.
+  const std::size_t nc = near_.size();
+  for (auto *v : {&now_.x, &now_.y, &now_.vx, &now_.vy, &now_.omega, &now_.radius, &now_.mass})
+    v->resize(nc);
+  const double half = 0.5 * length_;
+  for (std::size_t c = 0; c < nc; ++c) {
+    const std::uint32_t i = near_[c];
+    const double vx = p.vx[i] + half * p.fx[i] / p.mass[i], vy = p.vy[i] + half * p.fy[i] / p.mass[i];
+    now_.x[c] = p.x[i] + elapsed_ * vx + m.dx[i], now_.y[c] = p.y[i] + elapsed_ * vy + m.dy[i];
+    now_.vx[c] = vx + m.dvx[i], now_.vy[c] = vy + m.dvy[i];
+    now_.omega[c] = p.omega[i] + half * p.torque[i] / p.inertia(i) + m.domega[i];
+    now_.radius[c] = p.radius[i], now_.mass[c] = p.mass[i];
+  }
+  fast_.reset(nc);
   reactions_.clear();
-  dem_.advance(dt, [&](const Particles &particles, ParticleForces &forces) {
-    data_[0].window = window_; // read: positions at n+1, velocities at n+1/2
-    contact_.addForces(model, particles, forces, reactions_, dt);
-    data_[1].window = window_; // written
-  });
+  contact_.addForces(model, now_, fast_, reactions_, dt);
+  for (std::size_t c = 0; c < nc; ++c)
+    kick(c, 0.5 * dt);
   dem_.gatherReactions(reactions_);
   DiskContact::apply(model, reactions_);
-  data_[2].window = window_;
+  data_[2].window = window_ + 1;
+  if (elapsed_ + 0.5 * dt >= length_) // the FE step nearest to the planned end
+    endWindow();
   seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  for (const Data &d : data_)
-    if (d.window != window_)
-      throw fem::RunFailure("coupling: " + d.name + " on " + d.mesh + " (" + d.writer + " to " +
-                            d.reader + ") was not exchanged in time window " +
-                            std::to_string(window_) + " ending at t = " + std::to_string(time) +
-                            " s");
+}
+
+// The DEM participant's step with the window's motion; the last FE forces on the disks are
+// carried to the next window's first half kick, by id (the step may move disks to other ranks).
+void FeDemCoupling::endWindow() {
+  const Particles &p = dem_.particles();
+  carried_.clear();
+  for (std::size_t c = 0; c < near_.size(); ++c)
+    if (fast_.fx[c] != 0.0 || fast_.fy[c] != 0.0 || fast_.torque[c] != 0.0)
+      carried_.push_back({p.id[near_[c]], fast_.fx[c], fast_.fy[c], fast_.torque[c]});
+  data_[1].window = window_ + 1;
+  dem_.endWindow(elapsed_, length_, motion_);
+  dem_.gatherDiskForces(carried_);
+  ++window_;
+  open_ = false;
+}
+
+Particles FeDemCoupling::disks() const {
+  Particles d = dem_.particles();
+  if (!open_)
+    return d;
+  const WindowMotion &m = motion_;
+  const double half = 0.5 * length_;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    const double vx = d.vx[i] + half * d.fx[i] / d.mass[i], vy = d.vy[i] + half * d.fy[i] / d.mass[i];
+    d.x[i] += elapsed_ * vx + m.dx[i], d.y[i] += elapsed_ * vy + m.dy[i];
+    d.vx[i] = vx + m.dvx[i], d.vy[i] = vy + m.dvy[i];
+    d.omega[i] += half * d.torque[i] / d.inertia(i) + m.domega[i];
+  }
+  return d;
 }
 
 } // namespace mesopen::coupling

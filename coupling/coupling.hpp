@@ -1,10 +1,24 @@
 // A coupled run in preCICE's words (participants, meshes, data, time windows): the FE participant
 // (fem::Solver; its mesh the bodies' boundary nodes) and a DEM participant (its mesh the disks).
-// A time window is one FE step: the FE solver kicks and drifts to x(n+1), then, as one of its force
-// providers, this coupling lets the DEM participant advance over the same window; at x(n+1) the
-// DEM participant's particle state is read, the FE-DEM contact forces are written onto the disks
-// and their reactions onto the FE nodes (disk_contact.hpp); both solvers then finish the step
-// with the forces at n+1. Every declared exchange is checked to have happened once per window.
+// A time window is one step of the DEM participant, of about `window` seconds (by default its
+// stable step, a tenth of the contact time of its lightest disk); the FE participant takes its
+// own, shorter steps within it. This is r-RESPA multiple time stepping (Tuckerman, Berne &
+// Martyna 1992; DemParticipant::endWindow): the disks' own forces (disk-disk and wall contacts)
+// are the slow forces, the FE bodies' forces on them the fast ones.
+//   - At the window's start the disks' state is read (Particle-State: x(n), v(n) and their own
+//     forces f(n)) and they take the slow half kick over the planned length P:
+//     v_h = v(n) + P/2 f(n)/m.
+//   - Every FE step the disks are where both forces have taken them, x(n) + t v_h + dx: dx and dv
+//     are integrated by velocity Verlet on the FE steps from the FE-DEM contact forces
+//     (disk_contact.hpp), the same forces whose reactions go to the FE nodes in that step. Forces
+//     and reactions act over the same FE steps: momentum is kept to round-off.
+//   - The FE step nearest to P ends the window: the DEM participant takes (dx, dv) (Particle-Motion)
+//     and its own step of the window's length D.
+// Only the disks that can come within reach of an FE body during the window are moved step by
+// step (the near disks): chosen at the window's start, and again whenever the FE bodies leave the
+// region that choice allowed for; the others move on their slow path alone, exactly.
+// A window of one FE step (`window` shorter than the FE step) is the plain velocity-Verlet
+// coupling of both solvers step by step.
 #pragma once
 
 #include "dem.hpp"
@@ -25,9 +39,11 @@ struct Data {
 
 class FeDemCoupling : public fem::ForceProvider {
 public:
-  FeDemCoupling(const fem::Model &model, DemParticipant &dem, DiskContactSettings settings);
-  // One time window: the DEM participant's step with the exchange at x(n+1). Throws
-  // fem::RunFailure if a declared exchange did not happen.
+  // window: the DEM participant's step [s]; 0: its stable step.
+  FeDemCoupling(const fem::Model &model, DemParticipant &dem, DiskContactSettings settings,
+                double window = 0.0);
+  // One FE step within the window; ends the window if due. Throws fem::RunFailure if a declared
+  // exchange did not happen.
   void addForces(fem::Model &model, double time, double dt) override;
   double stepStiffness() const override { return contact_.stepStiffness(); }
   void boundaryChanged(const fem::Model &model, const std::vector<std::uint32_t> &) override {
@@ -35,16 +51,39 @@ public:
   }
   const DiskContact &contact() const { return contact_; }
   const DemParticipant &dem() const { return dem_; }
-  std::uint64_t windows() const { return window_; }
-  double seconds() const { return seconds_; } // in the windows: the DEM step and the exchange
+  // The disks now, within the window: positions, velocities and spins at the FE step's end.
+  Particles disks() const;
+  std::uint64_t windows() const { return window_; } // ended
+  double window() const { return planned_; }
+  std::size_t nearDisks() const { return near_.size(); } // moved step by step in this window
+  double seconds() const { return seconds_; } // in the coupling: the FE-DEM contact, the DEM steps
   const std::vector<Data> &data() const { return data_; }
 
 private:
+  void startWindow(double dt);
+  void choose(const DiskContact::Region &now, double dt);
+  void endWindow();
+
   DemParticipant &dem_;
   DiskContact contact_;
-  std::uint64_t window_ = 0;
+  double planned_;              // the window asked for
+  double length_ = 0.0;         // this one's planned length P: whole FE steps
+  bool open_ = false;           // a window under way
+  double elapsed_ = 0.0;        // its time so far
+  std::uint64_t window_ = 0;    // windows ended
   double seconds_ = 0.0;
-  std::vector<Data> data_; // the particles' state, the forces on them, the reactions on FE nodes
+  double r_max_ = 0.0;          // the largest disk
+  DiskContact::Region allowed_{}; // where the FE bodies may go before the near disks are chosen anew
+  // The near disks (indices into the participant's particles), their motion beyond the slow path
+  // and the last FE-DEM forces on them, and their state now for the contact.
+  std::vector<std::uint32_t> near_;
+  std::vector<char> is_near_;
+  std::vector<std::int64_t> place_; // per disk id: its index, -1 if not this rank's
+  WindowMotion motion_;            // per disk (zero but for the near ones)
+  ParticleForces fast_;            // per near disk
+  Particles now_;                  // per near disk
+  std::vector<DiskForce> carried_; // the last forces of the window before, by disk id
+  std::vector<Data> data_; // the particles' state, their motion, the reactions on FE nodes
   std::vector<Reaction> reactions_;
 };
 

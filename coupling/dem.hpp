@@ -13,10 +13,13 @@
 namespace mesopen::coupling {
 
 // The disks, struct of arrays. Within a window's exchange: positions at its end, velocities and
-// spins at its middle (the velocity-Verlet half step both solvers take); after it, both at its end.
+// spins at its middle (the velocity-Verlet half step both solvers take); after it, both at its end,
+// with the participant's own forces there (disk-disk and wall contacts, gravity; not the FE bodies').
 struct Particles {
   std::vector<double> x, y, vx, vy, omega; // [m], [m/s], [rad/s]
   std::vector<double> radius, mass;        // [m], [kg/m]
+  std::vector<double> fx, fy, torque;      // own forces [N/m], torques [N m/m]
+  std::vector<std::int64_t> id;            // each disk's number, whatever its place in the arrays
   std::size_t size() const { return x.size(); }
   double inertia(std::size_t i) const { return 0.5 * mass[i] * radius[i] * radius[i]; }
   // Kinetic energy, translation and rotation [J/m].
@@ -26,6 +29,13 @@ struct Particles {
       e += 0.5 * mass[i] * (vx[i] * vx[i] + vy[i] * vy[i]) + 0.5 * inertia(i) * omega[i] * omega[i];
     return e;
   }
+};
+
+// The disks' motion over a time window under the FE bodies' forces, beyond the motion their own
+// forces give them (multiple time stepping, see DemParticipant::endWindow), in the order of
+// Particles: displacement [m], velocity [m/s], spin [rad/s].
+struct WindowMotion {
+  std::vector<double> dx, dy, dvx, dvy, domega;
 };
 
 // A step that takes ten steps over the contact time pi sqrt(m / k_n) of the lightest disk (mass
@@ -46,11 +56,26 @@ struct Reaction {
   double fx, fy, friction_x, friction_y;
 };
 
+// A force and torque on the disk numbered `id` [N/m, N m/m].
+struct DiskForce {
+  std::int64_t id;
+  double fx, fy, torque;
+};
+
 // A DEM solver as a participant. advance() takes one time window of length dt as velocity
 // Verlet: v(n+1/2) = v(n) + dt/2 f(n)/m, x(n+1) = x(n) + dt v(n+1/2); then its own forces at x(n+1)
 // and `exchange`, which reads the particles there (positions at n+1, velocities at n+1/2) and
-// writes the forces the FE bodies exert on them; then v(n+1) = v(n+1/2) + dt/2 f(n+1)/m. The FE
-// solver takes the same steps in the same order, so that both read each other at x(n+1).
+// writes the forces the FE bodies exert on them; then v(n+1) = v(n+1/2) + dt/2 f(n+1)/m.
+// endWindow() ends a window of many FE steps (r-RESPA multiple time stepping, Tuckerman, Berne &
+// Martyna 1992, J. Chem. Phys. 97, 1990): over the window the disks moved as
+//   x(t) = x(n) + t v_h + dx(t),  v_h = v(n) + P/2 f(n)/m,
+// the slow kick of their own forces f(n) over the planned length P, then their own forces frozen
+// and the FE bodies' forces (fast) integrated on the FE steps into dx and dv. endWindow(D, P, m),
+// D the window's actual length, makes x(n+1) = x(n) + D v_h + dx (where the FE bodies saw them),
+// computes its own forces there and ends with
+//   v(n+1) = v(n) + D/2 f(n)/m + dv + D/2 f(n+1)/m
+// (and the spins alike): one step of its own of length D whose forces are computed once, its own
+// forces' impulses those of velocity Verlet with the step D whatever P was.
 class DemParticipant {
 public:
   using Exchange = std::function<void(const Particles &, ParticleForces &)>;
@@ -60,9 +85,12 @@ public:
   // calls it).
   virtual double stableStep() const = 0;
   virtual void advance(double dt, const Exchange &exchange) = 0;
+  virtual void endWindow(double length, double planned, const WindowMotion &motion) = 0;
   // Over MPI ranks each holding part of the disks, the reactions of every rank's disks, in rank
   // order, so that every rank loads its copy of the FE nodes alike (one rank: as they are).
   virtual void gatherReactions(std::vector<Reaction> &) const {}
+  // The same for forces on disks named by their ids (every rank's, in rank order).
+  virtual void gatherDiskForces(std::vector<DiskForce> &) const {}
   // Every rank's disks on rank 0 (every rank calls it), in the order of their ids; elsewhere empty.
   virtual void gatherParticles(Particles &all) const { all = particles(); }
 };

@@ -109,6 +109,32 @@ void DiskContact::apply(fem::Model &model, const std::vector<Reaction> &reaction
   }
 }
 
+DiskContact::Region DiskContact::measure(const fem::Model &model, double reach) {
+  const fem::Nodes &nd = model.nodes;
+  // (a body at rest keeps its box: its nodes have not moved)
+  const bool all = boxes_.size() != fe_bodies_.size();
+  boxes_.resize(fe_bodies_.size());
+  Region r{INFINITY, INFINITY, -INFINITY, -INFINITY, 0.0};
+  double fastest2 = 0.0;
+  for (std::size_t k = 0; k < fe_bodies_.size(); ++k) {
+    Box &box = boxes_[k];
+    if (all || !model.bodies[fe_bodies_[k]].at_rest) {
+      box = {INFINITY, INFINITY, -INFINITY, -INFINITY};
+      for (const std::uint32_t a : model.bodies[fe_bodies_[k]].boundary) {
+        box = {std::min(box.x0, nd.x[a]), std::min(box.y0, nd.y[a]), std::max(box.x1, nd.x[a]),
+               std::max(box.y1, nd.y[a])};
+        fastest2 = std::max(fastest2, nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a]);
+      }
+    }
+    r = {std::min(r.x0, box.x0 - reach), std::min(r.y0, box.y0 - reach),
+         std::max(r.x1, box.x1 + reach), std::max(r.y1, box.y1 + reach), 0.0};
+  }
+  r.fastest = std::sqrt(fastest2);
+  region_ = r, reach_ = reach;
+  measured_ = true;
+  return r;
+}
+
 void DiskContact::addForces(const fem::Model &model, const Particles &disks,
                             ParticleForces &forces, std::vector<Reaction> &reactions, double dt) {
   const fem::Nodes &nd = model.nodes;
@@ -116,26 +142,15 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
   stats_.contacts = 0;
   if (n == 0 || fe_bodies_.empty())
     return;
-  // The FE bodies' boxes, and the region they cover widened by the largest disk: only the disks
-  // whose centres lie in it can touch a body (disks thrown far off do not widen the grid).
+  // The region the FE bodies cover widened by the largest disk: only the disks whose centres lie
+  // in it can touch a body (disks thrown far off do not widen the grid).
   double r_max = 0.0;
   for (std::size_t i = 0; i < n; ++i)
     r_max = std::max(r_max, disks.radius[i]);
-  // (a body at rest keeps its box: its nodes have not moved)
-  const bool all = boxes_.size() != fe_bodies_.size();
-  boxes_.resize(fe_bodies_.size());
-  Box region{INFINITY, INFINITY, -INFINITY, -INFINITY};
-  for (std::size_t k = 0; k < fe_bodies_.size(); ++k) {
-    Box &box = boxes_[k];
-    if (all || !model.bodies[fe_bodies_[k]].at_rest) {
-      box = {INFINITY, INFINITY, -INFINITY, -INFINITY};
-      for (const std::uint32_t a : model.bodies[fe_bodies_[k]].boundary)
-        box = {std::min(box.x0, nd.x[a]), std::min(box.y0, nd.y[a]), std::max(box.x1, nd.x[a]),
-               std::max(box.y1, nd.y[a])};
-    }
-    region = {std::min(region.x0, box.x0 - r_max), std::min(region.y0, box.y0 - r_max),
-              std::max(region.x1, box.x1 + r_max), std::max(region.y1, box.y1 + r_max)};
-  }
+  if (!measured_ || reach_ < r_max)
+    measure(model, r_max);
+  measured_ = false;
+  const Box region{region_.x0, region_.y0, region_.x1, region_.y1};
   auto inRegion = [&](std::size_t i) {
     return region.x0 <= disks.x[i] && disks.x[i] <= region.x1 && region.y0 <= disks.y[i] &&
            disks.y[i] <= region.y1;

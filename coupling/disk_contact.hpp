@@ -43,6 +43,14 @@ public:
   // on both sides.
   void addForces(const fem::Model &model, const Particles &disks, ParticleForces &forces,
                  std::vector<Reaction> &reactions, double dt);
+  // The FE bodies' boxes now (those of bodies at rest kept), the rectangle they cover widened by
+  // `reach` (no disk centre outside it touches a body when `reach` is its largest radius), and the
+  // fastest of the moving bodies' boundary nodes [m/s]. addForces measures them itself if this
+  // was not called since the nodes moved.
+  struct Region {
+    double x0, y0, x1, y1, fastest;
+  };
+  Region measure(const fem::Model &model, double reach);
   // The reactions into the FE nodes (Nodes::addExternal, with their frictional part), their
   // bodies woken.
   static void apply(fem::Model &model, const std::vector<Reaction> &reactions);
@@ -66,6 +74,9 @@ private:
   std::vector<double> size_;                   // per body: longest boundary edge [m]
   std::vector<std::uint32_t> fe_bodies_;       // bodies with a boundary
   std::vector<Box> boxes_;                     // theirs, this step
+  Region region_{};                            // the last measure, with its reach
+  double reach_ = 0.0;
+  bool measured_ = false;                      // the boxes measured for the next addForces
   std::vector<std::size_t> cell_start_;        // grid of disks: first disk of each cell
   std::vector<std::uint32_t> cell_disks_;
   DiskContactStatistics stats_;

@@ -13,10 +13,13 @@ FakeDem::FakeDem(Particles particles, FakeDemSettings settings)
       throw std::invalid_argument("FakeDem: particle arrays of different lengths");
   if (!(s_.restitution > 0.0 && s_.restitution <= 1.0))
     throw std::invalid_argument("FakeDem: restitution outside (0, 1]");
+  if (p_.id.empty())
+    for (std::size_t i = 0; i < n; ++i)
+      p_.id.push_back(static_cast<std::int64_t>(i + 1));
   // The disks start apart: the first half step takes gravity alone.
-  f_.reset(n);
+  p_.fx.assign(n, 0.0), p_.fy.assign(n, 0.0), p_.torque.assign(n, 0.0);
   for (std::size_t i = 0; i < n; ++i)
-    f_.fy[i] = -p_.mass[i] * s_.gravity;
+    p_.fy[i] = -p_.mass[i] * s_.gravity;
 }
 
 double FakeDem::stableStep() const {
@@ -47,16 +50,16 @@ void FakeDem::contactForce(std::size_t i, std::size_t j, double nx, double ny, d
   const double tx = vx - vn * nx, ty = vy - vn * ny, slip = std::sqrt(tx * tx + ty * ty);
   const double ft = slip > 0.0 ? std::min(s_.friction * fn, m_t * slip / dt) / slip : 0.0;
   const double fx = fn * nx - ft * tx, fy = fn * ny - ft * ty;
-  f_.fx[i] += fx, f_.fy[i] += fy, f_.torque[i] -= ri * (nx * fy - ny * fx);
+  p_.fx[i] += fx, p_.fy[i] += fy, p_.torque[i] -= ri * (nx * fy - ny * fx);
   if (!wall)
-    f_.fx[j] -= fx, f_.fy[j] -= fy, f_.torque[j] -= p_.radius[j] * (nx * fy - ny * fx);
+    p_.fx[j] -= fx, p_.fy[j] -= fy, p_.torque[j] -= p_.radius[j] * (nx * fy - ny * fx);
 }
 
 void FakeDem::ownForces(double dt) {
   const std::size_t n = p_.size();
-  f_.reset(n);
+  p_.fx.assign(n, 0.0), p_.fy.assign(n, 0.0), p_.torque.assign(n, 0.0);
   for (std::size_t i = 0; i < n; ++i)
-    f_.fy[i] = -p_.mass[i] * s_.gravity;
+    p_.fy[i] = -p_.mass[i] * s_.gravity;
   if (!(s_.stiffness > 0.0))
     return;
   for (std::size_t i = 0; i < n; ++i) {
@@ -80,20 +83,41 @@ void FakeDem::ownForces(double dt) {
 
 void FakeDem::advance(double dt, const Exchange &exchange) {
   const std::size_t n = p_.size();
-  // v(n+1/2) = v(n) + dt/2 f(n)/m, x(n+1) = x(n) + dt v(n+1/2)
-  for (std::size_t i = 0; i < n; ++i) {
-    p_.vx[i] += 0.5 * dt * f_.fx[i] / p_.mass[i], p_.vy[i] += 0.5 * dt * f_.fy[i] / p_.mass[i];
-    p_.omega[i] += 0.5 * dt * f_.torque[i] / p_.inertia(i);
-    p_.x[i] += dt * p_.vx[i], p_.y[i] += dt * p_.vy[i];
-  }
+  drift(dt);
   ownForces(dt);
   external_.reset(n);
   exchange(p_, external_);
   // f(n+1) = own + external; v(n+1) = v(n+1/2) + dt/2 f(n+1)/m
   for (std::size_t i = 0; i < n; ++i) {
-    f_.fx[i] += external_.fx[i], f_.fy[i] += external_.fy[i], f_.torque[i] += external_.torque[i];
-    p_.vx[i] += 0.5 * dt * f_.fx[i] / p_.mass[i], p_.vy[i] += 0.5 * dt * f_.fy[i] / p_.mass[i];
-    p_.omega[i] += 0.5 * dt * f_.torque[i] / p_.inertia(i);
+    p_.fx[i] += external_.fx[i], p_.fy[i] += external_.fy[i], p_.torque[i] += external_.torque[i];
+    kick(i, dt);
+  }
+}
+
+// The window's motion put into the state at its start, so that the step of length D that follows
+// (half kick with f(n), drift, own forces, half kick) ends as DemParticipant::endWindow says.
+void FakeDem::endWindow(double length, double planned, const WindowMotion &m) {
+  const double shift = 0.5 * length * (planned - length);
+  for (std::size_t i = 0; i < p_.size(); ++i) {
+    p_.vx[i] += m.dvx[i], p_.vy[i] += m.dvy[i], p_.omega[i] += m.domega[i];
+    p_.x[i] += m.dx[i] - length * m.dvx[i] + shift * p_.fx[i] / p_.mass[i];
+    p_.y[i] += m.dy[i] - length * m.dvy[i] + shift * p_.fy[i] / p_.mass[i];
+  }
+  drift(length);
+  ownForces(length);
+  for (std::size_t i = 0; i < p_.size(); ++i)
+    kick(i, length);
+}
+
+// v += dt/2 f/m (and the spin); then, in drift, x += dt v.
+void FakeDem::kick(std::size_t i, double dt) {
+  p_.vx[i] += 0.5 * dt * p_.fx[i] / p_.mass[i], p_.vy[i] += 0.5 * dt * p_.fy[i] / p_.mass[i];
+  p_.omega[i] += 0.5 * dt * p_.torque[i] / p_.inertia(i);
+}
+void FakeDem::drift(double dt) {
+  for (std::size_t i = 0; i < p_.size(); ++i) {
+    kick(i, dt);
+    p_.x[i] += dt * p_.vx[i], p_.y[i] += dt * p_.vy[i];
   }
 }
 

@@ -25,13 +25,16 @@ public:
   const Particles &particles() const override { return p_; }
   double stableStep() const override;
   void advance(double dt, const Exchange &exchange) override;
+  void endWindow(double length, double planned, const WindowMotion &motion) override;
 
 private:
   void ownForces(double dt);
+  void kick(std::size_t i, double dt);
+  void drift(double dt); // with the half kick before
   void contactForce(std::size_t i, std::size_t j, double nx, double ny, double depth, double dt);
   Particles p_;
   FakeDemSettings s_;
-  ParticleForces f_, external_;
+  ParticleForces external_;
 };
 
 } // namespace mesopen::coupling

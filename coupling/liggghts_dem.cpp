@@ -135,12 +135,16 @@ double LiggghtsDem::stableStep() const {
 void LiggghtsDem::read() {
   LAMMPS_NS::Atom *atom = lammps(lmp_)->atom;
   const auto n = static_cast<std::size_t>(atom->nlocal);
-  for (auto *v : {&p_.x, &p_.y, &p_.vx, &p_.vy, &p_.omega, &p_.radius, &p_.mass})
+  for (auto *v : {&p_.x, &p_.y, &p_.vx, &p_.vy, &p_.omega, &p_.radius, &p_.mass, &p_.fx, &p_.fy,
+                  &p_.torque})
     v->resize(n);
+  p_.id.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     p_.x[i] = atom->x[i][0], p_.y[i] = atom->x[i][1];
     p_.vx[i] = atom->v[i][0], p_.vy[i] = atom->v[i][1], p_.omega[i] = atom->omega[i][2];
     p_.radius[i] = atom->radius[i], p_.mass[i] = atom->rmass[i];
+    p_.fx[i] = atom->f[i][0], p_.fy[i] = atom->f[i][1], p_.torque[i] = atom->torque[i][2];
+    p_.id[i] = atom->tag[i];
   }
 }
 
@@ -166,29 +170,33 @@ void LiggghtsDem::callback(void *self, std::int64_t step, int n, int *, double *
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-void LiggghtsDem::advance(double dt, const Exchange &exchange) {
-  // A new step length is handed to the integrator and the fixes as LAMMPS's `timestep` does between
-  // runs (update->dt, then every fix's reset_dt): a `timestep` command would need the next run set
-  // up again, which rebuilds the neighbour lists (a third of a hybrid run's time when the FE step
-  // changes every window).
-  if (dt != dt_) {
-    LAMMPS_NS::LAMMPS *lmp = lammps(lmp_);
-    lmp->update->dt = dt;
-    for (int i = 0; i < lmp->modify->nfix; ++i)
-      lmp->modify->fix[i]->reset_dt();
-    lmp->update->integrate->reset_dt();
-    dt_ = dt;
-  }
-  // One step of the integrator, as `run 1` takes it but without the run's set-up, which would
-  // compute every force once more at x(n) (LAMMPS's setup_minimal): the forces of the last step are
-  // still there for the first half kick. No output is due (the set-up run's last step is behind).
+// A new step length goes to the integrator and the fixes as LAMMPS's `timestep` does between
+// runs (update->dt, then every fix's reset_dt): a `timestep` command would need the next run set
+// up again, which rebuilds the neighbour lists (a third of a hybrid run's time when the FE step
+// changes every window).
+void LiggghtsDem::setStep(double dt) {
+  if (dt == dt_)
+    return;
+  LAMMPS_NS::LAMMPS *lmp = lammps(lmp_);
+  lmp->update->dt = dt;
+  for (int i = 0; i < lmp->modify->nfix; ++i)
+    lmp->modify->fix[i]->reset_dt();
+  lmp->update->integrate->reset_dt();
+  dt_ = dt;
+}
+
+// One step of the integrator, as `run 1` takes it but without the run's set-up, which would
+// compute every force once more at x(n) (LAMMPS's setup_minimal): the forces of the last step are
+// still there for the first half kick. No output is due (the set-up run's last step is behind).
+// With `exchange`, the FE bodies' forces go in inside the step (callback).
+void LiggghtsDem::step(const Exchange *exchange) {
   const auto start = std::chrono::steady_clock::now();
   LAMMPS_NS::Update *update = lammps(lmp_)->update;
   update->nsteps = 1;
   update->firststep = update->beginstep = update->ntimestep;
   update->laststep = update->endstep = update->ntimestep + 1;
   update->whichflag = 1;
-  exchange_ = &exchange;
+  exchange_ = exchange;
   exchange_step_ = update->ntimestep + 1;
   update->integrate->run(1);
   exchange_ = nullptr;
@@ -200,21 +208,53 @@ void LiggghtsDem::advance(double dt, const Exchange &exchange) {
   exchange_seconds_ += std::chrono::duration<double>(end - stepped).count();
 }
 
-// Every rank's reactions, gathered in rank order (as bytes: a Reaction is plain data).
-void LiggghtsDem::gatherReactions(std::vector<Reaction> &reactions) const {
+void LiggghtsDem::advance(double dt, const Exchange &exchange) {
+  setStep(dt);
+  step(&exchange);
+}
+
+// The window's motion put into the state at its start, so that LIGGGHTS's step of length D (half
+// kick with the forces f(n) it holds, drift, forces, half kick) ends as DemParticipant::endWindow
+// says. The positions written here are local atoms': the step then sends them to the ghosts (or
+// re-neighbours, its displacement check seeing the change).
+void LiggghtsDem::endWindow(double length, double planned, const WindowMotion &m) {
+  const auto start = std::chrono::steady_clock::now();
+  LAMMPS_NS::Atom *atom = lammps(lmp_)->atom;
+  const double shift = 0.5 * length * (planned - length);
+  for (std::size_t i = 0; i < p_.size(); ++i) {
+    atom->v[i][0] += m.dvx[i], atom->v[i][1] += m.dvy[i], atom->omega[i][2] += m.domega[i];
+    atom->x[i][0] += m.dx[i] - length * m.dvx[i] + shift * atom->f[i][0] / atom->rmass[i];
+    atom->x[i][1] += m.dy[i] - length * m.dvy[i] + shift * atom->f[i][1] / atom->rmass[i];
+  }
+  exchange_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  setStep(length);
+  step(nullptr);
+}
+
+namespace {
+// Every rank's items, gathered in rank order (as bytes: plain data).
+template <class T> void allGather(std::vector<T> &items, MPI_Comm comm) {
   int ranks = 1;
-  MPI_Comm_size(comm_, &ranks);
+  MPI_Comm_size(comm, &ranks);
   if (ranks == 1)
     return;
-  const int mine = static_cast<int>(reactions.size() * sizeof(Reaction));
+  const int mine = static_cast<int>(items.size() * sizeof(T));
   std::vector<int> sizes(ranks), starts(ranks + 1, 0);
-  MPI_Allgather(&mine, 1, MPI_INT, sizes.data(), 1, MPI_INT, comm_);
+  MPI_Allgather(&mine, 1, MPI_INT, sizes.data(), 1, MPI_INT, comm);
   for (int r = 0; r < ranks; ++r)
     starts[r + 1] = starts[r] + sizes[r];
-  std::vector<Reaction> all(static_cast<std::size_t>(starts[ranks]) / sizeof(Reaction));
-  MPI_Allgatherv(reactions.data(), mine, MPI_BYTE, all.data(), sizes.data(), starts.data(),
-                 MPI_BYTE, comm_);
-  reactions.swap(all);
+  std::vector<T> all(static_cast<std::size_t>(starts[ranks]) / sizeof(T));
+  MPI_Allgatherv(items.data(), mine, MPI_BYTE, all.data(), sizes.data(), starts.data(), MPI_BYTE,
+                 comm);
+  items.swap(all);
+}
+} // namespace
+
+void LiggghtsDem::gatherReactions(std::vector<Reaction> &reactions) const {
+  allGather(reactions, comm_);
+}
+void LiggghtsDem::gatherDiskForces(std::vector<DiskForce> &forces) const {
+  allGather(forces, comm_);
 }
 
 // The disks of every rank on rank 0, ordered by id (the same order on any number of ranks).

@@ -1,9 +1,10 @@
 // The DEM participant run by LIGGGHTS 3.8 through its library interface (library.h): the input
 // script liggghts-inputs/dem.in with its variables, one step of LIGGGHTS's integrator per time
-// window, the FE bodies' forces put in by `fix external pf/callback` (inside the step, after the
-// drift: exactly the velocity-Verlet step DemParticipant describes; writing the forces between runs
-// instead gives half the impulse) and their torques added in the same callback. The only file,
-// with its .cpp, that includes LIGGGHTS headers.
+// window. A window of many FE steps (endWindow) writes the disks' motion under the FE bodies'
+// forces into the atoms' positions, velocities and spins before the step; a window of one step
+// (advance) puts the forces in by `fix external pf/callback` inside the step, after the drift
+// (writing the forces between runs instead gives half the impulse), and their torques in the same
+// callback. The only file, with its .cpp, that includes LIGGGHTS headers.
 #pragma once
 
 #include "dem.hpp"
@@ -42,7 +43,9 @@ public:
   const Particles &particles() const override { return p_; }
   double stableStep() const override;
   void advance(double dt, const Exchange &exchange) override;
+  void endWindow(double length, double planned, const WindowMotion &motion) override;
   void gatherReactions(std::vector<Reaction> &reactions) const override;
+  void gatherDiskForces(std::vector<DiskForce> &forces) const override;
   void gatherParticles(Particles &all) const override;
   // The LIGGGHTS instance, for library.h calls (benchmarks).
   void *handle() const { return lmp_; }
@@ -54,6 +57,8 @@ public:
 private:
   static void callback(void *self, std::int64_t step, int n, int *id, double **x, double **f);
   void read(); // the particles' state from LIGGGHTS's arrays into p_
+  void setStep(double dt);
+  void step(const Exchange *exchange);
   void *lmp_ = nullptr;
   MPI_Comm comm_;
   Particles p_;

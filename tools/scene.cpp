@@ -279,7 +279,11 @@ const std::vector<Key> &keys() {
         real("dem", "tangential_damping", d, &D::tangential_damping, "N s/m^2", 0, false, 1e6,
              "tangential damping g_t (absolute)"),
         real("dem", "skin", d, &D::skin, "m", 0, false, 1,
-             "LIGGGHTS's neighbour skin; 0: a tenth of the mean grain diameter"),
+             "LIGGGHTS's neighbour skin; 0: half the mean grain diameter"),
+        real("dem", "step", d, &D::step, "s", 0, false, 1e-6,
+             "the disks' time step, a window of many FE steps (multiple time stepping, "
+             "docs/coupling.md); 0: their stable step, a tenth of the lightest disk's contact "
+             "time; at most that"),
         choice("modal", "body", m, &M::body, modal_body_names,
                "what `mesopen modal` analyses: the projectile above, or a rectangular beam "
                "(thesis appendix B); both of the material of [materials.projectile]"),

@@ -64,7 +64,8 @@ struct DemSpec {
   double tangential_stiffness = coupling::quartz_grains.kt; // k_t [N/m per m]
   double damping = coupling::quartz_grains.gn;              // g_n, absolute [N s/m per m]
   double tangential_damping = coupling::quartz_grains.gt;   // g_t [N s/m per m]
-  double skin = 0.0;                  // neighbour skin [m]; 0: a tenth of the mean diameter
+  double skin = 0.0;                  // neighbour skin [m]; 0: half the mean diameter
+  double step = 0.0; // the disks' step, a time window of many FE steps [s]; 0: their stable step
 };
 
 // What `mesopen modal` analyses (table [modal]): the scene's projectile, free, or a rectangular
