@@ -483,9 +483,10 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
         {"fe_dem_contacts_last_step", std::llround(world.sum(static_cast<double>(c.contacts)))},
         {"deepest_fe_dem_overlap_over_element_size", world.max(c.deepest)},
         {"work_on_disks", world.sum(c.work_on_disks)},
-        {"disks_kinetic_energy", world.sum(dem->particles().kineticEnergy())},
+        {"disks_kinetic_energy", world.sum(coupled->disks().kineticEnergy())},
         {"windows", coupled->windows()},
-        {"window", coupled->window()}};
+        {"window", coupled->window()},
+        {"seconds", coupled->seconds()}};
   }
   if (!writer)
     return loop.failure.empty() ? 0 : loop.interrupted ? 128 + static_cast<int>(stop_signal) : 1;
