@@ -683,7 +683,7 @@ void Contact::touch(const Model &model, std::size_t A, std::size_t B, const std:
       continue;
     }
     hot[n_hot++] = i;
-    if (!allowance_.empty() && allowance_[nodes_[k]] > 0.0 &&
+    if (!allowed_.empty() && allowance_[nodes_[k]] > 0.0 && // (none most steps: no look-up)
         (depth -= allowance_[nodes_[k]]) <= touching * h)
       continue; // an overlap erosion laid bare, still opening
     hits.found.push_back({static_cast<std::uint32_t>(A), k, static_cast<std::uint32_t>(B),
