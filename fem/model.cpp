@@ -146,23 +146,26 @@ void setBodyVelocity(Model &model, std::size_t body, double vx, double vy, doubl
   model.wake(body);
 }
 
+// One pass of raw moments: H about the centre of mass (thesis Eq. 3.13, H = sum r x m v) is
+// H = sum m (x vy - y vx) - (X Py - Y Px), X, Y the centre of mass, P the momentum.
 BodyMotion bodyMotion(const Model &model, std::size_t body) {
   const Nodes &nd = model.nodes;
   const Body &b = model.bodies[body];
   BodyMotion m{0, 0, 0, 0, 0, 0};
+  double moment = 0.0;
   for (std::size_t a = b.node_begin; a < b.node_end; ++a) {
     if (nd.detached[a])
       continue;
-    m.mass += nd.mass[a];
-    m.com_x += nd.mass[a] * nd.x[a];
-    m.com_y += nd.mass[a] * nd.y[a];
-    m.px += nd.mass[a] * nd.vx[a];
-    m.py += nd.mass[a] * nd.vy[a];
+    const double mass = nd.mass[a];
+    m.mass += mass;
+    m.com_x += mass * nd.x[a];
+    m.com_y += mass * nd.y[a];
+    m.px += mass * nd.vx[a];
+    m.py += mass * nd.vy[a];
+    moment += mass * (nd.x[a] * nd.vy[a] - nd.y[a] * nd.vx[a]);
   }
   m.com_x /= m.mass, m.com_y /= m.mass;
-  for (std::size_t a = b.node_begin; a < b.node_end; ++a) // H = sum r x m v (thesis Eq. 3.13)
-    if (!nd.detached[a])
-      m.angular_momentum += nd.mass[a] * ((nd.x[a] - m.com_x) * nd.vy[a] - (nd.y[a] - m.com_y) * nd.vx[a]);
+  m.angular_momentum = moment - (m.com_x * m.py - m.com_y * m.px);
   return m;
 }
 

@@ -273,10 +273,12 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
   const auto max_steps = static_cast<std::size_t>(run.max_steps);
   const auto every = static_cast<std::size_t>(run.series_interval);
   const double end_depth = run.end_depth * scene.projectile.length;
-  auto ended = [&] {
+  // (the depth is the series' own when it was just sampled)
+  auto ended = [&](bool sampled) {
     if (solver.time() >= run.end_time)
       result.end = "end_time";
-    else if (end_depth > 0.0 && series.depth(model) >= end_depth)
+    else if (end_depth > 0.0 &&
+             (sampled ? series.last("projectile/depth") : series.depth(model)) >= end_depth)
       result.end = "end_depth";
     else if (solver.steps() >= max_steps)
       result.end = "max_steps";
@@ -285,7 +287,7 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
   try {
     series.sample(model, solver);
     frames.offer(model, solver, true);
-    for (bool last = ended(); !last;) {
+    for (bool last = ended(true); !last;) {
       if (stop_signal != 0) {
         result.interrupted = true;
         result.failure = std::string("stopped by ") + (stop_signal == SIGINT ? "SIGINT" : "SIGTERM") +
@@ -296,8 +298,11 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
       solver.step();
       result.solver_seconds += secondsSince(step_start);
       result.element_steps += static_cast<double>(solver.activeElements());
-      last = ended();
-      if (last || solver.steps() % every == 0)
+      const bool due = solver.steps() % every == 0;
+      if (due)
+        series.sample(model, solver);
+      last = ended(due);
+      if (last && !due)
         series.sample(model, solver);
       frames.offer(model, solver, last);
       if (progress.due())
