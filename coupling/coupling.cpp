@@ -24,9 +24,18 @@ void FeDemCoupling::startWindow(double dt) {
   // assumed (the FE step changes little over a window)
   length_ = planned_ > dt ? std::floor(planned_ / dt) * dt : dt;
   const std::size_t n = p.size();
-  for (auto *v : {&motion_.dx, &motion_.dy, &motion_.dvx, &motion_.dvy, &motion_.domega})
-    v->assign(n, 0.0);
-  is_near_.assign(n, 0);
+  // No motion yet: the last window's near disks cleared (all, if the disks changed in number).
+  const std::initializer_list<std::vector<double> *> motion = {&motion_.dx, &motion_.dy, &motion_.dvx, &motion_.dvy, &motion_.domega};
+  if (is_near_.size() != n) {
+    for (auto *v : motion)
+      v->assign(n, 0.0);
+    is_near_.assign(n, 0);
+  } else
+    for (const std::uint32_t i : near_) {
+      for (auto *v : motion)
+        (*v)[i] = 0.0;
+      is_near_[i] = 0;
+    }
   near_.clear();
   fast_.reset(0);
   r_max_ = 0.0;
@@ -37,13 +46,15 @@ void FeDemCoupling::startWindow(double dt) {
     std::int64_t top = 0;
     for (std::int64_t id : p.id)
       top = std::max(top, id);
-    place_.assign(static_cast<std::size_t>(top) + 1, -1);
+    if (place_.size() < static_cast<std::size_t>(top) + 1)
+      place_.resize(static_cast<std::size_t>(top) + 1, -1);
     for (std::size_t i = 0; i < n; ++i)
       place_[p.id[i]] = static_cast<std::int64_t>(i);
     for (const DiskForce &f : carried_) {
-      if (f.id < 0 || f.id > top || place_[f.id] < 0)
-        continue; // another rank's
-      const auto i = static_cast<std::size_t>(place_[f.id]);
+      const std::int64_t at = f.id >= 0 && f.id <= top ? place_[f.id] : -1;
+      if (at < 0 || static_cast<std::size_t>(at) >= n || p.id[at] != f.id)
+        continue; // another rank's (the entry is a disk's place when it was here)
+      const auto i = static_cast<std::size_t>(at);
       near_.push_back(static_cast<std::uint32_t>(i));
       is_near_[i] = 1;
       fast_.fx.push_back(f.fx), fast_.fy.push_back(f.fy), fast_.torque.push_back(f.torque);
@@ -65,14 +76,19 @@ void FeDemCoupling::choose(const DiskContact::Region &now, double dt) {
   const double margin = 2.0 * now.fastest * left + 0.5 * r_max_;
   allowed_ = {now.x0 - margin, now.y0 - margin, now.x1 + margin, now.y1 + margin, now.fastest};
   const double half = 0.5 * length_;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    if (is_near_[i])
-      continue;
+  const std::size_t n = p.size();
+  meets_.resize(n);
+  const DiskContact::Region a = allowed_;
+#pragma omp simd
+  for (std::size_t i = 0; i < n; ++i) {
     const double vx = p.vx[i] + half * p.fx[i] / p.mass[i], vy = p.vy[i] + half * p.fy[i] / p.mass[i];
     const double xa = p.x[i] + elapsed_ * vx, ya = p.y[i] + elapsed_ * vy;
     const double xb = xa + left * vx, yb = ya + left * vy;
-    if (std::max(xa, xb) < allowed_.x0 || std::min(xa, xb) > allowed_.x1 ||
-        std::max(ya, yb) < allowed_.y0 || std::min(ya, yb) > allowed_.y1)
+    meets_[i] = (std::max(xa, xb) >= a.x0) & (std::min(xa, xb) <= a.x1) &
+                (std::max(ya, yb) >= a.y0) & (std::min(ya, yb) <= a.y1);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!meets_[i] || is_near_[i])
       continue;
     near_.push_back(static_cast<std::uint32_t>(i));
     is_near_[i] = 1;

@@ -77,7 +77,7 @@ private:
   // The near disks (indices into the participant's particles), their motion beyond the slow path
   // and the last FE-DEM forces on them, and their state now for the contact.
   std::vector<std::uint32_t> near_;
-  std::vector<char> is_near_;
+  std::vector<char> is_near_, meets_;
   std::vector<std::int64_t> place_; // per disk id: its index, -1 if not this rank's
   WindowMotion motion_;            // per disk (zero but for the near ones)
   ParticleForces fast_;            // per near disk

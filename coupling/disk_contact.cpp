@@ -34,18 +34,20 @@ void DiskContact::boundaryChanged(const fem::Model &model) {
 }
 
 // The closest point of the body's boundary to (cx, cy) among the segments within `reach` (the
-// disk's radius: the closest of all when it is that near; distance infinite when none is), and the
+// disk's radius: the closest of all when it is that near; distance infinite when none is), of
+// those in `near` (offsets into the body's boundary: every segment within reach among them), and the
 // side: at a segment's inside by its outward normal (the tangent turned right: boundaries run
 // counter-clockwise), at a vertex by the vertex's pseudo-normal, the sum of its two segments'
 // normals. A disk wholly inside a body (its centre more than its radius behind the boundary) is
 // not seen: the penalty keeps overlaps to a few percent of a radius.
 DiskContact::Closest DiskContact::closest(const fem::Model &model, std::size_t body, double cx,
-                                          double cy, double reach) const {
+                                          double cy, double reach,
+                                          const std::vector<std::uint32_t> &near) const {
   const fem::Nodes &nd = model.nodes;
   const auto &edges = model.bodies[body].boundary;
   double best = std::numeric_limits<double>::infinity(), best_t = 0.0, best_length = 0.0;
   std::size_t best_edge = edges.size();
-  for (std::size_t e = 0; e < edges.size(); e += 2) {
+  for (const std::uint32_t e : near) {
     const double ax = nd.x[edges[e]], ay = nd.y[edges[e]];
     const double bx = nd.x[edges[e + 1]], by = nd.y[edges[e + 1]];
     // a segment whose box is farther than `reach` from the point is farther than that
@@ -75,7 +77,7 @@ DiskContact::Closest DiskContact::closest(const fem::Model &model, std::size_t b
   double mx = (by - ay) / best_length, my = -(bx - ax) / best_length;
   if (best_t == 0.0 || best_t == best_length) {
     const std::uint32_t vertex = best_t == 0.0 ? c.s1 : c.s2;
-    for (std::size_t e = 0; e < edges.size(); e += 2) {
+    for (const std::uint32_t e : near) { // the other edge at the vertex is within reach too
       if (e == best_edge || edges[e + (best_t == 0.0 ? 1 : 0)] != vertex)
         continue;
       const double ox = nd.x[edges[e + 1]] - nd.x[edges[e]], oy = nd.y[edges[e + 1]] - nd.y[edges[e]];
@@ -98,6 +100,56 @@ DiskContact::Closest DiskContact::closest(const fem::Model &model, std::size_t b
   if (!outside)
     c.distance = -c.distance; // the centre inside the body
   return c;
+}
+
+// A body's boundary segments in cells over its box (each in every cell its box meets).
+void DiskContact::EdgeGrid::build(const fem::Model &model, std::size_t body, const Box &box,
+                                  double cell_size) {
+  const fem::Nodes &nd = model.nodes;
+  const auto &edges = model.bodies[body].boundary;
+  const std::size_t n = edges.size() / 2;
+  x0 = box.x0, y0 = box.y0;
+  // cells of a few segments' length, or the disks' size if larger
+  cell = std::max(cell_size, 4.0 * std::sqrt((box.x1 - box.x0) * (box.y1 - box.y0) / n));
+  inverse = 1.0 / cell;
+  nx = static_cast<std::size_t>((box.x1 - box.x0) / cell) + 1;
+  ny = static_cast<std::size_t>((box.y1 - box.y0) / cell) + 1;
+  start.assign(nx * ny + 1, 0);
+  auto span = [&](std::size_t e, auto visit) {
+    const double ax = nd.x[edges[e]], ay = nd.y[edges[e]], bx = nd.x[edges[e + 1]],
+                 by = nd.y[edges[e + 1]];
+    const std::size_t i0 = ix(std::min(ax, bx)), i1 = ix(std::max(ax, bx));
+    const std::size_t j0 = iy(std::min(ay, by)), j1 = iy(std::max(ay, by));
+    for (std::size_t j = j0; j <= j1; ++j)
+      for (std::size_t i = i0; i <= i1; ++i)
+        visit(j * nx + i);
+  };
+  for (std::size_t e = 0; e < edges.size(); e += 2)
+    span(e, [&](std::size_t c) { ++start[c + 1]; });
+  for (std::size_t c = 0; c < nx * ny; ++c)
+    start[c + 1] += start[c];
+  items.resize(start.back());
+  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+  for (std::size_t e = 0; e < edges.size(); e += 2)
+    span(e, [&](std::size_t c) { items[fill[c]++] = static_cast<std::uint32_t>(e); });
+}
+
+std::size_t DiskContact::EdgeGrid::ix(double x) const {
+  const double i = (x - x0) * inverse;
+  return i <= 0.0 ? 0 : std::min(static_cast<std::size_t>(i), nx - 1);
+}
+std::size_t DiskContact::EdgeGrid::iy(double y) const {
+  const double j = (y - y0) * inverse;
+  return j <= 0.0 ? 0 : std::min(static_cast<std::size_t>(j), ny - 1);
+}
+
+// The segments in the cells the rectangle meets (a segment may come more than once).
+void DiskContact::EdgeGrid::nearBox(double xa, double ya, double xb, double yb,
+                                    std::vector<std::uint32_t> &out) const {
+  out.clear();
+  for (std::size_t j = iy(ya); j <= iy(yb); ++j)
+    for (std::size_t i = ix(xa); i <= ix(xb); ++i)
+      out.insert(out.end(), items.begin() + start[j * nx + i], items.begin() + start[j * nx + i + 1]);
 }
 
 void DiskContact::apply(fem::Model &model, const std::vector<Reaction> &reactions) {
@@ -188,6 +240,8 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
   for (std::size_t kb = 0; kb < fe_bodies_.size(); ++kb) {
     const std::uint32_t b = fe_bodies_[kb];
     const Box &box = boxes_[kb];
+    const std::size_t n_edges = model.bodies[b].boundary.size() / 2;
+    bool binned = false; // its segments, binned when a disk first comes near (many) or listed (few)
     const auto ix0 = static_cast<std::size_t>(std::max(0.0, (box.x0 - r_max - x0) / cell));
     const auto iy0 = static_cast<std::size_t>(std::max(0.0, (box.y0 - r_max - y0) / cell));
     const auto ix1 = std::min(gx - 1, static_cast<std::size_t>(std::max(0.0, (box.x1 + r_max - x0) / cell)));
@@ -199,7 +253,17 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
           const double cx = disks.x[i], cy = disks.y[i], r = disks.radius[i];
           if (cx + r < box.x0 || cx - r > box.x1 || cy + r < box.y0 || cy - r > box.y1)
             continue;
-          const Closest c = closest(model, b, cx, cy, r);
+          if (!binned) {
+            binned = true;
+            if (n_edges > 64)
+              edges_.build(model, b, box, 2.0 * r_max);
+            else
+              for (std::uint32_t e = 0, j = 0; j < n_edges; ++j, e += 2)
+                j == 0 ? near_edges_.assign(1, e) : near_edges_.push_back(e);
+          }
+          if (n_edges > 64)
+            edges_.nearBox(cx - r, cy - r, cx + r, cy + r, near_edges_);
+          const Closest c = closest(model, b, cx, cy, r, near_edges_);
           const double depth = r - c.distance; // c.distance < 0: the centre inside
           if (!(depth > 0.0))
             continue;

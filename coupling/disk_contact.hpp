@@ -68,8 +68,21 @@ private:
     double w = 0.0;         // weight of s2
     double distance = 0.0, nx = 0.0, ny = 0.0; // |c - q|, unit normal out of the body
   };
-  Closest closest(const fem::Model &model, std::size_t body, double cx, double cy,
-                  double reach) const;
+  Closest closest(const fem::Model &model, std::size_t body, double cx, double cy, double reach,
+                  const std::vector<std::uint32_t> &near) const;
+  // A body's boundary segments in a grid of cells, rebuilt for each call: a disk looks at those
+  // in the cells it meets (the projectile has about a thousand).
+  struct EdgeGrid {
+    double x0 = 0, y0 = 0, cell = 1, inverse = 1;
+    std::size_t nx = 1, ny = 1;
+    std::vector<std::uint32_t> start, items; // per cell: offsets into Body::boundary
+    void build(const fem::Model &model, std::size_t body, const Box &box, double cell_size);
+    std::size_t ix(double x) const;
+    std::size_t iy(double y) const;
+    void nearBox(double xa, double ya, double xb, double yb, std::vector<std::uint32_t> &out) const;
+  };
+  EdgeGrid edges_;
+  std::vector<std::uint32_t> near_edges_;
   DiskContactSettings s_;
   std::vector<double> size_;                   // per body: longest boundary edge [m]
   std::vector<std::uint32_t> fe_bodies_;       // bodies with a boundary
