@@ -22,6 +22,10 @@
 //     pair of grains meeting corner to corner at 100 m/s closed its energy balance within 0.18 of
 //     the impact's energy, at 0.1 within 1e-4 (tests/verification/grain_pair.cpp). A rigid wall is
 //     found by one pass only and takes 2 kappa (1: the stiffness of the one-step constraint);
+//   - a depth no step's approach can make (deeper than the node's depth the step before plus twice
+//     its approach, -2 v_n dt, or 0.005 of an element: a boundary folded over it, a closest segment
+//     changed in a dented body) is not pushed out at once, at depth / dt: the excess is allowed for
+//     and let go over 200 steps, as the overlaps erosion lays bare (see hit);
 //   - Coulomb friction against the relative tangential velocity v_t:
 //       f_t = min(mu f_n, m_eff |v_t| / dt)
 //     (sliding at mu f_n; the second term is the force that stops the slip in one step: sticking).
