@@ -92,7 +92,10 @@ public:
   // The same for forces on disks named by their ids (every rank's, in rank order).
   virtual void gatherDiskForces(std::vector<DiskForce> &) const {}
   // Every rank's disks on rank 0 (every rank calls it), in the order of their ids; elsewhere empty.
-  virtual void gatherParticles(Particles &all) const { all = particles(); }
+  // `local`: this rank's disks as they are to be gathered (its particles, or their state within a
+  // window), in the order of particles().
+  virtual void gatherParticles(const Particles &local, Particles &all) const { all = local; }
+  void gatherParticles(Particles &all) const { gatherParticles(particles(), all); }
 };
 
 } // namespace mesopen::coupling

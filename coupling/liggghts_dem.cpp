@@ -265,9 +265,8 @@ void LiggghtsDem::gatherDiskForces(std::vector<DiskForce> &forces) const {
 }
 
 // The disks of every rank on rank 0, ordered by id (the same order on any number of ranks).
-void LiggghtsDem::gatherParticles(Particles &all) const {
-  LAMMPS_NS::Atom *atom = lammps(lmp_)->atom;
-  const int n = static_cast<int>(p_.size());
+void LiggghtsDem::gatherParticles(const Particles &local, Particles &all) const {
+  const int n = static_cast<int>(local.size());
   int ranks = 1, rank = 0;
   MPI_Comm_size(comm_, &ranks);
   MPI_Comm_rank(comm_, &rank);
@@ -278,7 +277,7 @@ void LiggghtsDem::gatherParticles(Particles &all) const {
   const int total = rank == 0 ? starts[ranks] : 0;
   std::vector<double> ids(n), all_ids(total);
   for (int i = 0; i < n; ++i)
-    ids[i] = static_cast<double>(atom->tag[i]);
+    ids[i] = static_cast<double>(local.id[i]);
   auto gather = [&](const std::vector<double> &mine, std::vector<double> &out) {
     out.resize(total);
     MPI_Gatherv(mine.data(), n, MPI_DOUBLE, out.data(), counts.data(), starts.data(), MPI_DOUBLE,
@@ -291,7 +290,7 @@ void LiggghtsDem::gatherParticles(Particles &all) const {
                                                     &Particles::omega, &Particles::radius,
                                                     &Particles::mass};
   for (auto field : fields)
-    gather(p_.*field, gathered.*field);
+    gather(local.*field, gathered.*field);
   std::vector<int> order(total);
   for (int i = 0; i < total; ++i)
     order[i] = i;

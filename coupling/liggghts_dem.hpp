@@ -46,7 +46,8 @@ public:
   void endWindow(double length, double planned, const WindowMotion &motion) override;
   void gatherReactions(std::vector<Reaction> &reactions) const override;
   void gatherDiskForces(std::vector<DiskForce> &forces) const override;
-  void gatherParticles(Particles &all) const override;
+  using DemParticipant::gatherParticles;
+  void gatherParticles(const Particles &local, Particles &all) const override;
   // The LIGGGHTS instance, for library.h calls (benchmarks).
   void *handle() const { return lmp_; }
   // Time in the windows [s]: all of it, and the part spent in the exchange (the state read, the

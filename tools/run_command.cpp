@@ -458,8 +458,8 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
   // Every rank takes the frames (they gather the disks to rank 0); rank 0 writes them.
   Frames frames(h5 ? &*h5 : nullptr, model, run.frame_interval,
                 run.vtk && writer ? dir + "/vtk" : std::string());
-  if (dem)
-    frames.addDisks(dem.get());
+  if (coupled)
+    frames.addDisks(coupled.get());
   Progress progress(writer && !options.quiet && isatty(STDERR_FILENO), run.end_time,
                     run.end_depth * scene.projectile.length);
   const LoopResult loop = timeLoop(scene, model, solver, series, frames, progress);

@@ -278,8 +278,8 @@ void Frames::offer(const fem::Model &model, const fem::Solver &solver, bool forc
 
 void Frames::take(const fem::Model &model, const fem::Solver &solver) {
   coupling::Particles disks;
-  if (dem_)
-    dem_->gatherParticles(disks); // every rank takes part; rank 0 holds them all
+  if (coupled_) // every rank takes part; rank 0 holds them all
+    coupled_->dem().gatherParticles(coupled_->disks(), disks);
   if (!h5_) {
     times_.push_back(solver.time());
     return;
@@ -308,7 +308,7 @@ void Frames::take(const fem::Model &model, const fem::Solver &solver) {
                          {"plastic_strain", &el.plastic_strain}})
     h5.write(g + "/" + name, *v);
   h5.write(g + "/eroded", el.eroded);
-  if (dem_) {
+  if (coupled_) {
     h5.createGroup(g + "/disks");
     for (auto [name, v] : {std::pair{"x", &disks.x}, {"y", &disks.y}, {"radius", &disks.radius},
                            {"vx", &disks.vx}, {"vy", &disks.vy}, {"omega", &disks.omega}})
@@ -330,7 +330,7 @@ void Frames::writeCollection() const {
                   "    <DataSet timestep=\"%.17g\" part=\"0\" file=\"frame_%06zu.vtu\"/>\n",
                   times_[i], i);
     text += line;
-    if (dem_) {
+    if (coupled_) {
       std::snprintf(line, sizeof line,
                     "    <DataSet timestep=\"%.17g\" part=\"1\" file=\"disks_%06zu.vtu\"/>\n",
                     times_[i], i);

@@ -18,7 +18,7 @@
 // Body 0 is the projectile, body b >= 1 the grain b - 1 of the target.
 #pragma once
 
-#include "dem.hpp"
+#include "coupling.hpp"
 #include "h5file.hpp"
 #include "model.hpp"
 #include "solver.hpp"
@@ -68,8 +68,9 @@ public:
   // The DEM participant's disks go into every frame too: /frames/NNNNNN/disks/{x, y, radius, vx,
   // vy, omega} and vtk/disks_NNNNNN.vtu (points with radius, velocity and spin, as the second part
   // of each time in run.pvd; in ParaView a Glyph of 2D circles scaled by radius shows them). Under
-  // MPI every rank takes the frames (the disks are gathered to rank 0, which writes them).
-  void addDisks(const coupling::DemParticipant *dem) { dem_ = dem; }
+  // MPI every rank takes the frames (the disks are gathered to rank 0, which writes them). The
+  // disks are where they are at the frame's time, within the coupling's window.
+  void addDisks(const coupling::FeDemCoupling *coupled) { coupled_ = coupled; }
   // vtk/run.pvd listing the VTK frames written so far (nothing without VTK frames).
   void writeCollection() const;
   std::size_t size() const { return times_.size(); }
@@ -82,7 +83,7 @@ private:
   double interval_, next_ = 0.0;
   std::string vtk_dir_;
   std::vector<double> times_;
-  const coupling::DemParticipant *dem_ = nullptr;
+  const coupling::FeDemCoupling *coupled_ = nullptr;
 };
 
 } // namespace mesopen
