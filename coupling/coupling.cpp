@@ -25,7 +25,8 @@ void FeDemCoupling::startWindow(double dt) {
   length_ = planned_ > dt ? std::floor(planned_ / dt) * dt : dt;
   const std::size_t n = p.size();
   // No motion yet: the last window's near disks cleared (all, if the disks changed in number).
-  const std::initializer_list<std::vector<double> *> motion = {&motion_.dx, &motion_.dy, &motion_.dvx, &motion_.dvy, &motion_.domega};
+  const std::initializer_list<std::vector<double> *> motion = {
+      &motion_.dx, &motion_.dy, &motion_.dvx, &motion_.dvy, &motion_.domega};
   if (is_near_.size() != n) {
     for (auto *v : motion)
       v->assign(n, 0.0);
@@ -75,13 +76,12 @@ void FeDemCoupling::choose(const DiskContact::Region &now, double dt) {
   const double left = std::max(length_ - elapsed_, 0.0) + 2.0 * dt;
   const double margin = 2.0 * now.fastest * left + 0.5 * r_max_;
   allowed_ = {now.x0 - margin, now.y0 - margin, now.x1 + margin, now.y1 + margin, now.fastest};
-  const double half = 0.5 * length_;
   const std::size_t n = p.size();
   meets_.resize(n);
   const DiskContact::Region a = allowed_;
 #pragma omp simd
   for (std::size_t i = 0; i < n; ++i) {
-    const double vx = p.vx[i] + half * p.fx[i] / p.mass[i], vy = p.vy[i] + half * p.fy[i] / p.mass[i];
+    const auto [vx, vy, spin] = slow(p, i);
     const double xa = p.x[i] + elapsed_ * vx, ya = p.y[i] + elapsed_ * vy;
     const double xb = xa + left * vx, yb = ya + left * vy;
     meets_[i] = (std::max(xa, xb) >= a.x0) & (std::min(xa, xb) <= a.x1) &
@@ -123,13 +123,12 @@ void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
   const std::size_t nc = near_.size();
   for (auto *v : {&now_.x, &now_.y, &now_.vx, &now_.vy, &now_.omega, &now_.radius, &now_.mass})
     v->resize(nc);
-  const double half = 0.5 * length_;
   for (std::size_t c = 0; c < nc; ++c) {
     const std::uint32_t i = near_[c];
-    const double vx = p.vx[i] + half * p.fx[i] / p.mass[i], vy = p.vy[i] + half * p.fy[i] / p.mass[i];
+    const auto [vx, vy, spin] = slow(p, i);
     now_.x[c] = p.x[i] + elapsed_ * vx + m.dx[i], now_.y[c] = p.y[i] + elapsed_ * vy + m.dy[i];
     now_.vx[c] = vx + m.dvx[i], now_.vy[c] = vy + m.dvy[i];
-    now_.omega[c] = p.omega[i] + half * p.torque[i] / p.inertia(i) + m.domega[i];
+    now_.omega[c] = spin + m.domega[i];
     now_.radius[c] = p.radius[i], now_.mass[c] = p.mass[i];
   }
   fast_.reset(nc);
@@ -165,12 +164,11 @@ Particles FeDemCoupling::disks() const {
   if (!open_)
     return d;
   const WindowMotion &m = motion_;
-  const double half = 0.5 * length_;
   for (std::size_t i = 0; i < d.size(); ++i) {
-    const double vx = d.vx[i] + half * d.fx[i] / d.mass[i], vy = d.vy[i] + half * d.fy[i] / d.mass[i];
+    const auto [vx, vy, spin] = slow(d, i);
     d.x[i] += elapsed_ * vx + m.dx[i], d.y[i] += elapsed_ * vy + m.dy[i];
     d.vx[i] = vx + m.dvx[i], d.vy[i] = vy + m.dvy[i];
-    d.omega[i] += half * d.torque[i] / d.inertia(i) + m.domega[i];
+    d.omega[i] = spin + m.domega[i];
   }
   return d;
 }

@@ -25,6 +25,7 @@
 #include "disk_contact.hpp"
 #include "solver.hpp"
 
+#include <array>
 #include <cstdint>
 #include <string>
 
@@ -60,6 +61,13 @@ public:
   const std::vector<Data> &data() const { return data_; }
 
 private:
+  // Disk i's velocity and spin after the slow half kick of its own forces over the window:
+  // v_h = v(n) + P/2 f(n)/m.
+  std::array<double, 3> slow(const Particles &p, std::size_t i) const {
+    const double half = 0.5 * length_;
+    return {p.vx[i] + half * p.fx[i] / p.mass[i], p.vy[i] + half * p.fy[i] / p.mass[i],
+            p.omega[i] + half * p.torque[i] / p.inertia(i)};
+  }
   void startWindow(double dt);
   void choose(const DiskContact::Region &now, double dt);
   void endWindow();
