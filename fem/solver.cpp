@@ -224,10 +224,18 @@ void Solver::updateActivity() {
   node_ranges_.clear();
   std::size_t unit_elements = 0;
   active_elements_ = 0;
+  active_bodies_.clear();
   for (std::size_t b = 0; b < n_bodies; ++b) {
     const Body &body = m_.bodies[b];
     body_active_seen_[b] = !body.at_rest;
     if (body.at_rest)
+      continue;
+    active_bodies_.push_back(static_cast<std::uint32_t>(b));
+    // Every process moves every active node; it computes the elements of its own bodies.
+    appendInPieces(node_ranges_, 0, Range{body.node_begin, body.node_end}, node_block,
+                   [](const Range &) { return true; });
+    active_elements_ += body.element_end - body.element_begin - body.eroded;
+    if (!owns(b))
       continue;
     const Material *material = m_.materials[body.material].get();
     const bool averaged = s_.anti_locking && material->plastic();
@@ -253,13 +261,10 @@ void Solver::updateActivity() {
       appendInPieces(chunks_, unit.chunk_begin, Chunk{{e, end}, material, averaged}, s_.chunk,
                      [&](const Chunk &c) { return c.material == material && c.averaged_volume == averaged; });
       unit_elements += end - e;
-      active_elements_ += end - e;
       e = end;
     }
     appendInPieces(unit_nodes_, unit.nodes_begin, Range{body.node_begin, body.node_end},
                    std::numeric_limits<std::size_t>::max(), [](const Range &) { return true; });
-    appendInPieces(node_ranges_, 0, Range{body.node_begin, body.node_end}, node_block,
-                   [](const Range &) { return true; });
     unit.chunk_end = chunks_.size();
     unit.nodes_end = unit_nodes_.size();
     unit.node_lo = std::min(unit.node_lo, body.node_begin);
@@ -402,25 +407,100 @@ void Solver::forces(double dt, bool kick) {
   }
   if (kick) {
     energy_.kinetic = 0.0;
+    if (s_.sharing) { // the units' sums of every process, in process order
+      KickSums own;
+      for (const KickSums &k : kick_sums_)
+        own.gravity += k.gravity, own.kinetic += k.kinetic, own.provider += k.provider,
+            own.friction += k.friction;
+      const std::vector<double> all = sumOver({own.gravity, own.kinetic, own.provider, own.friction});
+      kick_sums_.assign(1, KickSums{all[0], all[1], all[2], all[3]});
+    }
     addKickSums(kick_sums_, 0.5 * dt);
   }
   const long n = static_cast<long>(chunks_.size());
-  double dt_min = std::numeric_limits<double>::infinity();
-  for (long i = 0; i < n; ++i) {
-    if (sums_[i].inverted >= 0) {
-      const std::size_t e = static_cast<std::size_t>(sums_[i].inverted);
-      const Body &body = m_.bodies[m_.elements.body[e]];
-      std::ostringstream msg;
-      msg << "element " << e << " of body " << body.name << " (material "
-          << m_.materials[body.material]->type() << ") is inverted: area " << m_.elements.area[e]
-          << " m^2, initially " << m_.elements.area0[e] << " m^2, at t = " << time_ + dt
-          << " s, step " << steps_ + 1;
-      throw RunFailure(msg.str());
-    }
+  double dt_min = std::numeric_limits<double>::infinity(), inverted = -1.0;
+  for (long i = 0; i < n && inverted < 0.0; ++i) {
+    inverted = static_cast<double>(sums_[i].inverted);
     dt_min = std::min(dt_min, sums_[i].dt_min);
+  }
+  double inverted_area = inverted >= 0.0 ? m_.elements.area[static_cast<std::size_t>(inverted)] : 0.0;
+  if (s_.sharing) { // the shortest step of all, the first inverted element of any
+    const std::vector<double> all = s_.sharing->allGather({dt_min, inverted, inverted_area});
+    inverted = -1.0;
+    for (std::size_t k = 0; k < all.size(); k += 3) {
+      dt_min = std::min(dt_min, all[k]);
+      if (inverted < 0.0 && all[k + 1] >= 0.0)
+        inverted = all[k + 1], inverted_area = all[k + 2];
+    }
+  }
+  if (inverted >= 0.0) {
+    const auto e = static_cast<std::size_t>(inverted);
+    const Body &body = m_.bodies[m_.elements.body[e]];
+    std::ostringstream msg;
+    msg << "element " << e << " of body " << body.name << " (material "
+        << m_.materials[body.material]->type() << ") is inverted: area " << inverted_area
+        << " m^2, initially " << m_.elements.area0[e] << " m^2, at t = " << time_ + dt
+        << " s, step " << steps_ + 1;
+    throw RunFailure(msg.str());
   }
   next_dt_ = s_.safety * step_scale_ * dt_min;
   shortest_step_ = dt_min;
+  shareNodes();
+}
+
+// Every process's values of `mine`, summed in process order (one process: as they are).
+std::vector<double> Solver::sumOver(std::vector<double> mine) const {
+  if (!s_.sharing || mine.empty())
+    return mine;
+  const std::vector<double> all = s_.sharing->allGather(mine);
+  std::vector<double> sum(mine.size(), 0.0);
+  for (std::size_t k = 0; k < all.size(); ++k)
+    sum[k % mine.size()] += all[k];
+  return sum;
+}
+
+// The velocities and forces of the nodes of every process's active bodies, from their owners:
+// each process sends its own in the order of the bodies, and knows where the others' lie (every
+// process knows which bodies are active and whose they are).
+void Solver::shareNodes() {
+  if (!s_.sharing)
+    return;
+  Nodes &nd = m_.nodes;
+  std::vector<double> mine;
+  for (std::uint32_t b : active_bodies_)
+    if (owns(b))
+      for (std::size_t a = m_.bodies[b].node_begin; a < m_.bodies[b].node_end; ++a)
+        mine.insert(mine.end(), {nd.vx[a], nd.vy[a], nd.fx[a], nd.fy[a]});
+  const std::vector<double> all = s_.sharing->allGather(mine);
+  std::size_t k = 0;
+  for (int r = 0; r < s_.sharing->size(); ++r)
+    for (std::uint32_t b : active_bodies_)
+      if (static_cast<int>(b % s_.sharing->size()) == r)
+        for (std::size_t a = m_.bodies[b].node_begin; a < m_.bodies[b].node_end; ++a, k += 4)
+          nd.vx[a] = all[k], nd.vy[a] = all[k + 1], nd.fx[a] = all[k + 2], nd.fy[a] = all[k + 3];
+}
+
+// The element fields output reads, of every process's active bodies, from their owners.
+void Solver::shareElementState() const {
+  if (!s_.sharing)
+    return;
+  Elements &el = m_.elements;
+  std::vector<double> *fields[] = {&el.area,   &el.sxx,    &el.syy,           &el.sxy,
+                                   &el.pressure, &el.energy, &el.plastic_strain, &el.viscosity};
+  std::vector<double> mine;
+  for (std::uint32_t b : active_bodies_)
+    if (owns(b))
+      for (std::size_t e = m_.bodies[b].element_begin; e < m_.bodies[b].element_end; ++e)
+        for (auto *f : fields)
+          mine.push_back((*f)[e]);
+  const std::vector<double> all = s_.sharing->allGather(mine);
+  std::size_t k = 0;
+  for (int r = 0; r < s_.sharing->size(); ++r)
+    for (std::uint32_t b : active_bodies_)
+      if (static_cast<int>(b % s_.sharing->size()) == r)
+        for (std::size_t e = m_.bodies[b].element_begin; e < m_.bodies[b].element_end; ++e)
+          for (auto *f : fields)
+            (*f)[e] = all[k++];
 }
 
 // The active element with the shortest altitude, and what it has become: for the message of a
@@ -631,18 +711,48 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
 // half-kick uses; the step to come was taken without them (elementPass).
 void Solver::erode() {
   std::vector<std::uint32_t> failed;
+  std::vector<std::uint8_t> kind;
   for (std::size_t i = 0; i < chunks_.size(); ++i)
     if (sums_[i].eroding)
       for (std::size_t e = chunks_[i].begin; e < chunks_[i].end; ++e)
         if (failed_[e]) {
-          collapsed_elements_ += failed_[e] == 2;
+          kind.push_back(failed_[e]);
           failed_[e] = 0, failed.push_back(static_cast<std::uint32_t>(e));
         }
+  Elements &el = m_.elements;
+  if (s_.sharing) { // every process's failed elements, with their state, in element order
+    std::vector<double> mine;
+    for (std::size_t j = 0; j < failed.size(); ++j) {
+      const std::uint32_t e = failed[j];
+      mine.insert(mine.end(), {static_cast<double>(e), static_cast<double>(kind[j]), el.area[e],
+                               el.sxx[e], el.syy[e], el.sxy[e], el.pressure[e], el.energy[e],
+                               el.plastic_strain[e], el.viscosity[e]});
+    }
+    const std::vector<double> all = s_.sharing->allGather(mine);
+    failed.clear(), kind.clear();
+    for (std::size_t k = 0; k < all.size(); k += 10) {
+      const auto e = static_cast<std::uint32_t>(all[k]);
+      failed.push_back(e), kind.push_back(static_cast<std::uint8_t>(all[k + 1]));
+      el.area[e] = all[k + 2], el.sxx[e] = all[k + 3], el.syy[e] = all[k + 4];
+      el.sxy[e] = all[k + 5], el.pressure[e] = all[k + 6], el.energy[e] = all[k + 7];
+      el.plastic_strain[e] = all[k + 8], el.viscosity[e] = all[k + 9];
+    }
+    std::vector<std::size_t> order(failed.size());
+    for (std::size_t j = 0; j < order.size(); ++j)
+      order[j] = j;
+    std::sort(order.begin(), order.end(), [&](auto a, auto b) { return failed[a] < failed[b]; });
+    std::vector<std::uint32_t> sorted;
+    std::vector<std::uint8_t> sorted_kind;
+    for (std::size_t j : order)
+      sorted.push_back(failed[j]), sorted_kind.push_back(kind[j]);
+    failed.swap(sorted), kind.swap(sorted_kind);
+  }
+  for (std::uint8_t k : kind)
+    collapsed_elements_ += k == 2;
   if (failed.empty())
     return;
   // Their forces leave f(n+1) with them: f_k = -A B_k^T sigma, as in elementPass.
   Nodes &nd = m_.nodes;
-  const Elements &el = m_.elements;
   for (std::uint32_t e : failed) {
     const std::uint32_t *v = &el.node[3 * e];
     const double pq = el.pressure[e] + el.viscosity[e];
@@ -675,6 +785,10 @@ void Solver::accountEnergy() {
     internal += sums_[i].internal;
     plastic += sums_[i].plastic;
     viscous += sums_[i].viscous;
+  }
+  if (s_.sharing) {
+    const std::vector<double> all = sumOver({internal, plastic, viscous});
+    internal = all[0], plastic = all[1], viscous = all[2];
   }
   energy_.internal = internal;
   energy_.plastic += plastic;

@@ -15,6 +15,20 @@
 
 namespace mesopen::fem {
 
+// The processes that share a model's element work (MPI ranks): each computes the elements of the
+// bodies it owns (body b is process b mod size's); the model, the nodes' motion and the force
+// providers (contact) are the same on every process. After each element pass the nodes of every
+// process's active bodies (velocity and force) are gathered by all, and so are the failed
+// elements' states; energies and the stable step are combined in process order.
+class Sharing {
+public:
+  virtual ~Sharing() = default;
+  virtual int rank() const = 0;
+  virtual int size() const = 0;
+  // Every process's `mine`, concatenated in process order (every process calls it).
+  virtual std::vector<double> allGather(const std::vector<double> &mine) const = 0;
+};
+
 struct SolverSettings {
   double safety = 0.9;              // dt = safety * the smallest element's stable step
   double viscosity_linear = 0.5;    // C_L (thesis Table 3.1)
@@ -35,6 +49,7 @@ struct SolverSettings {
   double erode_dt_ratio = 0.01;
   double gravity_x = 0.0, gravity_y = 0.0; // body force per unit mass [m/s^2]
   std::size_t chunk = 256;          // elements per material batch
+  const Sharing *sharing = nullptr; // the element work shared by processes (null: one)
 };
 
 // Energies per metre of depth [J/m]. Internal includes the plastic and viscous work done.
@@ -94,6 +109,9 @@ public:
   // The element pass alone, as the time loop calls it: stresses and forces at the current
   // positions with the current velocities over a step dt (for benchmarks).
   void internalForces(double dt);
+  // With the element work shared: every process's elements' state (stress, pressure, energy,
+  // plastic strain, area) of its active bodies copied to all, for output (every process calls it).
+  void shareElementState() const;
 
 private:
   struct Range {
@@ -144,6 +162,11 @@ private:
   void applyConstraints(double half_dt, bool second_half);
   void erode();
   std::string thinnestElement() const;
+  bool owns(std::size_t body) const {
+    return !s_.sharing || static_cast<int>(body % s_.sharing->size()) == s_.sharing->rank();
+  }
+  std::vector<double> sumOver(std::vector<double> mine) const; // over processes, in their order
+  void shareNodes();
   void accountEnergy();
 
   Model &m_;
@@ -157,6 +180,7 @@ private:
   std::vector<KickSums> kick_sums_; // per node block (first half-kick) or unit (second)
   std::vector<double> inv_mass_;
   std::vector<char> body_active_seen_;
+  std::vector<std::uint32_t> active_bodies_; // every process's, in order
   std::size_t active_elements_ = 0, eroded_elements_ = 0, collapsed_elements_ = 0;
   double time_ = 0.0, dt_ = 0.0, next_dt_ = 0.0;
   double step_scale_ = 1.0; // sqrt(1 - kappa_n / 4) for the providers' stiffness kappa_n

@@ -390,6 +390,28 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
   return j;
 }
 
+// The element work shared by the MPI ranks (fem::Sharing): all-gathers over MPI_COMM_WORLD.
+class MpiSharing final : public fem::Sharing {
+public:
+  explicit MpiSharing(const coupling::World &world) : rank_(world.rank), size_(world.size) {}
+  int rank() const override { return rank_; }
+  int size() const override { return size_; }
+  std::vector<double> allGather(const std::vector<double> &mine) const override {
+    const int n = static_cast<int>(mine.size());
+    std::vector<int> counts(size_), starts(size_ + 1, 0);
+    MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+    for (int r = 0; r < size_; ++r)
+      starts[r + 1] = starts[r] + counts[r];
+    std::vector<double> all(static_cast<std::size_t>(starts[size_]));
+    MPI_Allgatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), starts.data(),
+                   MPI_DOUBLE, MPI_COMM_WORLD);
+    return all;
+  }
+
+private:
+  int rank_, size_;
+};
+
 // Everything a run does once the scene is read: target, model, time loop, files.
 int simulate(const Scene &scene, const RunOptions &options, const coupling::World &world,
              Clock::time_point start) {
@@ -424,12 +446,14 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
                                                   dir + "/liggghts.log", MPI_COMM_WORLD);
   }
   target.reset();
+  const MpiSharing sharing(world);
   fem::Solver solver(model, {.safety = run.safety,
                              .viscosity_linear = run.viscosity_linear,
                              .viscosity_quadratic = run.viscosity_quadratic,
                              .anti_locking = run.anti_locking,
                              .max_dt = dem ? dem->stableStep() : HUGE_VAL,
-                             .erode_dt_ratio = run.erode_step_ratio});
+                             .erode_dt_ratio = run.erode_step_ratio,
+                             .sharing = world.size > 1 ? &sharing : nullptr});
   std::unique_ptr<fem::Contact> contact;
   if (scene.contact.enabled) {
     contact = std::make_unique<fem::Contact>(model, contactSettings(scene, walls));

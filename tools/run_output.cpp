@@ -280,6 +280,7 @@ void Frames::take(const fem::Model &model, const fem::Solver &solver) {
   coupling::Particles disks;
   if (coupled_) // every rank takes part; rank 0 holds them all
     coupled_->dem().gatherParticles(coupled_->disks(), disks);
+  solver.shareElementState(); // every rank takes part
   if (!h5_) {
     times_.push_back(solver.time());
     return;
