@@ -71,11 +71,11 @@ void FeDemCoupling::startWindow(double dt) {
 // at up to twice the fastest boundary node's speed now (plus half the largest radius). A disk
 // left out feels no FE force and is exactly on its slow path; if the bodies leave that region,
 // the choice is made again.
-void FeDemCoupling::choose(const DiskContact::Region &now, double dt) {
+void FeDemCoupling::choose(const fem::Model &model, const DiskContact::Region &now, double dt) {
   const Particles &p = dem_.particles();
   const double left = std::max(length_ - elapsed_, 0.0) + 2.0 * dt;
-  const double margin = 2.0 * now.fastest * left + 0.5 * r_max_;
-  allowed_ = {now.x0 - margin, now.y0 - margin, now.x1 + margin, now.y1 + margin, now.fastest};
+  const double margin = 2.0 * contact_.fastest(model) * left + 0.5 * r_max_;
+  allowed_ = {now.x0 - margin, now.y0 - margin, now.x1 + margin, now.y1 + margin};
   const std::size_t n = p.size();
   meets_.resize(n);
   const DiskContact::Region a = allowed_;
@@ -117,7 +117,7 @@ void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
   const DiskContact::Region now = contact_.measure(model, r_max_);
   if (first || now.x0 < allowed_.x0 || now.y0 < allowed_.y0 || now.x1 > allowed_.x1 ||
       now.y1 > allowed_.y1)
-    choose(now, dt);
+    choose(model, now, dt);
   // Their state now (velocities at the step's middle, as the FE nodes'), the FE-DEM contact, and
   // the second half kick of its forces.
   const std::size_t nc = near_.size();

@@ -69,7 +69,7 @@ private:
             p.omega[i] + half * p.torque[i] / p.inertia(i)};
   }
   void startWindow(double dt);
-  void choose(const DiskContact::Region &now, double dt);
+  void choose(const fem::Model &model, const DiskContact::Region &now, double dt);
   void endWindow();
 
   DemParticipant &dem_;

@@ -161,30 +161,42 @@ void DiskContact::apply(fem::Model &model, const std::vector<Reaction> &reaction
   }
 }
 
+// A closed boundary's edges start at each of its nodes once: their first nodes are its nodes.
 DiskContact::Region DiskContact::measure(const fem::Model &model, double reach) {
   const fem::Nodes &nd = model.nodes;
   // (a body at rest keeps its box: its nodes have not moved)
   const bool all = boxes_.size() != fe_bodies_.size();
   boxes_.resize(fe_bodies_.size());
-  Region r{INFINITY, INFINITY, -INFINITY, -INFINITY, 0.0};
-  double fastest2 = 0.0;
+  Region r{INFINITY, INFINITY, -INFINITY, -INFINITY};
   for (std::size_t k = 0; k < fe_bodies_.size(); ++k) {
     Box &box = boxes_[k];
     if (all || !model.bodies[fe_bodies_[k]].at_rest) {
+      const auto &edges = model.bodies[fe_bodies_[k]].boundary;
       box = {INFINITY, INFINITY, -INFINITY, -INFINITY};
-      for (const std::uint32_t a : model.bodies[fe_bodies_[k]].boundary) {
+      for (std::size_t e = 0; e < edges.size(); e += 2) {
+        const std::uint32_t a = edges[e];
         box = {std::min(box.x0, nd.x[a]), std::min(box.y0, nd.y[a]), std::max(box.x1, nd.x[a]),
                std::max(box.y1, nd.y[a])};
-        fastest2 = std::max(fastest2, nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a]);
       }
     }
     r = {std::min(r.x0, box.x0 - reach), std::min(r.y0, box.y0 - reach),
-         std::max(r.x1, box.x1 + reach), std::max(r.y1, box.y1 + reach), 0.0};
+         std::max(r.x1, box.x1 + reach), std::max(r.y1, box.y1 + reach)};
   }
-  r.fastest = std::sqrt(fastest2);
   region_ = r, reach_ = reach;
   measured_ = true;
   return r;
+}
+
+double DiskContact::fastest(const fem::Model &model) const {
+  const fem::Nodes &nd = model.nodes;
+  double fastest2 = 0.0;
+  for (const std::uint32_t b : fe_bodies_)
+    if (!model.bodies[b].at_rest) {
+      const auto &edges = model.bodies[b].boundary;
+      for (std::size_t e = 0; e < edges.size(); e += 2)
+        fastest2 = std::max(fastest2, nd.vx[edges[e]] * nd.vx[edges[e]] + nd.vy[edges[e]] * nd.vy[edges[e]]);
+    }
+  return std::sqrt(fastest2);
 }
 
 void DiskContact::addForces(const fem::Model &model, const Particles &disks,

@@ -43,14 +43,15 @@ public:
   // on both sides.
   void addForces(const fem::Model &model, const Particles &disks, ParticleForces &forces,
                  std::vector<Reaction> &reactions, double dt);
-  // The FE bodies' boxes now (those of bodies at rest kept), the rectangle they cover widened by
-  // `reach` (no disk centre outside it touches a body when `reach` is its largest radius), and the
-  // fastest of the moving bodies' boundary nodes [m/s]. addForces measures them itself if this
-  // was not called since the nodes moved.
+  // The FE bodies' boxes now (those of bodies at rest kept) and the rectangle they cover widened by
+  // `reach` (no disk centre outside it touches a body when `reach` is its largest radius).
+  // addForces measures them itself if this was not called since the nodes moved.
   struct Region {
-    double x0, y0, x1, y1, fastest;
+    double x0, y0, x1, y1;
   };
   Region measure(const fem::Model &model, double reach);
+  // The speed of the fastest boundary node of the moving bodies [m/s].
+  double fastest(const fem::Model &model) const;
   // The reactions into the FE nodes (Nodes::addExternal, with their frictional part), their
   // bodies woken.
   static void apply(fem::Model &model, const std::vector<Reaction> &reactions);
