@@ -123,13 +123,14 @@ void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
   const std::size_t nc = near_.size();
   for (auto *v : {&now_.x, &now_.y, &now_.vx, &now_.vy, &now_.omega, &now_.radius, &now_.mass})
     v->resize(nc);
+  now_.id.resize(nc);
   for (std::size_t c = 0; c < nc; ++c) {
     const std::uint32_t i = near_[c];
     const auto [vx, vy, spin] = slow(p, i);
     now_.x[c] = p.x[i] + elapsed_ * vx + m.dx[i], now_.y[c] = p.y[i] + elapsed_ * vy + m.dy[i];
     now_.vx[c] = vx + m.dvx[i], now_.vy[c] = vy + m.dvy[i];
     now_.omega[c] = spin + m.domega[i];
-    now_.radius[c] = p.radius[i], now_.mass[c] = p.mass[i];
+    now_.radius[c] = p.radius[i], now_.mass[c] = p.mass[i], now_.id[c] = p.id[i];
   }
   fast_.reset(nc);
   reactions_.clear();

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <stdexcept>
 
@@ -9,6 +10,8 @@ namespace mesopen::coupling {
 
 namespace {
 constexpr std::size_t max_cells = 1u << 22;
+constexpr double release_steps = 200.0; // a sudden depth is let go over this many steps
+constexpr double step_margin = 0.005;   // a contact deepens in a step by its approach or this (of h)
 } // namespace
 
 DiskContact::DiskContact(const fem::Model &model, DiskContactSettings settings)
@@ -204,6 +207,12 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
   const fem::Nodes &nd = model.nodes;
   const std::size_t n = disks.size();
   stats_.contacts = 0;
+  // The depths of the last step; the allowances let go by a step's share.
+  for (auto it = held_.begin(); it != held_.end();) {
+    Held &h = it->second;
+    h.last = h.now, h.now = 0.0, h.allowance = std::max(0.0, h.allowance - h.rate);
+    it = h.last == 0.0 && h.allowance == 0.0 ? held_.erase(it) : std::next(it);
+  }
   if (n == 0 || fe_bodies_.empty())
     return;
   // The region the FE bodies cover widened by the largest disk: only the disks whose centres lie
@@ -276,8 +285,8 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
           if (n_edges > 64)
             edges_.nearBox(cx - r, cy - r, cx + r, cy + r, near_edges_);
           const Closest c = closest(model, b, cx, cy, r, near_edges_);
-          const double depth = r - c.distance; // c.distance < 0: the centre inside
-          if (!(depth > 0.0))
+          const double found = r - c.distance; // c.distance < 0: the centre inside
+          if (!(found > 0.0))
             continue;
           // relative velocity of the disk's contact point to the boundary point
           const double w1 = 1.0 - c.w, w2 = c.w;
@@ -285,6 +294,20 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
           const double vx = disks.vx[i] + om * r * c.ny - (w1 * nd.vx[c.s1] + w2 * nd.vx[c.s2]);
           const double vy = disks.vy[i] - om * r * c.nx - (w1 * nd.vy[c.s1] + w2 * nd.vy[c.s2]);
           const double vn = vx * c.nx + vy * c.ny; // > 0: separating
+          // A depth no step's approach makes (a boundary that erosion laid bare over the disk, a
+          // dented body) is allowed for and let go over release_steps steps, as in FE-FE contact:
+          // the disk may go deeper in a step by twice its approach, or step_margin of an element,
+          // than it was pushed at the step before.
+          Held &held = held_[disks.id.empty() ? static_cast<std::int64_t>(i) : disks.id[i]];
+          double depth = found - held.allowance;
+          if (!(depth > 0.0))
+            continue;
+          const double reach = held.last + std::max(step_margin * size_[b], -2.0 * vn * dt);
+          if (depth > reach) {
+            held.allowance += depth - reach, held.rate = held.allowance / release_steps;
+            depth = reach, ++stats_.sudden;
+          }
+          held.now = std::max(held.now, depth);
           const double m = disks.mass[i], m_seg = w1 * nd.mass[c.s1] + w2 * nd.mass[c.s2];
           const double m_eff = m * m_seg / (m + m_seg), m_t = (m / 3.0) * m_seg / (m / 3.0 + m_seg);
           const double fn = std::max(0.0, m_eff / dt * (kappa * depth / dt - zeta_c * vn));
@@ -296,7 +319,7 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
           reactions.push_back({c.s1, b, -w1 * fx, -w1 * fy, w1 * ft * tx, w1 * ft * ty});
           reactions.push_back({c.s2, b, -w2 * fx, -w2 * fy, w2 * ft * tx, w2 * ft * ty});
           stats_.work_on_disks += dt * (fx * disks.vx[i] + fy * disks.vy[i] + torque * om);
-          stats_.deepest = std::max(stats_.deepest, depth / size_[b]);
+          stats_.deepest = std::max(stats_.deepest, found / size_[b]);
           ++stats_.contacts;
         }
   }

@@ -12,13 +12,16 @@
 //     included), m_t the reduced mass with the disk's tangential 1/m + r^2/I = 3/m.
 // The force goes to the disk (and its torque about the centre), the reaction to s1 and s2 by
 // weights 1 - w, w: the two sum to zero up to round-off. A closest point at a vertex takes the
-// side of the vertex's pseudo-normal, as FE-FE contact does.
+// side of the vertex's pseudo-normal, as FE-FE contact does. A depth that no step's approach can
+// make (erosion laying a boundary bare over a disk) is allowed for and let go over 200 steps, as in
+// FE-FE contact (fem/contact.hpp).
 #pragma once
 
 #include "dem.hpp"
 #include "model.hpp"
 
 #include <cstdint>
+#include <unordered_map>
 #include <vector>
 
 namespace mesopen::coupling {
@@ -33,6 +36,7 @@ struct DiskContactStatistics {
   std::size_t contacts = 0;     // of the last call
   double deepest = 0.0;         // the largest overlap over the FE element size, over the run
   double work_on_disks = 0.0;   // the forces' work on the disks [J/m], over the run
+  std::size_t sudden = 0;       // over the run: contacts found deeper than a step's approach
 };
 
 class DiskContact {
@@ -94,6 +98,13 @@ private:
   std::vector<std::size_t> cell_start_;        // grid of disks: first disk of each cell
   std::vector<std::uint32_t> cell_disks_;
   DiskContactStatistics stats_;
+  // Per disk (by id, or place when the disks have no ids) in contact or with an allowance: the
+  // depth it was pushed at in the last step and in this one, a depth allowed for and its release
+  // per step [m].
+  struct Held {
+    double last = 0.0, now = 0.0, allowance = 0.0, rate = 0.0;
+  };
+  std::unordered_map<std::int64_t, Held> held_;
 };
 
 } // namespace mesopen::coupling

@@ -511,6 +511,7 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
         {"disks", std::llround(world.sum(static_cast<double>(dem->particles().size())))},
         {"fe_dem_contacts_last_step", std::llround(world.sum(static_cast<double>(c.contacts)))},
         {"deepest_fe_dem_overlap_over_element_size", world.max(c.deepest)},
+        {"sudden_fe_dem_contacts", std::llround(world.sum(static_cast<double>(c.sudden)))},
         {"work_on_disks", world.sum(c.work_on_disks)},
         {"disks_kinetic_energy", world.sum(coupled->disks().kineticEnergy())},
         {"windows", coupled->windows()},
