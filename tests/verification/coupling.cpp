@@ -170,3 +170,38 @@ TEST(Coupling, MultipleTimeSteppingFollowsTheStepByStepRun) {
   for (int k = 0; k < 2; ++k)
     EXPECT_NEAR(respa[k], each[k], 0.01 * 50.0) << "disk " << k;
 }
+
+// A disk found a third of an element deep in a free block at once, at rest, as when erosion lays a
+// boundary bare over it: pushed out in one step it would leave at about kappa d / dt (some 10 km/s
+// here); the excess depth is allowed for and let go over 200 steps, so it leaves at about
+// d / (200 dt). Bound: the disk slower than d / (20 dt); momentum kept to round-off; the overlap
+// opened within 400 steps.
+TEST(Coupling, SuddenDeepDiskOpensGently) {
+  fem::Model model = block();
+  fem::setBodyVelocity(model, 0, 0.0, 1e-3); // awake
+  const double overlap = 3e-6;               // a third of the block's 10 um elements
+  coupling::FakeDem dem(disks({{50e-6, 60e-6 - overlap, 0.0, 0.0, 0.0, 10e-6}}), {});
+  coupling::FeDemCoupling coupling(model, dem, {.friction = {0.3}});
+  fem::Solver solver(model, {});
+  solver.addForceProvider(&coupling);
+  const auto p0 = test::totalMomentum(model, coupling.disks());
+  const double mass = dem.particles().mass[0];
+  double fastest = 0.0, worst = 0.0, dt = HUGE_VAL;
+  for (int step = 0; step < 400; ++step) {
+    dt = std::min(dt, solver.dt());
+    solver.step();
+    const coupling::Particles d = coupling.disks();
+    fastest = std::max(fastest, std::hypot(d.vx[0], d.vy[0]));
+    const auto p = test::totalMomentum(model, d);
+    worst = std::max({worst, std::abs(p[0] - p0[0]), std::abs(p[1] - p0[1])});
+  }
+  const double one_step = overlap / dt;
+  std::printf("disk %.2f elements deep at once: %zu sudden contacts, fastest %.3g m/s (d / dt = %.3g "
+              "m/s), contacts at the end %zu, momentum %.2e of m d / dt\n",
+              overlap / 10e-6, coupling.contact().statistics().sudden, fastest, one_step,
+              coupling.contact().statistics().contacts, worst / (mass * one_step));
+  EXPECT_GT(coupling.contact().statistics().sudden, 0u);
+  EXPECT_LT(fastest, one_step / 20.0);
+  EXPECT_EQ(coupling.contact().statistics().contacts, 0u);
+  EXPECT_LT(worst, 1e-12 * mass * one_step);
+}
