@@ -12,8 +12,12 @@ FeDemCoupling::FeDemCoupling(const fem::Model &model, DemParticipant &dem,
       data_{{"Particle-State", "DEM-Particles", "DEM", "FE"},
             {"Particle-Motion", "DEM-Particles", "FE", "DEM"},
             {"Reaction-Force", "FE-Boundary", "FE", "FE"}} {
-  const double stable = dem.stableStep(); // every rank calls it
-  planned_ = window > 0.0 ? window : std::isfinite(stable) ? stable : 0.0;
+  if (window > 0.0)
+    planned_ = window;
+  else { // (window is the same on every rank: every rank calls it, or none)
+    const double stable = dem.stableStep();
+    planned_ = std::isfinite(stable) ? stable : 0.0;
+  }
 }
 
 // The disks' state read, their slow half kick (taken where used: v_h = v + P/2 f/m), no motion

@@ -1,5 +1,7 @@
 #include "disk_contact.hpp"
 
+#include "contact.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <iterator>
@@ -10,8 +12,6 @@ namespace mesopen::coupling {
 
 namespace {
 constexpr std::size_t max_cells = 1u << 22;
-constexpr double release_steps = 200.0; // a sudden depth is let go over this many steps
-constexpr double step_margin = 0.005;   // a contact deepens in a step by its approach or this (of h)
 } // namespace
 
 DiskContact::DiskContact(const fem::Model &model, DiskContactSettings settings)
@@ -295,16 +295,15 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
           const double vy = disks.vy[i] - om * r * c.nx - (w1 * nd.vy[c.s1] + w2 * nd.vy[c.s2]);
           const double vn = vx * c.nx + vy * c.ny; // > 0: separating
           // A depth no step's approach makes (a boundary that erosion laid bare over the disk, a
-          // dented body) is allowed for and let go over release_steps steps, as in FE-FE contact:
-          // the disk may go deeper in a step by twice its approach, or step_margin of an element,
-          // than it was pushed at the step before.
+          // dented body) is allowed for and let go over release_steps steps, as in FE-FE contact
+          // (fem::approachReach).
           Held &held = held_[disks.id.empty() ? static_cast<std::int64_t>(i) : disks.id[i]];
           double depth = found - held.allowance;
           if (!(depth > 0.0))
             continue;
-          const double reach = held.last + std::max(step_margin * size_[b], -2.0 * vn * dt);
+          const double reach = fem::approachReach(held.last, size_[b], vn, dt);
           if (depth > reach) {
-            held.allowance += depth - reach, held.rate = held.allowance / release_steps;
+            held.allowance += depth - reach, held.rate = held.allowance / fem::release_steps;
             depth = reach, ++stats_.sudden;
           }
           held.now = std::max(held.now, depth);

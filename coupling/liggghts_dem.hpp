@@ -30,6 +30,23 @@ struct World {
 };
 World world(bool needed);
 
+// Every rank's items, gathered in rank order on every rank (as bytes: plain data).
+template <class T> void allGather(std::vector<T> &items, MPI_Comm comm) {
+  int ranks = 1;
+  MPI_Comm_size(comm, &ranks);
+  if (ranks == 1)
+    return;
+  const int mine = static_cast<int>(items.size() * sizeof(T));
+  std::vector<int> sizes(ranks), starts(ranks + 1, 0);
+  MPI_Allgather(&mine, 1, MPI_INT, sizes.data(), 1, MPI_INT, comm);
+  for (int r = 0; r < ranks; ++r)
+    starts[r + 1] = starts[r] + sizes[r];
+  std::vector<T> all(static_cast<std::size_t>(starts[ranks]) / sizeof(T));
+  MPI_Allgatherv(items.data(), mine, MPI_BYTE, all.data(), sizes.data(), starts.data(), MPI_BYTE,
+                 comm);
+  items.swap(all);
+}
+
 class LiggghtsDem : public DemParticipant {
 public:
   // `variables` as the script's -var name value pairs; every value a finite number or an existing

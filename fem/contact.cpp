@@ -21,8 +21,6 @@ constexpr double list_margin = 0.5;   // a pair's lists: margin / the smaller bo
 constexpr double search_margin = 1.0; // pairs of bodies: margin / the median element size
 constexpr std::size_t runs_per_thread = 4; // runs of pairs: a thread takes the next one free
 constexpr std::size_t owner_blocks = 16;   // blocks of bodies, each adding its nodes' forces
-constexpr double release_steps = 200.0;    // an overlap erosion laid bare opens over this many steps
-constexpr double step_margin = 0.005; // a contact deepens in a step by its approach or this (of h)
 
 double sq(double x) { return x * x; }
 } // namespace
@@ -790,12 +788,11 @@ void Contact::hit(const Model &model, const Found &f, double dt, Hits &hits) con
     vy -= w1 * nd.vy[s1] + w2 * nd.vy[s2];
   }
   const double vn = vx * nx + vy * ny; // > 0: separating
-  // A contact deepens in a step by its approach, (-vn) dt, from the depth its node was pushed at
-  // the step before. Found deeper than that (with a margin: twice the approach, at least
-  // step_margin h), the node was not reached by approach: B's boundary folded over it, or a new
+  // Found deeper than its approach reaches from the depth its node was pushed at the step before
+  // (approachReach), the node was not reached by approach: B's boundary folded over it, or a new
   // closest segment took over in a dented body. Pushed out at once it would leave at depth / dt;
   // the excess is allowed for instead and let go over release_steps steps, as erosion's overlaps.
-  const double reach = pushed_[p] + std::max(step_margin * h, -2.0 * vn * dt);
+  const double reach = approachReach(pushed_[p], h, vn, dt);
   if (depth > reach)
     hits.sudden.emplace_back(p, depth - reach), depth = reach;
   // Two nodes that meet are pushed apart by both passes, a wall contact by one: the walls take

@@ -54,6 +54,16 @@
 
 namespace mesopen::fem {
 
+// A contact may deepen in a step by its approach, twice (-2 v_n dt, v_n > 0 separating) for a
+// margin, or by 0.005 of an element h, over the depth it was pushed at the step before; found
+// deeper, the node was not reached by approach, and the excess is allowed for and let go over
+// release_steps steps (Contact::hit; the FE-DEM contact does the same).
+constexpr double release_steps = 200.0;
+inline double approachReach(double pushed, double h, double vn, double dt) {
+  constexpr double step_margin = 0.005;
+  return pushed + std::max(step_margin * h, -2.0 * vn * dt);
+}
+
 struct ContactSettings {
   // Coulomb coefficient per pair of materials (Model::materials indices), n x n row-major; a
   // single value applies to every pair.

@@ -1,6 +1,7 @@
 #include "solver.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 #ifdef __AVX__
@@ -459,48 +460,47 @@ std::vector<double> Solver::sumOver(std::vector<double> mine) const {
   return sum;
 }
 
-// The velocities and forces of the nodes of every process's active bodies, from their owners:
-// each process sends its own in the order of the bodies, and knows where the others' lie (every
-// process knows which bodies are active and whose they are).
-void Solver::shareNodes() {
+// The element state a process keeps of its own elements and the others read: what output and
+// erosion need of them.
+std::array<std::vector<double> *, 8> Solver::elementState() const {
+  Elements &el = m_.elements;
+  return {&el.area, &el.sxx, &el.syy, &el.sxy, &el.pressure, &el.energy, &el.plastic_strain,
+          &el.viscosity};
+}
+
+// `fields` over each active body's range [begin, end) (its nodes or its elements), copied from
+// the body's owner to every process: each sends its own bodies' values in body order, and knows
+// where the others' lie (every process knows which bodies are active and whose they are).
+template <std::size_t N>
+void Solver::shareOwned(std::size_t Body::*begin, std::size_t Body::*end,
+                        const std::array<std::vector<double> *, N> &fields) const {
   if (!s_.sharing)
     return;
-  Nodes &nd = m_.nodes;
   std::vector<double> mine;
   for (std::uint32_t b : active_bodies_)
     if (owns(b))
-      for (std::size_t a = m_.bodies[b].node_begin; a < m_.bodies[b].node_end; ++a)
-        mine.insert(mine.end(), {nd.vx[a], nd.vy[a], nd.fx[a], nd.fy[a]});
+      for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
+        for (auto *f : fields)
+          mine.push_back((*f)[i]);
   const std::vector<double> all = s_.sharing->allGather(mine);
   std::size_t k = 0;
   for (int r = 0; r < s_.sharing->size(); ++r)
     for (std::uint32_t b : active_bodies_)
       if (static_cast<int>(b % s_.sharing->size()) == r)
-        for (std::size_t a = m_.bodies[b].node_begin; a < m_.bodies[b].node_end; ++a, k += 4)
-          nd.vx[a] = all[k], nd.vy[a] = all[k + 1], nd.fx[a] = all[k + 2], nd.fy[a] = all[k + 3];
+        for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
+          for (auto *f : fields)
+            (*f)[i] = all[k++];
+}
+
+// The velocities and forces of the nodes of every process's active bodies, from their owners.
+void Solver::shareNodes() {
+  Nodes &nd = m_.nodes;
+  shareOwned<4>(&Body::node_begin, &Body::node_end, {&nd.vx, &nd.vy, &nd.fx, &nd.fy});
 }
 
 // The element fields output reads, of every process's active bodies, from their owners.
 void Solver::shareElementState() const {
-  if (!s_.sharing)
-    return;
-  Elements &el = m_.elements;
-  std::vector<double> *fields[] = {&el.area,   &el.sxx,    &el.syy,           &el.sxy,
-                                   &el.pressure, &el.energy, &el.plastic_strain, &el.viscosity};
-  std::vector<double> mine;
-  for (std::uint32_t b : active_bodies_)
-    if (owns(b))
-      for (std::size_t e = m_.bodies[b].element_begin; e < m_.bodies[b].element_end; ++e)
-        for (auto *f : fields)
-          mine.push_back((*f)[e]);
-  const std::vector<double> all = s_.sharing->allGather(mine);
-  std::size_t k = 0;
-  for (int r = 0; r < s_.sharing->size(); ++r)
-    for (std::uint32_t b : active_bodies_)
-      if (static_cast<int>(b % s_.sharing->size()) == r)
-        for (std::size_t e = m_.bodies[b].element_begin; e < m_.bodies[b].element_end; ++e)
-          for (auto *f : fields)
-            (*f)[e] = all[k++];
+  shareOwned(&Body::element_begin, &Body::element_end, elementState());
 }
 
 // The active element with the shortest altitude, and what it has become: for the message of a
@@ -721,31 +721,25 @@ void Solver::erode() {
         }
   Elements &el = m_.elements;
   if (s_.sharing) { // every process's failed elements, with their state, in element order
+    const auto state = elementState();
     std::vector<double> mine;
     for (std::size_t j = 0; j < failed.size(); ++j) {
-      const std::uint32_t e = failed[j];
-      mine.insert(mine.end(), {static_cast<double>(e), static_cast<double>(kind[j]), el.area[e],
-                               el.sxx[e], el.syy[e], el.sxy[e], el.pressure[e], el.energy[e],
-                               el.plastic_strain[e], el.viscosity[e]});
+      mine.insert(mine.end(), {static_cast<double>(failed[j]), static_cast<double>(kind[j])});
+      for (auto *f : state)
+        mine.push_back((*f)[failed[j]]);
     }
     const std::vector<double> all = s_.sharing->allGather(mine);
-    failed.clear(), kind.clear();
-    for (std::size_t k = 0; k < all.size(); k += 10) {
+    std::vector<std::pair<std::uint32_t, std::uint8_t>> every;
+    for (std::size_t k = 0; k < all.size(); k += 2 + state.size()) {
       const auto e = static_cast<std::uint32_t>(all[k]);
-      failed.push_back(e), kind.push_back(static_cast<std::uint8_t>(all[k + 1]));
-      el.area[e] = all[k + 2], el.sxx[e] = all[k + 3], el.syy[e] = all[k + 4];
-      el.sxy[e] = all[k + 5], el.pressure[e] = all[k + 6], el.energy[e] = all[k + 7];
-      el.plastic_strain[e] = all[k + 8], el.viscosity[e] = all[k + 9];
+      every.emplace_back(e, static_cast<std::uint8_t>(all[k + 1]));
+      for (std::size_t f = 0; f < state.size(); ++f)
+        (*state[f])[e] = all[k + 2 + f];
     }
-    std::vector<std::size_t> order(failed.size());
-    for (std::size_t j = 0; j < order.size(); ++j)
-      order[j] = j;
-    std::sort(order.begin(), order.end(), [&](auto a, auto b) { return failed[a] < failed[b]; });
-    std::vector<std::uint32_t> sorted;
-    std::vector<std::uint8_t> sorted_kind;
-    for (std::size_t j : order)
-      sorted.push_back(failed[j]), sorted_kind.push_back(kind[j]);
-    failed.swap(sorted), kind.swap(sorted_kind);
+    std::sort(every.begin(), every.end());
+    failed.clear(), kind.clear();
+    for (auto [e, k] : every)
+      failed.push_back(e), kind.push_back(k);
   }
   for (std::uint8_t k : kind)
     collapsed_elements_ += k == 2;

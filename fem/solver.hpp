@@ -7,6 +7,7 @@
 
 #include "model.hpp"
 
+#include <array>
 #include <cstddef>
 #include <limits>
 #include <stdexcept>
@@ -166,6 +167,10 @@ private:
     return !s_.sharing || static_cast<int>(body % s_.sharing->size()) == s_.sharing->rank();
   }
   std::vector<double> sumOver(std::vector<double> mine) const; // over processes, in their order
+  std::array<std::vector<double> *, 8> elementState() const;
+  template <std::size_t N>
+  void shareOwned(std::size_t Body::*begin, std::size_t Body::*end,
+                  const std::array<std::vector<double> *, N> &fields) const;
   void shareNodes();
   void accountEnergy();
 

@@ -397,14 +397,8 @@ public:
   int rank() const override { return rank_; }
   int size() const override { return size_; }
   std::vector<double> allGather(const std::vector<double> &mine) const override {
-    const int n = static_cast<int>(mine.size());
-    std::vector<int> counts(size_), starts(size_ + 1, 0);
-    MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-    for (int r = 0; r < size_; ++r)
-      starts[r + 1] = starts[r] + counts[r];
-    std::vector<double> all(static_cast<std::size_t>(starts[size_]));
-    MPI_Allgatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), starts.data(),
-                   MPI_DOUBLE, MPI_COMM_WORLD);
+    std::vector<double> all = mine;
+    coupling::allGather(all, MPI_COMM_WORLD);
     return all;
   }
 
@@ -447,11 +441,12 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
   }
   target.reset();
   const MpiSharing sharing(world);
+  const double dem_step = dem ? dem->stableStep() : HUGE_VAL; // every rank calls it
   fem::Solver solver(model, {.safety = run.safety,
                              .viscosity_linear = run.viscosity_linear,
                              .viscosity_quadratic = run.viscosity_quadratic,
                              .anti_locking = run.anti_locking,
-                             .max_dt = dem ? dem->stableStep() : HUGE_VAL,
+                             .max_dt = dem_step,
                              .erode_dt_ratio = run.erode_step_ratio,
                              .sharing = world.size > 1 ? &sharing : nullptr});
   std::unique_ptr<fem::Contact> contact;
@@ -465,12 +460,12 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
     disk.friction[0] = scene.contact.projectile_friction;
     // Windows up to the disks' stable step (a longer one is refused: the disks' own contacts
     // would be unstable).
-    const double stable = dem->stableStep();
-    if (scene.dem.step > stable)
+    if (scene.dem.step > dem_step)
       throw InputError(options.scene + ": dem.step = " + std::to_string(scene.dem.step) +
-                       " s is longer than the disks' stable step, " + std::to_string(stable) +
+                       " s is longer than the disks' stable step, " + std::to_string(dem_step) +
                        " s (a tenth of the lightest disk's contact time); allowed: 0 to that");
-    coupled = std::make_unique<coupling::FeDemCoupling>(model, *dem, disk, scene.dem.step);
+    coupled = std::make_unique<coupling::FeDemCoupling>(
+        model, *dem, disk, scene.dem.step > 0.0 ? scene.dem.step : dem_step);
     solver.addForceProvider(coupled.get());
   }
 
