@@ -8,7 +8,7 @@ namespace mesopen::coupling {
 
 FeDemCoupling::FeDemCoupling(const fem::Model &model, DemParticipant &dem,
                              DiskContactSettings settings, double window)
-    : dem_(dem), contact_(model, std::move(settings)),
+    : dem_(dem), contact_(model, std::move(settings)), r_max_(dem.largestRadius()),
       data_{{"Particle-State", "DEM-Particles", "DEM", "FE"},
             {"Particle-Motion", "DEM-Particles", "FE", "DEM"},
             {"Reaction-Force", "FE-Boundary", "FE", "FE"}} {
@@ -43,10 +43,7 @@ void FeDemCoupling::startWindow(double dt) {
     }
   near_.clear();
   fast_.reset(0);
-  r_max_ = 0.0;
-  for (double r : p.radius)
-    r_max_ = std::max(r_max_, r);
-  if (!carried_.empty()) {
+  if (dem_.layout() != layout_ || !listed_) {
     // the disks' places by id (ids run from 1 to about the number of disks)
     std::int64_t top = 0;
     for (std::int64_t id : p.id)
@@ -55,6 +52,10 @@ void FeDemCoupling::startWindow(double dt) {
       place_.resize(static_cast<std::size_t>(top) + 1, -1);
     for (std::size_t i = 0; i < n; ++i)
       place_[p.id[i]] = static_cast<std::int64_t>(i);
+    layout_ = dem_.layout(), listed_ = true;
+  }
+  if (!carried_.empty()) {
+    const auto top = static_cast<std::int64_t>(place_.size()) - 1;
     for (const DiskForce &f : carried_) {
       const std::int64_t at = f.id >= 0 && f.id <= top ? place_[f.id] : -1;
       if (at < 0 || static_cast<std::size_t>(at) >= n || p.id[at] != f.id)
@@ -83,12 +84,16 @@ void FeDemCoupling::choose(const fem::Model &model, const DiskContact::Region &n
   const std::size_t n = p.size();
   meets_.resize(n);
   const DiskContact::Region a = allowed_;
+  const double half = 0.5 * length_;
+  const double *x = p.x.data(), *y = p.y.data(), *vx0 = p.vx.data(), *vy0 = p.vy.data(),
+               *fx = p.fx.data(), *fy = p.fy.data(), *mass = p.mass.data();
+  char *meets = meets_.data();
 #pragma omp simd
   for (std::size_t i = 0; i < n; ++i) {
-    const auto [vx, vy, spin] = slow(p, i);
-    const double xa = p.x[i] + elapsed_ * vx, ya = p.y[i] + elapsed_ * vy;
+    const double vx = vx0[i] + half * fx[i] / mass[i], vy = vy0[i] + half * fy[i] / mass[i]; // slow()
+    const double xa = x[i] + elapsed_ * vx, ya = y[i] + elapsed_ * vy;
     const double xb = xa + left * vx, yb = ya + left * vy;
-    meets_[i] = (std::max(xa, xb) >= a.x0) & (std::min(xa, xb) <= a.x1) &
+    meets[i] = (std::max(xa, xb) >= a.x0) & (std::min(xa, xb) <= a.x1) &
                 (std::max(ya, yb) >= a.y0) & (std::min(ya, yb) <= a.y1);
   }
   for (std::size_t i = 0; i < n; ++i) {
@@ -158,6 +163,7 @@ void FeDemCoupling::endWindow() {
     if (fast_.fx[c] != 0.0 || fast_.fy[c] != 0.0 || fast_.torque[c] != 0.0)
       carried_.push_back({p.id[near_[c]], fast_.fx[c], fast_.fy[c], fast_.torque[c]});
   data_[1].window = window_ + 1;
+  motion_.moved.assign(near_.begin(), near_.end());
   dem_.endWindow(elapsed_, length_, motion_);
   dem_.gatherDiskForces(carried_);
   ++window_;

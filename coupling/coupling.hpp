@@ -80,13 +80,15 @@ private:
   double elapsed_ = 0.0;        // its time so far
   std::uint64_t window_ = 0;    // windows ended
   double seconds_ = 0.0;
-  double r_max_ = 0.0;          // the largest disk
+  double r_max_ = 0.0;          // the largest disk, over all ranks
   DiskContact::Region allowed_{}; // where the FE bodies may go before the near disks are chosen anew
   // The near disks (indices into the participant's particles), their motion beyond the slow path
   // and the last FE-DEM forces on them, and their state now for the contact.
   std::vector<std::uint32_t> near_;
   std::vector<char> is_near_, meets_;
   std::vector<std::int64_t> place_; // per disk id: its index, -1 if not this rank's
+  std::uint64_t layout_ = 0;        // the participant's layout place_ was taken at
+  bool listed_ = false;
   WindowMotion motion_;            // per disk (zero but for the near ones)
   ParticleForces fast_;            // per near disk
   Particles now_;                  // per near disk

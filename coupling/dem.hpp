@@ -33,9 +33,11 @@ struct Particles {
 
 // The disks' motion over a time window under the FE bodies' forces, beyond the motion their own
 // forces give them (multiple time stepping, see DemParticipant::endWindow), in the order of
-// Particles: displacement [m], velocity [m/s], spin [rad/s].
+// Particles: displacement [m], velocity [m/s], spin [rad/s]. Only the disks in `moved` (the ones
+// the FE bodies could reach) have any; the others are zero there.
 struct WindowMotion {
   std::vector<double> dx, dy, dvx, dvy, domega;
+  std::vector<std::uint32_t> moved; // indices into Particles
 };
 
 // A step that takes ten steps over the contact time pi sqrt(m / k_n) of the lightest disk (mass
@@ -71,11 +73,14 @@ struct DiskForce {
 //   x(t) = x(n) + t v_h + dx(t),  v_h = v(n) + P/2 f(n)/m,
 // the slow kick of their own forces f(n) over the planned length P, then their own forces frozen
 // and the FE bodies' forces (fast) integrated on the FE steps into dx and dv. endWindow(D, P, m),
-// D the window's actual length, makes x(n+1) = x(n) + D v_h + dx (where the FE bodies saw them),
-// computes its own forces there and ends with
+// D the window's actual length, makes x(n+1) = x(n) + D v_h + dx for the moved disks (where the FE
+// bodies saw them), computes its own forces there and ends with
 //   v(n+1) = v(n) + D/2 f(n)/m + dv + D/2 f(n+1)/m
 // (and the spins alike): one step of its own of length D whose forces are computed once, its own
-// forces' impulses those of velocity Verlet with the step D whatever P was.
+// forces' impulses those of velocity Verlet with the step D whatever P was. The disks not moved
+// take that step alone, x(n+1) = x(n) + D (v(n) + D/2 f(n)/m): their path with P was only used to
+// tell that no FE body reaches them (the two differ by D |P - D| / 2 f/m, P - D a fraction of an FE
+// step).
 class DemParticipant {
 public:
   using Exchange = std::function<void(const Particles &, ParticleForces &)>;
@@ -84,8 +89,14 @@ public:
   // The largest stable time step of its own contacts [s] (contactStep; over MPI ranks, every rank
   // calls it).
   virtual double stableStep() const = 0;
+  // The largest disk's radius over all ranks [m] (every rank calls it).
+  virtual double largestRadius() const = 0;
   virtual void advance(double dt, const Exchange &exchange) = 0;
   virtual void endWindow(double length, double planned, const WindowMotion &motion) = 0;
+  // A number that changes whenever the particles' order or number in particles() may have changed
+  // (LIGGGHTS sorts and exchanges atoms when it rebuilds its neighbour lists); what is kept per
+  // place (the largest radius, places by id) is taken anew then.
+  virtual std::uint64_t layout() const { return 0; }
   // Over MPI ranks each holding part of the disks, the reactions of every rank's disks, in rank
   // order, so that every rank loads its copy of the FE nodes alike (one rank: as they are).
   virtual void gatherReactions(std::vector<Reaction> &) const {}

@@ -12,6 +12,7 @@ namespace mesopen::coupling {
 
 namespace {
 constexpr std::size_t max_cells = 1u << 22;
+double sq(double x) { return x * x; }
 } // namespace
 
 DiskContact::DiskContact(const fem::Model &model, DiskContactSettings settings)
@@ -24,6 +25,7 @@ DiskContact::DiskContact(const fem::Model &model, DiskContactSettings settings)
 void DiskContact::boundaryChanged(const fem::Model &model) {
   const fem::Nodes &nd = model.nodes;
   boxes_.clear(); // taken anew
+  grids_.clear();
   size_.assign(model.bodies.size(), 0.0);
   fe_bodies_.clear();
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
@@ -105,24 +107,29 @@ DiskContact::Closest DiskContact::closest(const fem::Model &model, std::size_t b
   return c;
 }
 
-// A body's boundary segments in cells over its box (each in every cell its box meets).
+// A body's boundary segments in cells over its box (each in every cell its box widened by a
+// quarter cell meets), with their first nodes' positions now.
 void DiskContact::EdgeGrid::build(const fem::Model &model, std::size_t body, const Box &box,
                                   double cell_size) {
   const fem::Nodes &nd = model.nodes;
   const auto &edges = model.bodies[body].boundary;
   const std::size_t n = edges.size() / 2;
-  x0 = box.x0, y0 = box.y0;
   // cells of a few segments' length, or the disks' size if larger
   cell = std::max(cell_size, 4.0 * std::sqrt((box.x1 - box.x0) * (box.y1 - box.y0) / n));
   inverse = 1.0 / cell;
-  nx = static_cast<std::size_t>((box.x1 - box.x0) / cell) + 1;
-  ny = static_cast<std::size_t>((box.y1 - box.y0) / cell) + 1;
+  slack = 0.25 * cell;
+  x0 = box.x0 - slack, y0 = box.y0 - slack;
+  nx = static_cast<std::size_t>((box.x1 - box.x0 + 2.0 * slack) / cell) + 1;
+  ny = static_cast<std::size_t>((box.y1 - box.y0 + 2.0 * slack) / cell) + 1;
   start.assign(nx * ny + 1, 0);
+  built_x.resize(n), built_y.resize(n);
+  for (std::size_t e = 0; e < edges.size(); e += 2)
+    built_x[e / 2] = nd.x[edges[e]], built_y[e / 2] = nd.y[edges[e]];
   auto span = [&](std::size_t e, auto visit) {
     const double ax = nd.x[edges[e]], ay = nd.y[edges[e]], bx = nd.x[edges[e + 1]],
                  by = nd.y[edges[e + 1]];
-    const std::size_t i0 = ix(std::min(ax, bx)), i1 = ix(std::max(ax, bx));
-    const std::size_t j0 = iy(std::min(ay, by)), j1 = iy(std::max(ay, by));
+    const std::size_t i0 = ix(std::min(ax, bx) - slack), i1 = ix(std::max(ax, bx) + slack);
+    const std::size_t j0 = iy(std::min(ay, by) - slack), j1 = iy(std::max(ay, by) + slack);
     for (std::size_t j = j0; j <= j1; ++j)
       for (std::size_t i = i0; i <= i1; ++i)
         visit(j * nx + i);
@@ -135,6 +142,7 @@ void DiskContact::EdgeGrid::build(const fem::Model &model, std::size_t body, con
   std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
   for (std::size_t e = 0; e < edges.size(); e += 2)
     span(e, [&](std::size_t c) { items[fill[c]++] = static_cast<std::uint32_t>(e); });
+  valid = true;
 }
 
 std::size_t DiskContact::EdgeGrid::ix(double x) const {
@@ -170,6 +178,7 @@ DiskContact::Region DiskContact::measure(const fem::Model &model, double reach) 
   // (a body at rest keeps its box: its nodes have not moved)
   const bool all = boxes_.size() != fe_bodies_.size();
   boxes_.resize(fe_bodies_.size());
+  grids_.resize(fe_bodies_.size());
   Region r{INFINITY, INFINITY, -INFINITY, -INFINITY};
   for (std::size_t k = 0; k < fe_bodies_.size(); ++k) {
     Box &box = boxes_[k];
@@ -180,6 +189,14 @@ DiskContact::Region DiskContact::measure(const fem::Model &model, double reach) 
         const std::uint32_t a = edges[e];
         box = {std::min(box.x0, nd.x[a]), std::min(box.y0, nd.y[a]), std::max(box.x1, nd.x[a]),
                std::max(box.y1, nd.y[a])};
+      }
+      EdgeGrid &grid = grids_[k];
+      if (grid.valid) { // does it still hold?
+        double moved2 = 0.0;
+        for (std::size_t e = 0; e < edges.size(); e += 2)
+          moved2 = std::max(moved2, sq(nd.x[edges[e]] - grid.built_x[e / 2]) +
+                                        sq(nd.y[edges[e]] - grid.built_y[e / 2]));
+        grid.valid = moved2 < grid.slack * grid.slack;
       }
     }
     r = {std::min(r.x0, box.x0 - reach), std::min(r.y0, box.y0 - reach),
@@ -276,14 +293,15 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
             continue;
           if (!binned) {
             binned = true;
-            if (n_edges > 64)
-              edges_.build(model, b, box, 2.0 * r_max);
-            else
+            if (n_edges > 64) {
+              if (!grids_[kb].valid)
+                grids_[kb].build(model, b, box, 2.0 * r_max);
+            } else
               for (std::uint32_t e = 0, j = 0; j < n_edges; ++j, e += 2)
                 j == 0 ? near_edges_.assign(1, e) : near_edges_.push_back(e);
           }
           if (n_edges > 64)
-            edges_.nearBox(cx - r, cy - r, cx + r, cy + r, near_edges_);
+            grids_[kb].nearBox(cx - r, cy - r, cx + r, cy + r, near_edges_);
           const Closest c = closest(model, b, cx, cy, r, near_edges_);
           const double found = r - c.distance; // c.distance < 0: the centre inside
           if (!(found > 0.0))

@@ -75,18 +75,22 @@ private:
   };
   Closest closest(const fem::Model &model, std::size_t body, double cx, double cy, double reach,
                   const std::vector<std::uint32_t> &near) const;
-  // A body's boundary segments in a grid of cells, rebuilt for each call: a disk looks at those
-  // in the cells it meets (the projectile has about a thousand).
+  // A body's boundary segments in a grid of cells: a disk looks at those in the cells it meets
+  // (the projectile has about a thousand). Each segment is in the cells its box widened by
+  // `slack` meets: the grid holds while no node of the body moved by `slack` since it was built
+  // (measure checks, from the positions then).
   struct EdgeGrid {
-    double x0 = 0, y0 = 0, cell = 1, inverse = 1;
+    double x0 = 0, y0 = 0, cell = 1, inverse = 1, slack = 0;
     std::size_t nx = 1, ny = 1;
     std::vector<std::uint32_t> start, items; // per cell: offsets into Body::boundary
+    std::vector<double> built_x, built_y;    // per segment: its first node when built
+    bool valid = false;
     void build(const fem::Model &model, std::size_t body, const Box &box, double cell_size);
     std::size_t ix(double x) const;
     std::size_t iy(double y) const;
     void nearBox(double xa, double ya, double xb, double yb, std::vector<std::uint32_t> &out) const;
   };
-  EdgeGrid edges_;
+  std::vector<EdgeGrid> grids_;                // per FE body with many segments
   std::vector<std::uint32_t> near_edges_;
   DiskContactSettings s_;
   std::vector<double> size_;                   // per body: longest boundary edge [m]

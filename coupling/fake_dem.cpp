@@ -22,6 +22,13 @@ FakeDem::FakeDem(Particles particles, FakeDemSettings settings)
     p_.fy[i] = -p_.mass[i] * s_.gravity;
 }
 
+double FakeDem::largestRadius() const {
+  double largest = 0.0;
+  for (double r : p_.radius)
+    largest = std::max(largest, r);
+  return largest;
+}
+
 double FakeDem::stableStep() const {
   const auto lightest = std::min_element(p_.mass.begin(), p_.mass.end());
   return contactStep(lightest == p_.mass.end() ? 0.0 : *lightest, s_.stiffness);
@@ -98,7 +105,7 @@ void FakeDem::advance(double dt, const Exchange &exchange) {
 // (half kick with f(n), drift, own forces, half kick) ends as DemParticipant::endWindow says.
 void FakeDem::endWindow(double length, double planned, const WindowMotion &m) {
   const double shift = 0.5 * length * (planned - length);
-  for (std::size_t i = 0; i < p_.size(); ++i) {
+  for (const std::uint32_t i : m.moved) {
     p_.vx[i] += m.dvx[i], p_.vy[i] += m.dvy[i], p_.omega[i] += m.domega[i];
     p_.x[i] += m.dx[i] - length * m.dvx[i] + shift * p_.fx[i] / p_.mass[i];
     p_.y[i] += m.dy[i] - length * m.dvy[i] + shift * p_.fy[i] / p_.mass[i];

@@ -24,6 +24,7 @@ public:
   FakeDem(Particles particles, FakeDemSettings settings);
   const Particles &particles() const override { return p_; }
   double stableStep() const override;
+  double largestRadius() const override;
   void advance(double dt, const Exchange &exchange) override;
   void endWindow(double length, double planned, const WindowMotion &motion) override;
 

@@ -6,6 +6,7 @@
 #include "lammps.h"
 #include "library.h"
 #include "modify.h"
+#include "neighbor.h"
 #include "integrate.h"
 #include "update.h"
 
@@ -139,19 +140,35 @@ double LiggghtsDem::stableStep() const {
   return contactStep(std::isfinite(lightest) ? lightest : 0.0, kn_);
 }
 
+// The atoms' order and number change only where LIGGGHTS rebuilds its neighbour lists (it
+// exchanges atoms between ranks and sorts them there): the disks' radii, masses and ids are read
+// again only then.
+double LiggghtsDem::largestRadius() const {
+  double largest = 0.0;
+  for (double r : p_.radius)
+    largest = std::max(largest, r);
+  MPI_Allreduce(MPI_IN_PLACE, &largest, 1, MPI_DOUBLE, MPI_MAX, comm_);
+  return largest;
+}
+
 void LiggghtsDem::read() {
-  LAMMPS_NS::Atom *atom = lammps(lmp_)->atom;
+  LAMMPS_NS::LAMMPS *lmp = lammps(lmp_);
+  const LAMMPS_NS::Atom *atom = lmp->atom;
   const auto n = static_cast<std::size_t>(atom->nlocal);
-  for (auto *v : {&p_.x, &p_.y, &p_.vx, &p_.vy, &p_.omega, &p_.radius, &p_.mass, &p_.fx, &p_.fy,
-                  &p_.torque})
-    v->resize(n);
-  p_.id.resize(n);
+  if (lmp->neighbor->lastcall != listed_at_ || n != p_.size()) {
+    for (auto *v : {&p_.x, &p_.y, &p_.vx, &p_.vy, &p_.omega, &p_.radius, &p_.mass, &p_.fx, &p_.fy,
+                    &p_.torque})
+      v->resize(n);
+    p_.id.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      p_.radius[i] = atom->radius[i], p_.mass[i] = atom->rmass[i], p_.id[i] = atom->tag[i];
+    listed_at_ = lmp->neighbor->lastcall;
+    ++layout_;
+  }
   for (std::size_t i = 0; i < n; ++i) {
     p_.x[i] = atom->x[i][0], p_.y[i] = atom->x[i][1];
     p_.vx[i] = atom->v[i][0], p_.vy[i] = atom->v[i][1], p_.omega[i] = atom->omega[i][2];
-    p_.radius[i] = atom->radius[i], p_.mass[i] = atom->rmass[i];
     p_.fx[i] = atom->f[i][0], p_.fy[i] = atom->f[i][1], p_.torque[i] = atom->torque[i][2];
-    p_.id[i] = atom->tag[i];
   }
 }
 
@@ -228,7 +245,7 @@ void LiggghtsDem::endWindow(double length, double planned, const WindowMotion &m
   const auto start = std::chrono::steady_clock::now();
   LAMMPS_NS::Atom *atom = lammps(lmp_)->atom;
   const double shift = 0.5 * length * (planned - length);
-  for (std::size_t i = 0; i < p_.size(); ++i) {
+  for (const std::uint32_t i : m.moved) {
     atom->v[i][0] += m.dvx[i], atom->v[i][1] += m.dvy[i], atom->omega[i][2] += m.domega[i];
     atom->x[i][0] += m.dx[i] - length * m.dvx[i] + shift * atom->f[i][0] / atom->rmass[i];
     atom->x[i][1] += m.dy[i] - length * m.dvy[i] + shift * atom->f[i][1] / atom->rmass[i];

@@ -59,8 +59,10 @@ public:
   LiggghtsDem &operator=(const LiggghtsDem &) = delete;
   const Particles &particles() const override { return p_; }
   double stableStep() const override;
+  double largestRadius() const override;
   void advance(double dt, const Exchange &exchange) override;
   void endWindow(double length, double planned, const WindowMotion &motion) override;
+  std::uint64_t layout() const override { return layout_; }
   void gatherReactions(std::vector<Reaction> &reactions) const override;
   void gatherDiskForces(std::vector<DiskForce> &forces) const override;
   using DemParticipant::gatherParticles;
@@ -85,6 +87,8 @@ private:
   std::int64_t exchange_step_ = 0;     // LIGGGHTS's step number of the window's step
   double dt_ = 0.0, kn_ = 0.0;
   double window_seconds_ = 0.0, exchange_seconds_ = 0.0;
+  std::int64_t listed_at_ = -1; // LIGGGHTS's step of the neighbour lists p_'s order was read at
+  std::uint64_t layout_ = 0;
 };
 
 } // namespace mesopen::coupling
