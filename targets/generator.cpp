@@ -29,7 +29,8 @@ Sites window(const Sites &s, double w, double h) {
 
 } // namespace
 
-double calibrateVoidFactor(const Sites &placed, const TargetSpec &spec, GeneratorReport &report) {
+double calibrateVoidFactor(const Sites &placed, const TargetSpec &spec, GeneratorReport &report,
+                           std::vector<Tessellated> *trials) {
   TargetSpec trial = spec;
   Sites sites = placed;
   const double limit = 20000.0;
@@ -37,14 +38,16 @@ double calibrateVoidFactor(const Sites &placed, const TargetSpec &spec, Generato
     const double shrink = std::sqrt(limit / placed.grains);
     trial.width = spec.width * shrink, trial.height = spec.height * shrink;
     sites = window(placed, trial.width, trial.height);
+    trials = nullptr; // a window's tessellations are not the target's
   }
   auto porosity = [&](double factor) {
-    Sites copy = sites;
-    std::vector<std::uint32_t> grain_site;
-    TessellationReport ignored;
+    Tessellated t{factor, sites, {}, {}, {}};
+    t.grains = tessellate(t.sites, trial, factor, t.grain_site, t.report);
     double solid = 0.0;
-    for (double a : grainFigures(tessellate(copy, trial, factor, grain_site, ignored)).area)
+    for (double a : grainFigures(t.grains).area)
       solid += a;
+    if (trials)
+      trials->push_back(std::move(t));
     const double p = 1.0 - solid / trial.area();
     report.trial_factor.push_back(factor);
     report.trial_porosity.push_back(p);
@@ -107,12 +110,21 @@ Target generateTarget(const TargetSpec &spec, GeneratorReport &report,
   say("porosity control");
 
   t0 = std::chrono::steady_clock::now();
-  report.void_factor = spec.calibrate_porosity ? calibrateVoidFactor(t.sites, spec, report) : 1.0;
+  std::vector<Tessellated> trials;
+  report.void_factor =
+      spec.calibrate_porosity ? calibrateVoidFactor(t.sites, spec, report, &trials) : 1.0;
   report.seconds_calibration = since(t0);
 
   say("tessellation");
   t0 = std::chrono::steady_clock::now();
-  t.grains = tessellate(t.sites, spec, report.void_factor, t.grain_site, report.tessellation);
+  const auto found = std::find_if(trials.begin(), trials.end(), [&](const Tessellated &trial) {
+    return trial.void_factor == report.void_factor;
+  });
+  if (found != trials.end()) { // the calibration's trial with the factor found
+    t.sites = std::move(found->sites), t.grains = std::move(found->grains);
+    t.grain_site = std::move(found->grain_site), report.tessellation = std::move(found->report);
+  } else
+    t.grains = tessellate(t.sites, spec, report.void_factor, t.grain_site, report.tessellation);
   report.seconds_tessellation = since(t0);
 
   if (spec.mesh != MeshKind::none)

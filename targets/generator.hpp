@@ -26,7 +26,17 @@ struct GeneratorReport {
 // tessellation. With calibrate_porosity the tessellation scales the void radii by a factor found
 // by safeguarded secant steps so that the porosity matches the request: on the placed sites
 // themselves, or for more than 20,000 grains on a corner window of them holding about 20,000.
-double calibrateVoidFactor(const Sites &placed, const TargetSpec &spec, GeneratorReport &report);
+// On the placed sites themselves, each trial's tessellation is appended to `trials` if given (the
+// one with the factor found is the target's: it need not be made again).
+struct Tessellated {
+  double void_factor = 1.0;
+  Sites sites; // as the tessellation left them
+  Polygons grains;
+  std::vector<std::uint32_t> grain_site;
+  TessellationReport report;
+};
+double calibrateVoidFactor(const Sites &placed, const TargetSpec &spec, GeneratorReport &report,
+                           std::vector<Tessellated> *trials = nullptr);
 
 // Make the target the spec asks for. Deterministic: the same spec gives the same target for any
 // number of threads.
