@@ -71,7 +71,9 @@ void clearOutput(const Scene &scene, const std::string &dir) {
 }
 
 // Which grains are meshed: every one (fe), none (dem), or those whose centroids lie within the
-// band around the projectile's axis (hybrid).
+// band around the projectile's path (hybrid): within band_half_width of its axis, from the surface
+// down to band_depth below its tip (by default the depth the run ends at, plus the half-width:
+// deeper grains carry the waves as disks do, and the projectile does not reach them).
 std::vector<char> meshedGrains(const Scene &scene, const Target &target, const PlacedProjectile &p) {
   const std::size_t n = target.grains.size();
   switch (scene.run.representation) {
@@ -83,10 +85,15 @@ std::vector<char> meshedGrains(const Scene &scene, const Target &target, const P
     break;
   }
   const double half = scene.run.band_half_width > 0.0 ? scene.run.band_half_width : p.shape.diameter;
+  const double depth = scene.run.band_depth > 0.0 ? scene.run.band_depth
+                       : scene.run.end_depth > 0.0
+                           ? scene.run.end_depth * scene.projectile.length + half
+                           : HUGE_VAL;
+  const double bottom = *std::min_element(p.mesh.y.begin(), p.mesh.y.end()) - depth;
   const GrainFigures f = grainFigures(target.grains);
   std::vector<char> meshed(n);
   for (std::size_t g = 0; g < n; ++g)
-    meshed[g] = std::abs(f.centroid_x[g] - p.offset_x) <= half;
+    meshed[g] = std::abs(f.centroid_x[g] - p.offset_x) <= half && f.centroid_y[g] >= bottom;
   return meshed;
 }
 

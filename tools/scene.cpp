@@ -231,6 +231,9 @@ const std::vector<Key> &keys() {
         real("run", "band_half_width", r, &R::band_half_width, "m", 0, false, 10,
              "hybrid: grains whose centres lie within this distance of the projectile's axis are "
              "meshed; 0: one projectile diameter"),
+        real("run", "band_depth", r, &R::band_depth, "m", 0, false, 10,
+             "hybrid: the meshed grains' centres lie no deeper than this below the projectile's tip at "
+             "the start; 0: run.end_depth's depth plus band_half_width (no limit without end_depth)"),
         real("run", "end_time", r, &R::end_time, "s", 0, true, 1, "simulated time"),
         real("run", "velocity", r, &R::velocity, "m/s", 0, false, 1e4,
              "projectile's initial speed, downward (thesis: 500-1500)"),

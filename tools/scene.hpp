@@ -28,6 +28,8 @@ struct RunSpec {
   Representation representation = Representation::fe;
   double band_half_width = 0.0;    // hybrid: meshed grains' centres within this of the axis [m];
                                    // 0: one projectile diameter
+  double band_depth = 0.0;         // hybrid: and no deeper than this below the tip at the start
+                                   // [m]; 0: the end depth plus band_half_width
   double end_time = 1e-6;          // simulated time [s]
   double velocity = 1000.0;        // projectile's initial speed, downward [m/s]
   double spin = 0.0;               // projectile's initial spin about its centre of mass [rad/s]

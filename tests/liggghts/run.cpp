@@ -5,8 +5,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 using namespace mesopen;
 using test::ScratchDir;
@@ -40,4 +42,29 @@ TEST(LiggghtsRun, TinyHybridRunWritesItsFiles) {
   for (const char *frame : {"000000", "000001"})
     EXPECT_EQ(h5.read<double>(std::string("/frames/") + frame + "/disks/radius").size(),
               s["dem"]["disks"].get<std::size_t>());
+}
+
+// The band of meshed grains reaches band_depth below the projectile's tip and no deeper (grains
+// whose centres lie deeper are disks); without it and without an end depth, the whole target's
+// height. The tiny target is 0.3 mm high, its grains 60 um: with band_depth = 0.1 mm no node of a
+// meshed grain lies deeper than 0.1 mm plus a grain diameter below the tip, and without the limit
+// some do.
+TEST(LiggghtsRun, HybridBandEndsAtItsDepth) {
+  auto deepest = [](const std::string &band) {
+    ScratchDir dir("run-hybrid-band");
+    const auto r = test::runScene(dir, test::tinyScene("representation = \"hybrid\"\n"
+                                                       "frame_interval = 0\nmax_steps = 1\n" +
+                                                       band));
+    EXPECT_EQ(r.code, 0) << r.output;
+    const H5File h5 = H5File::open(dir / "out/run.h5");
+    const auto y = h5.read<double>("/mesh/y");
+    const auto body = h5.read<std::uint32_t>("/mesh/node_body");
+    double tip = HUGE_VAL, lowest = HUGE_VAL;
+    for (std::size_t a = 0; a < y.size(); ++a)
+      (body[a] == 0 ? tip : lowest) = std::min(body[a] == 0 ? tip : lowest, y[a]);
+    return tip - lowest; // how deep below the tip the meshed grains reach
+  };
+  const double limited = deepest("band_depth = 0.1e-3\n"), whole = deepest("");
+  EXPECT_LT(limited, 0.1e-3 + 60e-6);
+  EXPECT_GT(whole, limited + 60e-6);
 }
