@@ -49,8 +49,28 @@ void appendInPieces(std::vector<R> &ranges, std::size_t first, R piece, std::siz
 // elasticity over the longitudinal modulus M = K + 4G/3, g = G / M in [0, 3/4]:
 //   S = [P 0 R; 0 Q R; R R P+Q],  Dhat = [1 1-2g 0; 1-2g 1 0; 0 0 g] = L L^T,
 //   L = [1 0 0; 1-2g s 0; 0 0 sqrt g],  s = 2 sqrt(g (1 - g)),
+// The largest root y of y^3 - 3y = 2c, c in [-1, 1]: y = 2 cos(acos(c) / 3), in [1, 2] (the
+// trigonometric solution of a cubic with three real roots). Without acos and cos, a third of the
+// time: y is analytic in s = sqrt((1 + c) / 2), and a polynomial of degree 6 in s is within 9e-7
+// of it (least squares, Chebyshev basis); Newton steps from there end above the root (the cubic is
+// convex for y > 0) and close on it quadratically. Where two roots nearly meet (c near -1) Newton
+// is slow, and the trigonometric form is taken.
+double largestCubicRoot(double c) {
+  const double s = std::sqrt(std::max(0.5 * (1.0 + c), 0.0));
+  double y = 1.00000087 +
+             s * (1.15465022 + s * (-0.22151017 + s * (0.102632071 + s * (-0.0523143943 +
+                                                   s * (0.0206477273 + s * -0.00410657997)))));
+  for (int k = 0; k < 3; ++k) {
+    const double step = (y * (y * y - 3.0) - 2.0 * c) / (3.0 * (y * y - 1.0));
+    y -= step;
+    if (std::abs(step) < 1e-9) // what is left is about step^2 / (y - 1)
+      return y;
+  }
+  return 2.0 * std::cos(std::acos(c) / 3.0);
+}
+
 // S Dhat is similar to the symmetric T = L^T S L (its eigenvalues by the trigonometric solution of
-// the cubic). g = 0 is the rank-one limit u u^T, u = (1, 1, 0): P + Q.
+// the cubic, largestCubicRoot). g = 0 is the rank-one limit u u^T, u = (1, 1, 0): P + Q.
 double shapeStiffness(double P, double Q, double R, double g) {
   const double d = 1.0 - 2.0 * g, s = 2.0 * std::sqrt(g * (1.0 - g)), r = std::sqrt(g);
   const double t00 = P + d * d * Q, t01 = s * d * Q, t02 = r * (1.0 + d) * R;
@@ -63,7 +83,7 @@ double shapeStiffness(double P, double Q, double R, double g) {
                  b22 = (t22 - q) / p, b01 = t01 / p, b02 = t02 / p, b12 = t12 / p;
     const double det = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) +
                               b02 * (b01 * b12 - b11 * b02));
-    largest = q + 2.0 * p * std::cos(std::acos(std::clamp(det, -1.0, 1.0)) / 3.0);
+    largest = q + p * largestCubicRoot(std::clamp(det, -1.0, 1.0));
   }
   return std::max(largest, g == 0.0 ? P + Q : 0.0);
 }

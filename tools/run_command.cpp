@@ -84,7 +84,10 @@ std::vector<char> meshedGrains(const Scene &scene, const Target &target, const P
   case Representation::hybrid:
     break;
   }
-  const double half = scene.run.band_half_width > 0.0 ? scene.run.band_half_width : p.shape.diameter;
+  // By default one and a half projectile diameters: the narrowest band of those measured whose run 6
+  // stays within the fully meshed runs' seed-to-seed range on every measure (docs/coupling.md)
+  const double half =
+      scene.run.band_half_width > 0.0 ? scene.run.band_half_width : 1.5 * p.shape.diameter;
   const double depth = scene.run.band_depth > 0.0 ? scene.run.band_depth
                        : scene.run.end_depth > 0.0
                            ? scene.run.end_depth * scene.projectile.length + half

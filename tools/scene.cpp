@@ -230,7 +230,7 @@ const std::vector<Key> &keys() {
                "around the projectile's path and disks beyond (hybrid)"),
         real("run", "band_half_width", r, &R::band_half_width, "m", 0, false, 10,
              "hybrid: grains whose centres lie within this distance of the projectile's axis are "
-             "meshed; 0: one projectile diameter"),
+             "meshed; 0: one and a half projectile diameters"),
         real("run", "band_depth", r, &R::band_depth, "m", 0, false, 10,
              "hybrid: the meshed grains' centres lie no deeper than this below the projectile's tip at "
              "the start; 0: run.end_depth's depth plus band_half_width (no limit without end_depth)"),

@@ -27,7 +27,7 @@ inline constexpr Named<Representation> representation_names[] = {
 struct RunSpec {
   Representation representation = Representation::fe;
   double band_half_width = 0.0;    // hybrid: meshed grains' centres within this of the axis [m];
-                                   // 0: one projectile diameter
+                                   // 0: one and a half projectile diameters
   double band_depth = 0.0;         // hybrid: and no deeper than this below the tip at the start
                                    // [m]; 0: the end depth plus band_half_width
   double end_time = 1e-6;          // simulated time [s]
