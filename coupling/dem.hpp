@@ -95,7 +95,7 @@ public:
   virtual void endWindow(double length, double planned, const WindowMotion &motion) = 0;
   // A number that changes whenever the particles' order or number in particles() may have changed
   // (LIGGGHTS sorts and exchanges atoms when it rebuilds its neighbour lists); what is kept per
-  // place (the largest radius, places by id) is taken anew then.
+  // place (the disks' places by id) is taken anew then.
   virtual std::uint64_t layout() const { return 0; }
   // Over MPI ranks each holding part of the disks, the reactions of every rank's disks, in rank
   // order, so that every rank loads its copy of the FE nodes alike (one rank: as they are).

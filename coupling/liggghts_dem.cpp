@@ -140,9 +140,6 @@ double LiggghtsDem::stableStep() const {
   return contactStep(std::isfinite(lightest) ? lightest : 0.0, kn_);
 }
 
-// The atoms' order and number change only where LIGGGHTS rebuilds its neighbour lists (it
-// exchanges atoms between ranks and sorts them there): the disks' radii, masses and ids are read
-// again only then.
 double LiggghtsDem::largestRadius() const {
   double largest = 0.0;
   for (double r : p_.radius)
@@ -151,6 +148,9 @@ double LiggghtsDem::largestRadius() const {
   return largest;
 }
 
+// The atoms' order and number change only where LIGGGHTS rebuilds its neighbour lists (it
+// exchanges atoms between ranks and sorts them there): the disks' radii, masses and ids are read
+// again only then.
 void LiggghtsDem::read() {
   LAMMPS_NS::LAMMPS *lmp = lammps(lmp_);
   const LAMMPS_NS::Atom *atom = lmp->atom;

@@ -44,11 +44,6 @@ void appendInPieces(std::vector<R> &ranges, std::size_t first, R piece, std::siz
   }
 }
 
-// The largest eigenvalue of S Dhat(g) for a constant-strain triangle: S = B B^T from the shape
-// function gradients (gx, gy over 2A, engineering shear), Dhat(g) = C / M the plane-strain
-// elasticity over the longitudinal modulus M = K + 4G/3, g = G / M in [0, 3/4]:
-//   S = [P 0 R; 0 Q R; R R P+Q],  Dhat = [1 1-2g 0; 1-2g 1 0; 0 0 g] = L L^T,
-//   L = [1 0 0; 1-2g s 0; 0 0 sqrt g],  s = 2 sqrt(g (1 - g)),
 // The largest root y of y^3 - 3y = 2c, c in [-1, 1]: y = 2 cos(acos(c) / 3), in [1, 2] (the
 // trigonometric solution of a cubic with three real roots). Without acos and cos, a third of the
 // time: y is analytic in s = sqrt((1 + c) / 2), and a polynomial of degree 6 in s is within 9e-7
@@ -69,6 +64,11 @@ double largestCubicRoot(double c) {
   return 2.0 * std::cos(std::acos(c) / 3.0);
 }
 
+// The largest eigenvalue of S Dhat(g) for a constant-strain triangle: S = B B^T from the shape
+// function gradients (gx, gy over 2A, engineering shear), Dhat(g) = C / M the plane-strain
+// elasticity over the longitudinal modulus M = K + 4G/3, g = G / M in [0, 3/4]:
+//   S = [P 0 R; 0 Q R; R R P+Q],  Dhat = [1 1-2g 0; 1-2g 1 0; 0 0 g] = L L^T,
+//   L = [1 0 0; 1-2g s 0; 0 0 sqrt g],  s = 2 sqrt(g (1 - g)),
 // S Dhat is similar to the symmetric T = L^T S L (its eigenvalues by the trigonometric solution of
 // the cubic, largestCubicRoot). g = 0 is the rank-one limit u u^T, u = (1, 1, 0): P + Q.
 double shapeStiffness(double P, double Q, double R, double g) {
