@@ -5,10 +5,13 @@ baseline-hybrid.toml without frames (resumable: a finished run of the same scene
 kept), `mesopen analyze` on each, then prints and writes a table (Markdown and JSON) of wall time
 and the instability measures (mean, standard deviation and range over the seeds), the speed-ups
 over fe, whether each representation's mean lies within fe's seed-to-seed range, and one plot of
-the rotational momentum and lateral displacement histories.
+the rotational momentum and lateral displacement histories. With --bands, also the hybrid target
+with each of those band half-widths (run.band_half_width, m), and a table of the band's width
+against its speed and its agreement with fe (bands.md, bands.json).
 
     python3 tools/bench/compare_representations.py [--mesopen build/bin/mesopen]
         [--out build/compare] [--seeds 5] [--threads 2] [--docs docs/figures]
+        [--bands 0.25e-3,0.44e-3,0.66e-3]
 """
 import argparse
 import json
@@ -32,8 +35,9 @@ MEASURES = [  # instability.json key, label, unit scale, unit
 ]
 
 
-def run_one(args, representation, seed):
-    out = os.path.join(args.out, f"{representation}-seed{seed}")
+def run_one(args, representation, seed, band=None):
+    name = representation if band is None else f"{representation}-band{band}"
+    out = os.path.join(args.out, f"{name}-seed{seed}")
     summary = os.path.join(out, "summary.json")
     scene_path = os.path.join(ROOT, "examples", SCENES[representation])
     if os.path.exists(summary):
@@ -43,10 +47,13 @@ def run_one(args, representation, seed):
                 os.path.exists(os.path.join(out, "instability.json")):
             return out
     os.makedirs(args.out, exist_ok=True)
-    scene = os.path.join(args.out, f"{representation}.toml")
+    scene = os.path.join(args.out, f"{name}.toml")
     with open(scene_path) as f, open(scene, "w") as g:
-        g.write(without_frames(f.read()))
-    print(f"  {representation} seed {seed} ...", flush=True)
+        text = without_frames(f.read())
+        if band is not None:
+            text = text.replace("[run]\n", f"[run]\nband_half_width = {band}\n", 1)
+        g.write(text)
+    print(f"  {name} seed {seed} ...", flush=True)
     subprocess.run([args.mesopen, "run", scene, "-o", out, "--seed", str(seed), "--threads",
                     str(args.threads), "--quiet"], check=True, stdout=subprocess.DEVNULL)
     subprocess.run([args.mesopen, "analyze", out, "--no-plot"], check=True,
@@ -67,7 +74,10 @@ def main():
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--docs", default=None, help="also write the table and plot here")
+    ap.add_argument("--bands", default="",
+                    help="hybrid band half-widths [m], comma-separated, for the table of bands")
     args = ap.parse_args()
+    bands = [float(b) for b in args.bands.split(",") if b.strip()]
 
     runs = {r: [run_one(args, r, seed) for seed in range(1, args.seeds + 1)] for r in SCENES}
     result = {"seeds": args.seeds, "threads": args.threads, "representations": {}}
@@ -122,6 +132,53 @@ def main():
             f.write(table + "\n")
     plot(runs, [os.path.join(t, "representations.png") for t in targets])
     print("written: " + ", ".join(os.path.join(t, "representations.{md,json,png}") for t in targets))
+    if bands:
+        band_table(args, bands, fe, targets)
+
+
+def band_table(args, bands, fe, targets):
+    """The hybrid target with each band half-width: its size, time, speed-up over fe's mean, and
+    how many of the measures' means lie within fe's seed-to-seed range."""
+    rows = []
+    for band in bands:
+        dirs = [run_one(args, "hybrid", seed, band) for seed in range(1, args.seeds + 1)]
+        summaries, measures = [], []
+        for d in dirs:
+            with open(os.path.join(d, "summary.json")) as f:
+                summaries.append(json.load(f))
+            with open(os.path.join(d, "instability.json")) as f:
+                measures.append(json.load(f))
+        wall = describe([s["wall_seconds"] for s in summaries])
+        row = {"band_half_width": band, "elements": summaries[0]["model"]["elements"],
+               "wall_seconds": wall, "speedup_over_fe": fe["wall_seconds"]["mean"] / wall["mean"]}
+        for key, _, _, _ in MEASURES:
+            row[key] = describe([m[key] for m in measures])
+        row["within_fe_range"] = {key: fe[key]["min"] <= row[key]["mean"] <= fe[key]["max"]
+                                  for key, _, _, _ in MEASURES}
+        rows.append(row)
+    lines = [f"hybrid run 6 by band half-width, {args.seeds} target seeds each, {args.threads} "
+             f"threads; fe's time to one length {fe['duration']['mean'] * 1e6:.4g} us "
+             f"[{fe['duration']['min'] * 1e6:.4g}, {fe['duration']['max'] * 1e6:.4g}], lateral "
+             "displacement by seed " + ", ".join(f"{v * 1e6:.1f}" for v in
+                                                  fe["lateral_displacement"]["values"]) + " um",
+             "", "| half-width [mm] | elements | wall time [s] | speed-up over fe | time to one length "
+             "[us] | measures within fe's range | lateral displacement by seed [um] |",
+             "|---|---|---|---|---|---|---|"]
+    for row in rows:
+        inside = sum(row["within_fe_range"].values())
+        lines.append(
+            f"| {row['band_half_width'] * 1e3:.3g} | {row['elements']:,} | "
+            f"{row['wall_seconds']['mean']:.3g} | {row['speedup_over_fe']:.1f}x | "
+            f"{row['duration']['mean'] * 1e6:.4g} | {inside} of {len(MEASURES)} | " +
+            ", ".join(f"{v * 1e6:.1f}" for v in row["lateral_displacement"]["values"]) + " |")
+    table = "\n".join(lines)
+    print(table)
+    for t in targets:
+        with open(os.path.join(t, "bands.json"), "w") as f:
+            json.dump({"seeds": args.seeds, "threads": args.threads, "bands": rows}, f, indent=1)
+        with open(os.path.join(t, "bands.md"), "w") as f:
+            f.write(table + "\n")
+    print("written: " + ", ".join(os.path.join(t, "bands.{md,json}") for t in targets))
 
 
 def plot(runs, paths):
