@@ -61,6 +61,17 @@ def run_one(args, representation, seed, band=None):
     return out
 
 
+def read_runs(dirs):
+    """Each run's summary.json and instability.json."""
+    summaries, measures = [], []
+    for d in dirs:
+        with open(os.path.join(d, "summary.json")) as f:
+            summaries.append(json.load(f))
+        with open(os.path.join(d, "instability.json")) as f:
+            measures.append(json.load(f))
+    return summaries, measures
+
+
 def describe(values):
     return {"mean": statistics.mean(values),
             "std": statistics.stdev(values) if len(values) > 1 else 0.0,
@@ -82,12 +93,7 @@ def main():
     runs = {r: [run_one(args, r, seed) for seed in range(1, args.seeds + 1)] for r in SCENES}
     result = {"seeds": args.seeds, "threads": args.threads, "representations": {}}
     for r, dirs in runs.items():
-        summaries, measures = [], []
-        for d in dirs:
-            with open(os.path.join(d, "summary.json")) as f:
-                summaries.append(json.load(f))
-            with open(os.path.join(d, "instability.json")) as f:
-                measures.append(json.load(f))
+        summaries, measures = read_runs(dirs)
         entry = {"wall_seconds": describe([s["wall_seconds"] for s in summaries]),
                  "steps": describe([s["steps"] for s in summaries]),
                  "elements": summaries[0]["model"]["elements"],
@@ -142,12 +148,7 @@ def band_table(args, bands, fe, targets):
     rows = []
     for band in bands:
         dirs = [run_one(args, "hybrid", seed, band) for seed in range(1, args.seeds + 1)]
-        summaries, measures = [], []
-        for d in dirs:
-            with open(os.path.join(d, "summary.json")) as f:
-                summaries.append(json.load(f))
-            with open(os.path.join(d, "instability.json")) as f:
-                measures.append(json.load(f))
+        summaries, measures = read_runs(dirs)
         wall = describe([s["wall_seconds"] for s in summaries])
         row = {"band_half_width": band, "elements": summaries[0]["model"]["elements"],
                "wall_seconds": wall, "speedup_over_fe": fe["wall_seconds"]["mean"] / wall["mean"]}
