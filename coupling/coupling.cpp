@@ -36,12 +36,12 @@ void FeDemCoupling::startWindow(double dt) {
       v->assign(n, 0.0);
     is_near_.assign(n, 0);
   } else
-    for (const std::uint32_t i : near_) {
+    for (const std::uint32_t i : motion_.moved) {
       for (auto *v : motion)
         (*v)[i] = 0.0;
       is_near_[i] = 0;
     }
-  near_.clear();
+  motion_.moved.clear();
   fast_.reset(0);
   if (dem_.layout() != layout_ || !listed_) {
     // the disks' places by id (ids run from 1 to about the number of disks)
@@ -61,7 +61,7 @@ void FeDemCoupling::startWindow(double dt) {
       if (at < 0 || static_cast<std::size_t>(at) >= n || p.id[at] != f.id)
         continue; // another rank's (the entry is a disk's place when it was here)
       const auto i = static_cast<std::size_t>(at);
-      near_.push_back(static_cast<std::uint32_t>(i));
+      motion_.moved.push_back(static_cast<std::uint32_t>(i));
       is_near_[i] = 1;
       fast_.fx.push_back(f.fx), fast_.fy.push_back(f.fy), fast_.torque.push_back(f.torque);
     }
@@ -99,7 +99,7 @@ void FeDemCoupling::choose(const fem::Model &model, const DiskContact::Region &n
   for (std::size_t i = 0; i < n; ++i) {
     if (!meets_[i] || is_near_[i])
       continue;
-    near_.push_back(static_cast<std::uint32_t>(i));
+    motion_.moved.push_back(static_cast<std::uint32_t>(i));
     is_near_[i] = 1;
     fast_.fx.push_back(0.0), fast_.fy.push_back(0.0), fast_.torque.push_back(0.0);
   }
@@ -114,13 +114,14 @@ void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
   WindowMotion &m = motion_;
   // The near disks under the FE bodies' forces of the last step: half kick, drift.
   auto kick = [&](std::size_t c, double half_dt) {
-    const std::uint32_t i = near_[c];
+    const std::uint32_t i = m.moved[c];
     m.dvx[i] += half_dt * fast_.fx[c] / p.mass[i], m.dvy[i] += half_dt * fast_.fy[c] / p.mass[i];
     m.domega[i] += half_dt * fast_.torque[c] / p.inertia(i);
   };
-  for (std::size_t c = 0; c < near_.size(); ++c) {
+  for (std::size_t c = 0; c < m.moved.size(); ++c) {
+    const std::uint32_t i = m.moved[c];
     kick(c, 0.5 * dt);
-    m.dx[near_[c]] += dt * m.dvx[near_[c]], m.dy[near_[c]] += dt * m.dvy[near_[c]];
+    m.dx[i] += dt * m.dvx[i], m.dy[i] += dt * m.dvy[i];
   }
   elapsed_ += dt;
   const DiskContact::Region now = contact_.measure(model, r_max_);
@@ -129,12 +130,12 @@ void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
     choose(model, now, dt);
   // Their state now (velocities at the step's middle, as the FE nodes'), the FE-DEM contact, and
   // the second half kick of its forces.
-  const std::size_t nc = near_.size();
+  const std::size_t nc = m.moved.size();
   for (auto *v : {&now_.x, &now_.y, &now_.vx, &now_.vy, &now_.omega, &now_.radius, &now_.mass})
     v->resize(nc);
   now_.id.resize(nc);
   for (std::size_t c = 0; c < nc; ++c) {
-    const std::uint32_t i = near_[c];
+    const std::uint32_t i = m.moved[c];
     const auto [vx, vy, spin] = slow(p, i);
     now_.x[c] = p.x[i] + elapsed_ * vx + m.dx[i], now_.y[c] = p.y[i] + elapsed_ * vy + m.dy[i];
     now_.vx[c] = vx + m.dvx[i], now_.vy[c] = vy + m.dvy[i];
@@ -159,11 +160,10 @@ void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
 void FeDemCoupling::endWindow() {
   const Particles &p = dem_.particles();
   carried_.clear();
-  for (std::size_t c = 0; c < near_.size(); ++c)
+  for (std::size_t c = 0; c < motion_.moved.size(); ++c)
     if (fast_.fx[c] != 0.0 || fast_.fy[c] != 0.0 || fast_.torque[c] != 0.0)
-      carried_.push_back({p.id[near_[c]], fast_.fx[c], fast_.fy[c], fast_.torque[c]});
+      carried_.push_back({p.id[motion_.moved[c]], fast_.fx[c], fast_.fy[c], fast_.torque[c]});
   data_[1].window = window_ + 1;
-  motion_.moved.assign(near_.begin(), near_.end());
   dem_.endWindow(elapsed_, length_, motion_);
   dem_.gatherDiskForces(carried_);
   ++window_;

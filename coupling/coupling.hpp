@@ -43,8 +43,7 @@ public:
   // window: the DEM participant's step [s]; 0: its stable step.
   FeDemCoupling(const fem::Model &model, DemParticipant &dem, DiskContactSettings settings,
                 double window = 0.0);
-  // One FE step within the window; ends the window if due. Throws fem::RunFailure if a declared
-  // exchange did not happen.
+  // One FE step within the window; ends the window if due.
   void addForces(fem::Model &model, double time, double dt) override;
   double stepStiffness() const override { return contact_.stepStiffness(); }
   void boundaryChanged(const fem::Model &model, const std::vector<std::uint32_t> &) override {
@@ -56,7 +55,7 @@ public:
   Particles disks() const;
   std::uint64_t windows() const { return window_; } // ended
   double window() const { return planned_; }
-  std::size_t nearDisks() const { return near_.size(); } // moved step by step in this window
+  std::size_t nearDisks() const { return motion_.moved.size(); } // moved step by step in this window
   double seconds() const { return seconds_; } // in the coupling: the FE-DEM contact, the DEM steps
   const std::vector<Data> &data() const { return data_; }
 
@@ -82,14 +81,13 @@ private:
   double seconds_ = 0.0;
   double r_max_ = 0.0;          // the largest disk, over all ranks
   DiskContact::Region allowed_{}; // where the FE bodies may go before the near disks are chosen anew
-  // The near disks (indices into the participant's particles), their motion beyond the slow path
-  // and the last FE-DEM forces on them, and their state now for the contact.
-  std::vector<std::uint32_t> near_;
+  // The near disks (motion_.moved: indices into the participant's particles), their motion beyond
+  // the slow path and the last FE-DEM forces on them, and their state now for the contact.
   std::vector<char> is_near_, meets_;
   std::vector<std::int64_t> place_; // per disk id: its index, -1 if not this rank's
   std::uint64_t layout_ = 0;        // the participant's layout place_ was taken at
   bool listed_ = false;
-  WindowMotion motion_;            // per disk (zero but for the near ones)
+  WindowMotion motion_;            // per disk (zero but for the near ones, which it lists)
   ParticleForces fast_;            // per near disk
   Particles now_;                  // per near disk
   std::vector<DiskForce> carried_; // the last forces of the window before, by disk id
