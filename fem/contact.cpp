@@ -21,6 +21,7 @@ constexpr double list_margin = 0.5;   // a pair's lists: margin / the smaller bo
 constexpr double search_margin = 1.0; // pairs of bodies: margin / the median element size
 constexpr std::size_t runs_per_thread = 4; // runs of pairs: a thread takes the next one free
 constexpr std::size_t owner_blocks = 16;   // blocks of bodies, each adding its nodes' forces
+constexpr std::size_t prefetch_ahead = 8;  // contacts and loads ahead whose nodes are fetched
 
 double sq(double x) { return x * x; }
 } // namespace
@@ -89,6 +90,7 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
   for (Hits &hits : run_hits_)
     hits.loads.resize(owner_blocks);
   arenas_.resize(runs);
+  scratch_.resize(static_cast<std::size_t>(omp_get_max_threads()));
   block_loaded_.resize(owner_blocks);
   block_pushed_.resize(owner_blocks);
   for (std::size_t b = 0; b < n_bodies; ++b)
@@ -117,6 +119,14 @@ void Contact::takeBoundaries(const Model &model) {
   points_.resize(nodes_.size());
   for (std::size_t k = 0; k < nodes_.size(); ++k)
     points_[k] = {nd.x[nodes_[k]], nd.y[nodes_[k]]};
+  // A vertex is the start of one segment and the end of one, unless the boundary touches itself
+  // there (erosion can leave two elements joined at a corner alone).
+  std::vector<std::uint8_t> starts(nodes_.size(), 0);
+  for (std::size_t k = 0; k < segment_ends_.size(); k += 2)
+    ++starts[segment_ends_[k]];
+  pinched_.resize(nodes_.size());
+  for (std::size_t k = 0; k < nodes_.size(); ++k)
+    pinched_[k] = starts[k] != 1;
 }
 
 // Erosion changed the boundaries of `bodies`: the lists, which hold indices into the boundaries,
@@ -211,13 +221,19 @@ void Contact::addForces(Model &model, double, double dt) {
   std::size_t refreshed = 0, overlapping = 0, skipped = 0, partial = 0;
 #pragma omp parallel if (pairs_.size() > 64) reduction(+ : refreshed, overlapping, skipped, partial)
   {
-    Scratch scratch;
+    Scratch &scratch = scratch_[omp_get_thread_num()];
 #pragma omp for schedule(dynamic, 1)
     for (long r = 0; r < runs; ++r) {
       std::vector<std::uint32_t> &arena = arenas_[r];
       Hits &hits = run_hits_[r];
       hits.clear();
       for (std::size_t i = run_pairs_[r]; i < run_pairs_[r + 1]; ++i) {
+        if (i + prefetch_ahead < run_pairs_[r + 1]) { // the lists of a pair ahead, scattered
+          const Pair &ahead = pairs_[i + prefetch_ahead];
+          __builtin_prefetch(&boxes_[ahead.b]);
+          __builtin_prefetch(arena.data() + ahead.begin);
+          __builtin_prefetch(arena.data() + ahead.begin + ahead.end[3]);
+        }
         Pair &pair = pairs_[i];
         if (!boxes_[pair.a].overlaps(boxes_[pair.b]))
           continue;
@@ -248,8 +264,12 @@ void Contact::addForces(Model &model, double, double dt) {
       }
       // The forces after the search: their nodes' masses and velocities, scattered in memory, are
       // then fetched many at once.
-      for (const Found &f : hits.found)
-        hit(model, f, dt, hits);
+      const std::size_t n_found = hits.found.size();
+      for (std::size_t i = 0; i < n_found; ++i) {
+        if (i + prefetch_ahead < n_found)
+          prefetchHit(model, hits.found[i + prefetch_ahead]);
+        hit(model, hits.found[i], dt, hits);
+      }
     }
   }
   stats_.refreshed += refreshed;
@@ -292,8 +312,14 @@ void Contact::addHits(Model &model) {
       pushed_[p] = 0.0;
     block_pushed_[k].clear();
     for (const Hits &hits : run_hits_)
-      for (const Load &l : hits.loads[k]) {
-        if (l.depth > pushed_[l.node]) {
+      for (std::size_t i = 0, n = hits.loads[k].size(); i < n; ++i) {
+        const Load &l = hits.loads[k][i];
+        if (i + prefetch_ahead < n) {
+          const std::uint32_t ahead = hits.loads[k][i + prefetch_ahead].node;
+          __builtin_prefetch(&nd.external[ahead], 1);
+          __builtin_prefetch(&nd.is_loaded[ahead], 1);
+        }
+        if (l.depth > 0.0 && l.depth > pushed_[l.node]) { // (a reaction is pushed at 0)
           if (pushed_[l.node] == 0.0)
             block_pushed_[k].push_back(l.node);
           pushed_[l.node] = l.depth;
@@ -711,7 +737,12 @@ Contact::At Contact::atVertex(const Near &near, Closest &c, double px, double py
   if (at_start ? c.along > tie * length : c.along < (1.0 - tie) * length)
     return At::segment;
   const std::uint32_t vertex = near.ends[2 * c.segment + (at_start ? 0 : 1)];
-  for (std::uint32_t j = 0; j < near.size; ++j) {
+  // The other segment at V: the one V ends (at_start) or starts, found where the lists keep it,
+  // next to c in the boundary's order, unless V is pinched (then the first of them, by a search).
+  const std::uint32_t beside = at_start ? c.segment - 1 : c.segment + 1;
+  const bool next_to = !pinched_[vertex] && beside < near.size && near.in(beside) &&
+                       near.ends[2 * beside + (at_start ? 1 : 0)] == vertex;
+  for (std::uint32_t j = next_to ? beside : 0; j < near.size; ++j) {
     if (j == c.segment || !near.in(j) || near.ends[2 * j + (at_start ? 1 : 0)] != vertex)
       continue;
     const Segment o = near[j];
@@ -769,6 +800,18 @@ void Contact::walls(const Model &model, double dt, Hits &hits) const {
               dt, hits);
     }
   }
+}
+
+// The nodal data a contact's force reads (scattered: one line per node and array), fetched ahead.
+void Contact::prefetchHit(const Model &model, const Found &f) const {
+  const Nodes &nd = model.nodes;
+  for (std::uint32_t k : {f.k, f.k1, f.k2}) {
+    if (k == no_node)
+      break;
+    const std::uint32_t p = nodes_[k];
+    __builtin_prefetch(&nd.mass[p]), __builtin_prefetch(&nd.vx[p]), __builtin_prefetch(&nd.vy[p]);
+  }
+  __builtin_prefetch(&pushed_[nodes_[f.k]]);
 }
 
 // The force of a contact (the first `touching` h of the depth is free), relative velocities at

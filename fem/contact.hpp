@@ -230,6 +230,7 @@ private:
   bool inside(std::size_t B, double px, double py) const;
   void walls(const Model &model, double dt, Hits &hits) const;
   void hit(const Model &model, const Found &f, double dt, Hits &hits) const;
+  void prefetchHit(const Model &model, const Found &f) const;
 
   ContactSettings s_;
   std::size_t n_materials_;
@@ -242,6 +243,7 @@ private:
   };
   std::vector<Point> points_;                           // per boundary node (as nodes_)
   std::vector<std::uint32_t> segment_ends_; // boundary edges (ccw), their nodes as indices into nodes_
+  std::vector<std::uint8_t> pinched_;       // per boundary node: not the start of exactly one edge
   std::vector<double> size_;                            // per body: longest boundary edge [m]
   std::vector<Box> boxes_;                              // per body, this step
   std::vector<double> travel_; // per body: sum over steps of its boundary nodes' largest move
@@ -258,6 +260,7 @@ private:
   std::vector<std::size_t> run_pairs_;
   std::vector<std::vector<std::uint32_t>> arenas_;
   std::vector<Hits> run_hits_;
+  std::vector<Scratch> scratch_; // per thread
   std::vector<std::uint8_t> block_;                      // per body: its block of bodies
   std::vector<std::vector<std::uint32_t>> block_loaded_; // per block of bodies: nodes it loaded
   std::vector<std::vector<std::uint32_t>> block_pushed_; // per block of bodies: nodes pushed_ holds
