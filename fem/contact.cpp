@@ -466,7 +466,7 @@ Contact::Closest Contact::closest(const Near &near, double px, double py, double
       const auto j = static_cast<std::uint32_t>(std::countr_zero(at));
       // beyond an end (Segment::foot's excess > 0)
       c = {static_cast<std::uint32_t>(base + j), d[j], g[j], t[j],
-           t[j] < 0.0 || t[j] > near.length[base + j]};
+           static_cast<bool>((t[j] < 0.0) | (t[j] > near.length[base + j]))};
     }
   }
   return c;
@@ -754,9 +754,11 @@ Contact::At Contact::atVertex(const Near &near, Closest &c, double px, double py
                               double &nx, double &ny, double &w2) const {
   constexpr double tie = 1e-9; // relative: at the end but for round-off
   const double length = near.length[c.segment];
-  const bool at_start = c.along < 0.5 * length;
-  if (at_start ? c.along > tie * length : c.along < (1.0 - tie) * length)
+  // (the foot inside the segment, away from both ends: no branch on which end is nearer, which
+  // would be taken at random)
+  if ((c.along > tie * length) & (c.along < (1.0 - tie) * length))
     return At::segment;
+  const bool at_start = c.along < 0.5 * length;
   const std::uint32_t vertex = near.ends[2 * c.segment + (at_start ? 0 : 1)];
   // The other segment at V: the one V ends (at_start) or starts, found where the lists keep it,
   // next to c in the boundary's order, unless V is pinched (then the first of them, by a search).
