@@ -182,7 +182,7 @@ DiskContact::Region DiskContact::measure(const fem::Model &model, double reach) 
   Region r{INFINITY, INFINITY, -INFINITY, -INFINITY};
   for (std::size_t k = 0; k < fe_bodies_.size(); ++k) {
     Box &box = boxes_[k];
-    if (all || !model.bodies[fe_bodies_[k]].at_rest) {
+    if (all || !model.at_rest[fe_bodies_[k]]) {
       const auto &edges = model.bodies[fe_bodies_[k]].boundary;
       box = {INFINITY, INFINITY, -INFINITY, -INFINITY};
       for (std::size_t e = 0; e < edges.size(); e += 2) {
@@ -211,7 +211,7 @@ double DiskContact::fastest(const fem::Model &model) const {
   const fem::Nodes &nd = model.nodes;
   double fastest2 = 0.0;
   for (const std::uint32_t b : fe_bodies_)
-    if (!model.bodies[b].at_rest) {
+    if (!model.at_rest[b]) {
       const auto &edges = model.bodies[b].boundary;
       for (std::size_t e = 0; e < edges.size(); e += 2)
         fastest2 = std::max(fastest2, nd.vx[edges[e]] * nd.vx[edges[e]] + nd.vy[edges[e]] * nd.vy[edges[e]]);

@@ -42,6 +42,8 @@ Contact::Box Contact::Box::overlap(const Box &o) const {
 
 Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(settings)) {
   n_materials_ = model.materials.size();
+  for (int wall = 0; wall < 2; ++wall) // c = 2 zeta sqrt(kappa), kappa doubled at a wall (see hit)
+    damping_[wall] = 2.0 * s_.damping * std::sqrt(wall ? 2.0 * s_.stiffness : s_.stiffness);
   if (s_.friction.size() == 1)
     s_.friction.assign(n_materials_ * n_materials_, s_.friction[0]);
   if (s_.friction.size() != n_materials_ * n_materials_)
@@ -86,7 +88,7 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
   // The bodies at rest now, in a grid that stays: a body at rest does not move.
   std::vector<std::uint32_t> resting;
   for (std::size_t b = 0; b < n_bodies; ++b)
-    if (model.bodies[b].at_rest && node_begin_[b] < node_begin_[b + 1])
+    if (model.at_rest[b] && node_begin_[b] < node_begin_[b + 1])
       resting.push_back(static_cast<std::uint32_t>(b));
   rest_grid_.build(boxes_, resting, cell_);
   const std::size_t runs = runs_per_thread * static_cast<std::size_t>(omp_get_max_threads());
@@ -203,7 +205,7 @@ void Contact::addForces(Model &model, double, double dt) {
   });
   moving_.clear();
   for (std::size_t b = 0; b < model.bodies.size(); ++b)
-    if (!model.bodies[b].at_rest && node_begin_[b] < node_begin_[b + 1])
+    if (!model.at_rest[b] && node_begin_[b] < node_begin_[b + 1])
       moving_.push_back(static_cast<std::uint32_t>(b));
   const long n_moving = static_cast<long>(moving_.size());
   double farthest = 0.0; // the largest travel since the last search for pairs
@@ -608,7 +610,7 @@ void Contact::addPairsOfWoken(const Model &model) {
     return;
   for (std::uint32_t a : woken_)
     restNeighbours(a, search_margin_,
-                   [&](std::uint32_t b) { return !listed_[b] && (model.bodies[b].at_rest || a < b); },
+                   [&](std::uint32_t b) { return !listed_[b] && (model.at_rest[b] || a < b); },
                    [&](std::uint32_t a, std::uint32_t b) { pairs_.emplace_back(a, b); });
   for (std::uint32_t a : woken_)
     listed_[a] = 1;
@@ -863,8 +865,8 @@ void Contact::hit(const Model &model, const Found &f, double dt, Hits &hits) con
     hits.sudden.emplace_back(p, depth - reach), depth = reach;
   // Two nodes that meet are pushed apart by both passes, a wall contact by one: the walls take
   // twice the stiffness (kappa 1 by default, the one-step constraint).
-  const double kappa = k1 == no_node ? 2.0 * s_.stiffness : s_.stiffness;
-  const double c = 2.0 * s_.damping * std::sqrt(kappa);
+  const bool wall = k1 == no_node;
+  const double kappa = wall ? 2.0 * s_.stiffness : s_.stiffness, c = damping_[wall];
   const double fn = std::max(0.0, m_eff / dt * (kappa * (depth - touching * h) / dt - c * vn));
   const double tx = vx - vn * nx, ty = vy - vn * ny, slip = std::sqrt(tx * tx + ty * ty);
   const double ft = slip > 0.0 ? std::min(mu * fn, m_eff * slip / dt) / slip : 0.0;

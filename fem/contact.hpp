@@ -233,6 +233,7 @@ private:
   void prefetchHit(const Model &model, const Found &f) const;
 
   ContactSettings s_;
+  double damping_[2] = {}; // the damping coefficient c of hit, between bodies and at a wall
   std::size_t n_materials_;
   std::vector<std::size_t> node_begin_, segment_begin_; // per body, into nodes_ and segment_ends_ / 2
   std::vector<std::uint32_t> nodes_;                    // boundary nodes, body by body

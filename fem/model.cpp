@@ -71,13 +71,13 @@ Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> ma
   nd.detached.assign(n_nodes, 0);
 
   model.bodies.resize(n_bodies);
+  model.at_rest.assign(n_bodies, 1);
   for (std::size_t b = 0; b < n_bodies; ++b) {
     Body &body = model.bodies[b];
     body.name = b < body_names.size() ? body_names[b] : "body-" + std::to_string(b);
     body.node_begin = mesh.node_offset[b], body.node_end = mesh.node_offset[b + 1];
     body.element_begin = mesh.tri_offset[b], body.element_end = mesh.tri_offset[b + 1];
     body.material = body_material[b];
-    body.at_rest = true;
     const double rho = model.materials[body.material]->density();
     std::fill(nd.body.begin() + body.node_begin, nd.body.begin() + body.node_end, b);
     // Lumped mass: a third of each element's mass at each of its nodes.

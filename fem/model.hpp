@@ -73,7 +73,6 @@ struct Body {
   std::string name;
   std::size_t node_begin = 0, node_end = 0, element_begin = 0, element_end = 0;
   int material = 0;           // index into Model::materials
-  bool at_rest = false;       // not updated while at rest and unloaded (see Model::wake)
   std::size_t eroded = 0;     // its elements removed by erosion
   std::vector<std::uint32_t> boundary; // boundary edges (node pairs, counter-clockwise)
 };
@@ -92,9 +91,12 @@ struct Model {
   std::vector<Body> bodies;
   std::vector<std::unique_ptr<Material>> materials;
   std::vector<VelocityConstraint> constraints;
+  // Per body: 1 while it is at rest and unloaded, not updated (side by side: the time loop and the
+  // contact look at every body's every step). Every body starts at rest; none goes back to rest.
+  std::vector<std::uint8_t> at_rest;
 
   // A body that was at rest takes part in the time loop again (contact calls this).
-  void wake(std::size_t body) { bodies[body].at_rest = false; }
+  void wake(std::size_t body) { at_rest[body] = 0; }
 };
 
 // A model from triangle meshes of many bodies (node and triangle offsets per body, as

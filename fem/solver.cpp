@@ -235,7 +235,7 @@ void Solver::updateActivity() {
   const std::size_t n_bodies = m_.bodies.size();
   bool changed = body_active_seen_.size() != n_bodies;
   for (std::size_t b = 0; !changed && b < n_bodies; ++b)
-    changed = body_active_seen_[b] != !m_.bodies[b].at_rest;
+    changed = body_active_seen_[b] != !m_.at_rest[b];
   if (!changed)
     return;
   body_active_seen_.assign(n_bodies, 0);
@@ -248,8 +248,8 @@ void Solver::updateActivity() {
   active_bodies_.clear();
   for (std::size_t b = 0; b < n_bodies; ++b) {
     const Body &body = m_.bodies[b];
-    body_active_seen_[b] = !body.at_rest;
-    if (body.at_rest)
+    body_active_seen_[b] = !m_.at_rest[b];
+    if (m_.at_rest[b])
       continue;
     active_bodies_.push_back(static_cast<std::uint32_t>(b));
     // Every process moves every active node; it computes the elements of its own bodies.
@@ -370,7 +370,7 @@ void Solver::applyConstraints(double half_dt, bool second_half) {
   };
   for (const auto &c : m_.constraints)
     for (std::uint32_t a : c.nodes) {
-      if (m_.bodies[nd.body[a]].at_rest)
+      if (m_.at_rest[nd.body[a]])
         continue;
       if (c.constrain_x)
         impose(a, nd.vx[a], nd.x[a], c.vx, nd.fx[a], nd.external[a].fx, nd.external[a].friction_x, s_.gravity_x);
