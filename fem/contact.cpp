@@ -127,7 +127,7 @@ void Contact::takeBoundaries(const Model &model) {
     points_[k] = {nd.x[nodes_[k]], nd.y[nodes_[k]]};
   // A vertex is the start of one segment and the end of one, unless the boundary touches itself
   // there (erosion can leave two elements joined at a corner alone).
-  std::vector<std::uint8_t> starts(nodes_.size(), 0);
+  std::vector<std::uint32_t> starts(nodes_.size(), 0);
   for (std::size_t k = 0; k < segment_ends_.size(); k += 2)
     ++starts[segment_ends_[k]];
   pinched_.resize(nodes_.size());
@@ -269,7 +269,7 @@ void Contact::addForces(Model &model, double, double dt) {
         }
       }
       // The forces after the search: their nodes' masses and velocities, scattered in memory, are
-      // then fetched many at once.
+      // then fetched a few contacts ahead.
       const std::size_t n_found = hits.found.size();
       for (std::size_t i = 0; i < n_found; ++i) {
         if (i + prefetch_ahead < n_found)
