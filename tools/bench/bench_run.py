@@ -7,6 +7,11 @@ one the table gives the median (min-max), since the machine may be shared.
 
     python3 tools/bench/bench_run.py [--mesopen build/bin/mesopen] [--out build/bench]
         [--scene examples/baseline.toml] [--threads 2] [--runs 1] [--omp-wait-policy ACTIVE|PASSIVE]
+        [--end-depth LENGTHS]
+
+On this shared machine two-thread timings drift with its load (run 6 from about 60 to 95 s within
+a day), and so does the contact's share of them; on one thread the share is steady (within 0.003
+over three runs): `--threads 1 --end-depth 0.4 --runs 3` compares two builds' contact cost.
 """
 import argparse
 import json
@@ -49,10 +54,17 @@ def main():
     # OpenMP's own waiting (spin, then sleep) unless given: PASSIVE sleeps at once, which costs
     # run 6 about 45 % on two threads (86 s against 59 s), ACTIVE spins.
     ap.add_argument("--omp-wait-policy", choices=["ACTIVE", "PASSIVE"])
+    ap.add_argument("--end-depth", type=float,
+                    help="run.end_depth, in projectile lengths (default: the scene's)")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     with open(args.scene) as f:
         text = without_frames(f.read())
+    if args.end_depth is not None:
+        if not 0.0 < args.end_depth <= 10.0:
+            ap.error(f"--end-depth {args.end_depth}: allowed 0 < end depth <= 10 projectile lengths")
+        text = re.sub(r"(?m)^end_depth\s*=.*$", "", text)
+        text = re.sub(r"(?m)^\[run\]\s*$", f"[run]\nend_depth = {args.end_depth}", text, count=1)
     length = float(re.search(r"(?m)^length\s*=\s*(\S+)", text).group(1))
 
     summaries = []
@@ -81,7 +93,8 @@ def main():
               "status": [s["status"] for s in summaries]}
     for key, label, get in FIGURES:
         values = [get(s) for s in summaries]
-        result[key] = {"median": statistics.median(values), "min": min(values), "max": max(values)}
+        result[key] = {"median": statistics.median(values), "min": min(values), "max": max(values),
+                       "values": values}
         print(f"  {label:34s} {statistics.median(values):12.4g}  ({min(values):.4g} - {max(values):.4g})")
     path = os.path.join(args.out, "bench_run.json")
     with open(path, "w") as f:
