@@ -233,12 +233,9 @@ void Solver::step() {
 // Work ranges over the bodies that move: element chunks of one material, node blocks.
 void Solver::updateActivity() {
   const std::size_t n_bodies = m_.bodies.size();
-  bool changed = body_active_seen_.size() != n_bodies;
-  for (std::size_t b = 0; !changed && b < n_bodies; ++b)
-    changed = body_active_seen_[b] != !m_.at_rest[b];
-  if (!changed)
+  if (at_rest_seen_ == m_.at_rest)
     return;
-  body_active_seen_.assign(n_bodies, 0);
+  at_rest_seen_ = m_.at_rest;
   chunks_.clear();
   units_.clear();
   unit_nodes_.clear();
@@ -248,7 +245,6 @@ void Solver::updateActivity() {
   active_bodies_.clear();
   for (std::size_t b = 0; b < n_bodies; ++b) {
     const Body &body = m_.bodies[b];
-    body_active_seen_[b] = !m_.at_rest[b];
     if (m_.at_rest[b])
       continue;
     active_bodies_.push_back(static_cast<std::uint32_t>(b));
@@ -782,7 +778,7 @@ void Solver::erode() {
   energy_.eroded += energy;
   eroded_elements_ += failed.size();
   energy_.internal -= energy; // this step's pass summed theirs
-  body_active_seen_.clear(); // the chunks are laid out anew
+  at_rest_seen_.clear(); // the chunks are laid out anew
   std::vector<std::uint32_t> bodies;
   for (std::uint32_t e : failed)
     bodies.push_back(el.body[e]);

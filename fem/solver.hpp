@@ -184,7 +184,7 @@ private:
   std::vector<ChunkSums> sums_;
   std::vector<KickSums> kick_sums_; // per node block (first half-kick) or unit (second)
   std::vector<double> inv_mass_;
-  std::vector<char> body_active_seen_;
+  std::vector<std::uint8_t> at_rest_seen_; // Model::at_rest when the work ranges were laid out
   std::vector<std::uint32_t> active_bodies_; // every process's, in order
   std::size_t active_elements_ = 0, eroded_elements_ = 0, collapsed_elements_ = 0;
   double time_ = 0.0, dt_ = 0.0, next_dt_ = 0.0;
