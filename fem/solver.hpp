@@ -150,6 +150,7 @@ private:
   };
 
   void updateActivity();
+  void shareAmongThreads();
   struct KickSums {
     double gravity = 0.0, kinetic = 0.0, provider = 0.0, friction = 0.0;
   };
@@ -182,6 +183,9 @@ private:
   std::vector<Range> unit_nodes_;  // node ranges of the units
   std::vector<Range> node_ranges_; // active nodes, in blocks
   std::vector<ChunkSums> sums_;
+  // Each thread's units and node blocks, [bounds[t], bounds[t + 1]): contiguous, of about equal
+  // element counts, fixed while the same bodies move (see shareAmongThreads).
+  std::vector<std::size_t> thread_units_, thread_blocks_;
   std::vector<KickSums> kick_sums_; // per node block (first half-kick) or unit (second)
   std::vector<double> inv_mass_;
   std::vector<std::uint8_t> at_rest_seen_; // Model::at_rest when the work ranges were laid out
