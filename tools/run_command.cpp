@@ -307,7 +307,7 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
       const auto step_start = Clock::now();
       solver.step();
       result.solver_seconds += secondsSince(step_start);
-      result.element_steps += static_cast<double>(solver.activeElements());
+      result.element_steps += static_cast<double>(solver.elementUpdates());
       const bool due = solver.steps() % every == 0;
       if (due)
         series.sample(model, solver);
@@ -458,6 +458,7 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
                              .anti_locking = run.anti_locking,
                              .max_dt = dem_step,
                              .erode_dt_ratio = run.erode_step_ratio,
+                             .subcycle_levels = static_cast<int>(run.subcycle_levels),
                              .sharing = world.size > 1 ? &sharing : nullptr});
   std::unique_ptr<fem::Contact> contact;
   if (scene.contact.enabled) {
