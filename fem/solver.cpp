@@ -195,7 +195,7 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
   const std::size_t n_bodies = m_.bodies.size();
   level_.assign(n_bodies, 0);
   if (s_.subcycle_levels > 0)
-    fine_vx_.assign(nd.size(), 0.0), fine_vy_.assign(nd.size(), 0.0);
+    fine_vx_.assign(nd.size(), 0.0), fine_vy_.assign(nd.size(), 0.0), held_.assign(nd.size(), {});
   constrained_.assign(n_bodies, 0);
   body_step_.assign(n_bodies, HUGE_VAL);
   body_stamp_.assign(n_bodies, 0);
@@ -425,24 +425,18 @@ void Solver::shareAmongThreads() {
 // 1/2 m v(n-1/2) . v(n+1/2) = 1/2 m (|v(n)|^2 - |dv|^2) with dv this half-kick: central differences
 // conserve it exactly for a linear elastic system (1/2 m |v(n)|^2 carries an O((omega dt)^2)
 // oscillation of the fastest modes).
-// A node of a subcycled body takes its force over half a substep, half_h, and the external part of
-// it over the rest of the step's half too, half_dt (the contact force is held over the step).
-void Solver::halfKick(std::size_t a, double half_h, double half_dt, double fx, double fy,
-                      bool second_half, double &vx, double &vy, KickSums &sums) const {
+void Solver::halfKick(std::size_t a, double half_dt, double fx, double fy, bool second_half,
+                      double &vx, double &vy, KickSums &sums) const {
   const Nodes &nd = m_.nodes;
-  double dvx = half_h * fx * inv_mass_[a], dvy = half_h * fy * inv_mass_[a];
-  if (half_h != half_dt && nd.is_loaded[a]) {
-    const double held = (half_dt - half_h) * inv_mass_[a];
-    dvx += held * nd.external[a].fx, dvy += held * nd.external[a].fy;
-  }
+  const double dvx = half_dt * fx * inv_mass_[a], dvy = half_dt * fy * inv_mass_[a];
   const double mean_vx = vx + 0.5 * dvx, mean_vy = vy + 0.5 * dvy;
   if (nd.is_loaded[a]) {
     const Nodes::External &e = nd.external[a];
     sums.provider += e.fx * mean_vx + e.fy * mean_vy;
     sums.friction += e.friction_x * mean_vx + e.friction_y * mean_vy;
   }
-  if (s_.gravity_x != 0.0 || s_.gravity_y != 0.0) // gravity acts over half_h
-    sums.gravity += half_h / half_dt * nd.mass[a] * (s_.gravity_x * mean_vx + s_.gravity_y * mean_vy);
+  if (s_.gravity_x != 0.0 || s_.gravity_y != 0.0)
+    sums.gravity += nd.mass[a] * (s_.gravity_x * mean_vx + s_.gravity_y * mean_vy);
   vx += dvx, vy += dvy;
   if (second_half)
     sums.kinetic += 0.5 * nd.mass[a] * (vx * vx + vy * vy - dvx * dvx - dvy * dvy);
@@ -471,7 +465,7 @@ void Solver::kickAndDrift(double dt) {
       KickSums sums; // in registers: the node arrays' stores could alias kick_sums_
       for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
         double vx = nd.vx[a], vy = nd.vy[a];
-        halfKick(a, half_dt, half_dt, nd.fx[a], nd.fy[a], false, vx, vy, sums);
+        halfKick(a, half_dt, nd.fx[a], nd.fy[a], false, vx, vy, sums);
         nd.vx[a] = vx, nd.vy[a] = vy;
         nd.x[a] += dt * vx;
         nd.y[a] += dt * vy;
@@ -559,7 +553,15 @@ void Solver::forces(double dt, bool kick) {
           nd.fx[a] = fx, nd.fy[a] = fy;
           if (kick) {
             double vx = nodes.state[a - base].vx, vy = nodes.state[a - base].vy;
-            halfKick(a, 0.5 * h, 0.5 * dt, fx, fy, true, vx, vy, sums);
+            if (unit.level == 0) {
+              halfKick(a, 0.5 * dt, fx, fy, true, vx, vy, sums);
+            } else { // the held external force gives way to the new one (see substeps)
+              const Nodes::External e = nd.is_loaded[a] ? nd.external[a] : Nodes::External{};
+              const Nodes::External &old = held_[a];
+              subKick(a, 0.5 * h, {fx, fy}, e, 0.5 * (dt - h),
+                      {e.fx - old.fx, e.fy - old.fy, e.friction_x - old.friction_x, e.friction_y - old.friction_y},
+                      0.5 * dt, true, vx, vy, sums);
+            }
             nd.vx[a] = vx, nd.vy[a] = vy;
           }
         }
@@ -639,6 +641,29 @@ void Solver::unitPasses(const Unit &unit, double h, const UnitNodes &nodes, Chun
     elementPass(chunks_[i], h, nodes, sums[i]);
 }
 
+// A kick of a node of a subcycled body (see substeps): v += (t_f f + t_held held) / m, f the node's
+// force with its external part `in_f`, `held` an external force added apart. The work of the
+// external forces, each times the mean velocity over the kick and its duration, and of gravity
+// (in f) go into the sums over half_dt, as halfKick's; after the second half, the leapfrog's
+// kinetic energy.
+void Solver::subKick(std::size_t a, double t_f, NodeForce f, const Nodes::External &in_f, double t_held,
+                     const Nodes::External &held, double half_dt, bool second_half, double &vx,
+                     double &vy, KickSums &sums) const {
+  const Nodes &nd = m_.nodes;
+  const double dvx = (t_f * f.x + t_held * held.fx) * inv_mass_[a];
+  const double dvy = (t_f * f.y + t_held * held.fy) * inv_mass_[a];
+  const double mean_vx = vx + 0.5 * dvx, mean_vy = vy + 0.5 * dvy;
+  const double w_f = t_f / half_dt, w_held = t_held / half_dt;
+  sums.provider += (w_f * in_f.fx + w_held * held.fx) * mean_vx + (w_f * in_f.fy + w_held * held.fy) * mean_vy;
+  sums.friction += (w_f * in_f.friction_x + w_held * held.friction_x) * mean_vx +
+                   (w_f * in_f.friction_y + w_held * held.friction_y) * mean_vy;
+  if (s_.gravity_x != 0.0 || s_.gravity_y != 0.0)
+    sums.gravity += w_f * nd.mass[a] * (s_.gravity_x * mean_vx + s_.gravity_y * mean_vy);
+  vx += dvx, vy += dvy;
+  if (second_half)
+    sums.kinetic += 0.5 * nd.mass[a] * (vx * vx + vy * vy - dvx * dvx - dvy * dvy);
+}
+
 // A subcycled unit's substeps in the step dt (Belytschko, Yen & Mullen 1979 partition each body
 // alone here: bodies share no nodes, only contact forces): its bodies take N = 2^level substeps
 // h = dt / N. The first half-kick takes f(n), its internal part over h/2 and the external part
@@ -651,8 +676,6 @@ void Solver::substeps(const Unit &unit, double dt, UnitBuffers &buffers, KickSum
   Nodes &nd = m_.nodes;
   const int n_sub = 1 << unit.level;
   const double h = dt / n_sub, half_dt = 0.5 * dt;
-  const double gx = s_.gravity_x, gy = s_.gravity_y;
-  const bool gravity = gx != 0.0 || gy != 0.0;
   const UnitNodes nodes = loadUnit(unit, buffers);
   NodeState *state = buffers.state.data();
   const std::size_t base = unit.node_lo;
@@ -662,7 +685,8 @@ void Solver::substeps(const Unit &unit, double dt, UnitBuffers &buffers, KickSum
         f(a, state[a - base]);
   };
   eachNode([&](std::size_t a, NodeState &s) {
-    halfKick(a, 0.5 * h, half_dt, nd.fx[a], nd.fy[a], false, s.vx, s.vy, sums);
+    held_[a] = nd.is_loaded[a] ? nd.external[a] : Nodes::External{};
+    subKick(a, 0.5 * h, {nd.fx[a], nd.fy[a]}, held_[a], 0.0, {}, half_dt, false, s.vx, s.vy, sums);
     s.x += h * s.vx, s.y += h * s.vy;
   });
   for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
@@ -680,11 +704,7 @@ void Solver::substeps(const Unit &unit, double dt, UnitBuffers &buffers, KickSum
         inner.inverted = pass.inverted;
     }
     eachNode([&](std::size_t a, NodeState &s) {
-      const double dvx = h * nodes.force[a - base].x * inv_mass_[a];
-      const double dvy = h * nodes.force[a - base].y * inv_mass_[a];
-      if (gravity) // to be multiplied by half_dt, as the kicks' sums are
-        sums.gravity += h / half_dt * nd.mass[a] * (gx * (s.vx + 0.5 * dvx) + gy * (s.vy + 0.5 * dvy));
-      s.vx += dvx, s.vy += dvy;
+      subKick(a, h, nodes.force[a - base], {}, h, held_[a], half_dt, false, s.vx, s.vy, sums);
       s.x += h * s.vx, s.y += h * s.vy;
     });
   }

@@ -176,8 +176,11 @@ private:
   struct KickSums {
     double gravity = 0.0, kinetic = 0.0, provider = 0.0, friction = 0.0;
   };
-  void halfKick(std::size_t a, double half_h, double half_dt, double fx, double fy, bool second_half,
-                double &vx, double &vy, KickSums &sums) const;
+  void halfKick(std::size_t a, double half_dt, double fx, double fy, bool second_half, double &vx,
+                double &vy, KickSums &sums) const;
+  void subKick(std::size_t a, double t_f, NodeForce f, const Nodes::External &in_f, double t_held,
+               const Nodes::External &held, double half_dt, bool second_half, double &vx, double &vy,
+               KickSums &sums) const;
   void addKickSums(const std::vector<KickSums> &sums, double half_dt);
   void kickAndDrift(double dt);
   void forces(double dt, bool kick);
@@ -220,6 +223,7 @@ private:
   std::vector<std::uint8_t> level_, levels_seen_, constrained_;
   std::vector<double> body_step_;
   std::vector<double> fine_vx_, fine_vy_; // subcycled nodes: the velocity of their last substep
+  std::vector<Nodes::External> held_;     // subcycled nodes: the external force held over the step
   std::vector<std::uint32_t> body_stamp_;
   std::vector<std::uint32_t> constrained_bodies_;
   std::uint32_t stamp_ = 0;
