@@ -347,7 +347,8 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
               {"spin", scene.run.spin},
               {"grains", scene.run.grains},
               {"projectile_material", scene.projectile_material.name},
-              {"grain_material", scene.grain_material.name}};
+              {"grain_material", scene.grain_material.name},
+              {"subcycle_levels", scene.run.subcycle_levels}};
   j["model"] = {{"bodies", model.bodies.size()},
                 {"nodes", model.nodes.size()},
                 {"elements", model.elements.size()},
@@ -362,7 +363,9 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
   j["steps_per_second"] = solver.steps() / std::max(loop.seconds, 1e-9);
   j["solver_seconds"] = loop.solver_seconds;
   j["element_steps_per_second"] = loop.element_steps / std::max(loop.solver_seconds, 1e-9);
-  // Bodies at rest are skipped: the element-steps computed, against every element every step.
+  // Bodies at rest are skipped: the element-steps computed (a subcycled body's substeps each
+  // count), against every element every step.
+  j["subcycled_bodies_last_step"] = solver.subcycledBodies();
   j["element_steps"] = loop.element_steps;
   j["active_element_share"] =
       loop.element_steps / std::max(1.0, static_cast<double>(model.elements.size()) * solver.steps());
