@@ -189,27 +189,10 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
     if (el.sxx[e] != 0.0 || el.syy[e] != 0.0 || el.sxy[e] != 0.0 || el.pressure[e] != 0.0 ||
         el.energy[e] != 0.0)
       m_.wake(el.body[e]);
-  if (s_.sharing)
-    s_.subcycle_levels = 0;
-  s_.subcycle_levels = std::clamp(s_.subcycle_levels, 0, 6);
-  const std::size_t n_bodies = m_.bodies.size();
-  level_.assign(n_bodies, 0);
-  if (s_.subcycle_levels > 0)
-    fine_vx_.assign(nd.size(), 0.0), fine_vy_.assign(nd.size(), 0.0), held_.assign(nd.size(), {});
-  constrained_.assign(n_bodies, 0);
-  body_step_.assign(n_bodies, HUGE_VAL);
-  body_stamp_.assign(n_bodies, 0);
-  for (const auto &c : m_.constraints)
-    for (std::uint32_t a : c.nodes)
-      constrained_[nd.body[a]] = 1;
-  for (std::size_t b = 0; b < n_bodies; ++b)
-    if (constrained_[b])
-      constrained_bodies_.push_back(static_cast<std::uint32_t>(b));
   m_.nodes.clearExternal();
   updateActivity();
   failed_.assign(el.size(), 0);
   internalForces(0.0);
-  start_step_ = shortest_step_;
   erode_below_ = s_.erode_dt_ratio * shortest_step_;
   dt_ = std::min(next_dt_, s_.max_dt);
   for (const Range &r : node_ranges_)
@@ -234,15 +217,13 @@ void Solver::addForceProvider(ForceProvider *provider) {
 void Solver::step() {
   const double dt = dt_;
   kick_work_ = provider_work_ = friction_work_ = 0.0;
-  assignLevels(dt);         // the bodies' substeps
-  updateActivity();
   kickAndDrift(dt);         // v(n+1/2) = v(n) + dt/2 f(n) / m, the imposed velocities;
-                            // x(n+1) = x(n) + dt v(n+1/2) (subcycled bodies: their substeps)
+                            // x(n+1) = x(n) + dt v(n+1/2)
   m_.nodes.clearExternal();
   for (auto *provider : providers_) // external forces at x(n+1): contact, coupling
     provider->addForces(m_, time_ + dt, dt);
   updateActivity();         // bodies the providers woke take part
-  forces(dt, true);
+  forces(dt, true);         // stresses at n+1, f(n+1), the next stable step, and unit by unit
                             // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
   applyConstraints(0.5 * dt, true); // the imposed velocities at n+1
   time_ += dt;
@@ -250,10 +231,9 @@ void Solver::step() {
   if (steps_ == 1)
     first_dt_ = dt;
   dt_ = std::min({next_dt_, s_.max_dt, s_.max_dt_growth * dt});
-  const double finest = s_.safety * step_scale_ * shortest_step_;
-  if (finest < s_.min_dt_ratio * first_dt_) {
+  if (next_dt_ < s_.min_dt_ratio * first_dt_) {
     std::ostringstream msg;
-    msg << "the stable step fell to " << finest << " s, below " << s_.min_dt_ratio
+    msg << "the stable step fell to " << next_dt_ << " s, below " << s_.min_dt_ratio
         << " of the first (" << first_dt_ << " s), at t = " << time_ << " s, step " << steps_
         << "; the thinnest element: " << thinnestElement();
     throw RunFailure(msg.str());
@@ -262,21 +242,18 @@ void Solver::step() {
   erode();                  // elements that failed in this step leave the model
 }
 
-// Work ranges over the bodies that move: element chunks of one material in units of whole bodies
-// of one substep level (the subcycled first, highest level first, each level in body order: the
-// bodies that contact wakes during a step join level 0 at the end, and the subcycled units' chunks
-// keep their place within the step), node blocks of the bodies without substeps.
+// Work ranges over the bodies that move: element chunks of one material, node blocks.
 void Solver::updateActivity() {
   const std::size_t n_bodies = m_.bodies.size();
-  if (at_rest_seen_ == m_.at_rest && levels_seen_ == level_)
+  if (at_rest_seen_ == m_.at_rest)
     return;
   at_rest_seen_ = m_.at_rest;
-  levels_seen_ = level_;
   chunks_.clear();
   units_.clear();
   unit_nodes_.clear();
   node_ranges_.clear();
-  active_elements_ = element_updates_ = subcycled_bodies_ = 0;
+  std::size_t unit_elements = 0;
+  active_elements_ = 0;
   active_bodies_.clear();
   for (std::size_t b = 0; b < n_bodies; ++b) {
     const Body &body = m_.bodies[b];
@@ -284,134 +261,79 @@ void Solver::updateActivity() {
       continue;
     active_bodies_.push_back(static_cast<std::uint32_t>(b));
     // Every process moves every active node; it computes the elements of its own bodies.
-    if (level_[b] == 0)
-      appendInPieces(node_ranges_, 0, Range{body.node_begin, body.node_end}, node_block,
-                     [](const Range &) { return true; });
-    const std::size_t elements = body.element_end - body.element_begin - body.eroded;
-    active_elements_ += elements;
-    element_updates_ += elements << level_[b];
-    subcycled_bodies_ += level_[b] > 0;
-  }
-  for (int level = s_.subcycle_levels; level >= 0; --level) {
-    if (level == 0)
-      subcycled_units_ = units_.size();
-    std::size_t unit_elements = 0;
-    bool open = false;
-    for (std::uint32_t b : active_bodies_) {
-      if (level_[b] != level || !owns(b))
-        continue;
-      const Body &body = m_.bodies[b];
-      const Material *material = m_.materials[body.material].get();
-      const bool averaged = s_.anti_locking && material->plastic();
-      // A work unit holds whole bodies (no node is shared between units, so each unit adds its
-      // elements' forces into the nodes without races, in element order).
-      if (!open || unit_elements >= unit_target) {
-        units_.push_back({chunks_.size(), chunks_.size(), unit_nodes_.size(), unit_nodes_.size(),
-                          body.node_begin, body.node_end, false, static_cast<unsigned>(level), 0});
-        unit_elements = 0;
-        open = true;
-      }
-      Unit &unit = units_.back();
-      // The body's elements in runs without eroded ones.
-      for (std::size_t e = body.element_begin; e < body.element_end;) {
-        std::size_t end = body.element_end;
-        if (body.eroded > 0) {
-          while (e < end && m_.elements.eroded[e])
-            ++e;
-          end = e;
-          while (end < body.element_end && !m_.elements.eroded[end])
-            ++end;
-        }
-        appendInPieces(chunks_, unit.chunk_begin, Chunk{{e, end}, material, averaged}, s_.chunk,
-                       [&](const Chunk &c) { return c.material == material && c.averaged_volume == averaged; });
-        unit_elements += end - e;
-        unit.elements += end - e;
-        e = end;
-      }
-      appendInPieces(unit_nodes_, unit.nodes_begin, Range{body.node_begin, body.node_end},
-                     std::numeric_limits<std::size_t>::max(), [](const Range &) { return true; });
-      unit.chunk_end = chunks_.size();
-      unit.nodes_end = unit_nodes_.size();
-      unit.node_lo = std::min(unit.node_lo, body.node_begin);
-      unit.node_hi = std::max(unit.node_hi, body.node_end);
-      unit.averaged_volume = unit.averaged_volume || averaged;
+    appendInPieces(node_ranges_, 0, Range{body.node_begin, body.node_end}, node_block,
+                   [](const Range &) { return true; });
+    active_elements_ += body.element_end - body.element_begin - body.eroded;
+    if (!owns(b))
+      continue;
+    const Material *material = m_.materials[body.material].get();
+    const bool averaged = s_.anti_locking && material->plastic();
+    // A work unit holds whole bodies (no node is shared between units, so each unit adds its
+    // elements' forces into the nodes without races, in element order).
+    const bool new_unit = units_.empty() || unit_elements >= unit_target;
+    if (new_unit) {
+      units_.push_back({chunks_.size(), chunks_.size(), unit_nodes_.size(), unit_nodes_.size(),
+                        body.node_begin, body.node_end, false});
+      unit_elements = 0;
     }
+    Unit &unit = units_.back();
+    // The body's elements in runs without eroded ones.
+    for (std::size_t e = body.element_begin; e < body.element_end;) {
+      std::size_t end = body.element_end;
+      if (body.eroded > 0) {
+        while (e < end && m_.elements.eroded[e])
+          ++e;
+        end = e;
+        while (end < body.element_end && !m_.elements.eroded[end])
+          ++end;
+      }
+      appendInPieces(chunks_, unit.chunk_begin, Chunk{{e, end}, material, averaged}, s_.chunk,
+                     [&](const Chunk &c) { return c.material == material && c.averaged_volume == averaged; });
+      unit_elements += end - e;
+      e = end;
+    }
+    appendInPieces(unit_nodes_, unit.nodes_begin, Range{body.node_begin, body.node_end},
+                   std::numeric_limits<std::size_t>::max(), [](const Range &) { return true; });
+    unit.chunk_end = chunks_.size();
+    unit.nodes_end = unit_nodes_.size();
+    unit.node_lo = std::min(unit.node_lo, body.node_begin);
+    unit.node_hi = std::max(unit.node_hi, body.node_end);
+    unit.averaged_volume = unit.averaged_volume || averaged;
   }
   sums_.resize(chunks_.size());
-  inner_sums_.resize(chunks_.size());
   shareAmongThreads();
-}
-
-// Each moving body's substeps in the step dt: the fewest, N = 2^level, that keep dt / N within
-// the stable step of its elements in the last step (scaled as the loop's step is). Level 0 for a
-// body with imposed velocities, one whose elements were not computed in the last step (just
-// woken: at rest, its first pass comes before it moves), and without subcycling.
-void Solver::assignLevels(double dt) {
-  if (s_.subcycle_levels > 0) {
-    const double fine = s_.safety * step_scale_;
-    for (std::uint32_t b : active_bodies_) {
-      int level = 0;
-      if (!constrained_[b] && body_stamp_[b] == stamp_)
-        while (level < s_.subcycle_levels && dt > std::ldexp(fine * body_step_[b], level))
-          ++level;
-      level_[b] = static_cast<std::uint8_t>(level);
-    }
-  }
-  ++stamp_; // this step's passes
-}
-
-// The loop's step (before the safety factor) over the shortest element step dt_min: that step
-// without subcycling; with it, up to 2^subcycle_levels times it, the bodies that are slower taking
-// substeps, but no longer than the first step (an impact's contact is never resolved more coarsely
-// than at the start) nor than the bodies that do not subcycle.
-double Solver::loopStep(double dt_min) const {
-  if (s_.subcycle_levels == 0)
-    return dt_min;
-  double step = std::min(std::ldexp(dt_min, s_.subcycle_levels), std::max(start_step_, dt_min));
-  for (std::uint32_t b : constrained_bodies_)
-    if (body_stamp_[b] == stamp_)
-      step = std::min(step, body_step_[b]);
-  return step;
-}
-
-// Bounds of the threads' contiguous runs of the units [first, last), each with about its share of
-// the elements (of their inner substeps, with `inner`).
-std::vector<std::size_t> Solver::splitUnits(std::size_t first, std::size_t last, bool inner) const {
-  const auto threads = static_cast<std::size_t>(omp_get_max_threads());
-  auto weight = [&](const Unit &u) { return inner ? u.elements * ((std::size_t{1} << u.level) - 1) : u.elements; };
-  std::size_t total = 0;
-  for (std::size_t u = first; u < last; ++u)
-    total += weight(units_[u]);
-  std::vector<std::size_t> bounds(threads + 1, last);
-  bounds[0] = first;
-  std::size_t before = 0; // weight of the units before u
-  for (std::size_t u = first, t = 0; u < last; ++u) {
-    // the thread whose share holds the unit's middle
-    const std::size_t w = weight(units_[u]);
-    const std::size_t owner =
-        std::min(threads - 1, (2 * before + w) * threads / (2 * std::max<std::size_t>(total, 1)));
-    while (t < owner)
-      bounds[++t] = u;
-    before += w;
-  }
-  return bounds;
 }
 
 // Each thread takes a contiguous run of units with about its share of the elements, and the node
 // blocks beside them: the nodes it kicks and moves are those whose elements it computes. Nodes
 // written on one core and read on the other cost a transfer between the cores' caches at each
-// pass. The subcycled units' inner substeps are shared apart.
+// pass; with the units taken as they came (a dynamic schedule) and the blocks in halves, the node
+// passes cost 2.5 to 3 times more on two threads than on one (run 6 to 0.4 length).
 void Solver::shareAmongThreads() {
   const auto threads = static_cast<std::size_t>(omp_get_max_threads());
-  thread_units_ = splitUnits(0, units_.size(), false);
-  thread_inner_units_ = splitUnits(0, subcycled_units_, true);
-  // A block goes with the units that hold its first node (the units without substeps are in body
-  // order, after the subcycled ones).
+  std::vector<std::size_t> elements(units_.size(), 0);
+  std::size_t total = 0;
+  for (std::size_t u = 0; u < units_.size(); ++u) {
+    for (std::size_t c = units_[u].chunk_begin; c < units_[u].chunk_end; ++c)
+      elements[u] += chunks_[c].end - chunks_[c].begin;
+    total += elements[u];
+  }
+  thread_units_.assign(threads + 1, units_.size());
+  thread_units_[0] = 0;
+  std::size_t before = 0; // elements in the units before u
+  for (std::size_t u = 0, t = 0; u < units_.size(); ++u) {
+    // the thread whose share holds the unit's middle element
+    const std::size_t owner = std::min(threads - 1, (2 * before + elements[u]) * threads / (2 * std::max<std::size_t>(total, 1)));
+    while (t < owner)
+      thread_units_[++t] = u;
+    before += elements[u];
+  }
+  // A block goes with the units that hold its first node.
   thread_blocks_.assign(threads + 1, node_ranges_.size());
   thread_blocks_[0] = 0;
   for (std::size_t t = 1, i = 0; t < threads; ++t) {
-    const std::size_t u = std::max(thread_units_[t], subcycled_units_);
-    const std::size_t first_node = u < units_.size() ? units_[u].node_lo : std::numeric_limits<std::size_t>::max();
+    const std::size_t first_node = thread_units_[t] < units_.size() ? units_[thread_units_[t]].node_lo
+                                                                    : std::numeric_limits<std::size_t>::max();
     while (i < node_ranges_.size() && node_ranges_[i].begin < first_node)
       ++i;
     thread_blocks_[t] = i;
@@ -457,24 +379,19 @@ void Solver::addKickSums(const std::vector<KickSums> &sums, double half_dt) {
 void Solver::kickAndDrift(double dt) {
   Nodes &nd = m_.nodes;
   const double half_dt = 0.5 * dt;
-  const std::size_t blocks = node_ranges_.size(), subcycled = subcycled_units_;
-  kick_sums_.assign(blocks + subcycled, KickSums{});
-#pragma omp parallel if (blocks + subcycled > 1)
-  {
-    for (auto [i, end] = threadShare(thread_blocks_); i < end; ++i) {
-      KickSums sums; // in registers: the node arrays' stores could alias kick_sums_
-      for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
-        double vx = nd.vx[a], vy = nd.vy[a];
-        halfKick(a, half_dt, nd.fx[a], nd.fy[a], false, vx, vy, sums);
-        nd.vx[a] = vx, nd.vy[a] = vy;
-        nd.x[a] += dt * vx;
-        nd.y[a] += dt * vy;
-      }
-      kick_sums_[i] = sums;
+  const long blocks = static_cast<long>(node_ranges_.size());
+  kick_sums_.assign(blocks, KickSums{});
+#pragma omp parallel if (blocks > 1)
+  for (auto [i, end] = threadShare(thread_blocks_); i < end; ++i) {
+    KickSums sums; // in registers: the node arrays' stores could alias kick_sums_
+    for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
+      double vx = nd.vx[a], vy = nd.vy[a];
+      halfKick(a, half_dt, nd.fx[a], nd.fy[a], false, vx, vy, sums);
+      nd.vx[a] = vx, nd.vy[a] = vy;
+      nd.x[a] += dt * vx;
+      nd.y[a] += dt * vy;
     }
-    UnitBuffers buffers;
-    for (auto [u, end] = threadShare(thread_inner_units_); u < end; ++u)
-      substeps(units_[u], dt, buffers, kick_sums_[blocks + u]);
+    kick_sums_[i] = sums;
   }
   addKickSums(kick_sums_, half_dt);
   applyConstraints(half_dt, false);
@@ -519,49 +436,41 @@ void Solver::internalForces(double dt) { forces(dt, false); }
 // external forces at the loaded nodes; with `kick`, the second half-kick of the unit's nodes.
 void Solver::forces(double dt, bool kick) {
   Nodes &nd = m_.nodes;
+  const double gx = s_.gravity_x, gy = s_.gravity_y;
+  const bool gravity = gx != 0.0 || gy != 0.0;
   const long units = static_cast<long>(units_.size());
   kick_sums_.assign(kick ? units : 0, KickSums{});
 #pragma omp parallel if (units > 1)
   {
-    UnitBuffers buffers; // this thread's copies of a unit's nodes (cache-resident)
+    std::vector<NodeState> state; // this thread's copies of a unit's nodes (cache-resident)
+    std::vector<NodeForce> force;
+    std::vector<double> jacobian;
     for (auto [u, end] = threadShare(thread_units_); u < end; ++u) {
       const Unit &unit = units_[u];
-      const double h = dt / (1 << unit.level); // a subcycled unit's last substep
-      const UnitNodes nodes = loadUnit(unit, buffers);
-      if (kick && unit.level > 0) // the last substep's velocity (see substeps)
-        for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
-          for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a)
-            buffers.state[a - unit.node_lo].vx = fine_vx_[a], buffers.state[a - unit.node_lo].vy = fine_vy_[a];
-      unitPasses(unit, h, nodes, sums_.data());
-      if (kick && unit.level > 0) // with the work of its inner substeps
-        for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i) {
-          ChunkSums &last = sums_[i];
-          const ChunkSums &inner = inner_sums_[i];
-          last.plastic += inner.plastic, last.viscous += inner.viscous;
-          last.dt_min = std::min(last.dt_min, inner.dt_min);
-          last.eroding = last.eroding || inner.eroding;
-          if (last.inverted < 0)
-            last.inverted = inner.inverted;
-        }
       const std::size_t base = unit.node_lo;
+      state.resize(unit.node_hi - base);
+      force.resize(state.size());
+      jacobian.resize(unit.averaged_volume ? state.size() : 0);
+      for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
+        for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
+          state[a - base] = {nd.x[a], nd.y[a], nd.vx[a], nd.vy[a]};
+          force[a - base] = gravity ? NodeForce{nd.mass[a] * gx, nd.mass[a] * gy} : NodeForce{0.0, 0.0};
+        }
+      const UnitNodes nodes{state.data(), force.data(), jacobian.data(), base};
+      if (unit.averaged_volume)
+        nodalVolumes(unit, nodes);
+      for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
+        elementPass(chunks_[i], dt, nodes, sums_[i]);
       KickSums sums; // in registers: the node arrays' stores could alias kick_sums_
       for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
         for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
-          double fx = nodes.force[a - base].x, fy = nodes.force[a - base].y;
+          double fx = force[a - base].x, fy = force[a - base].y;
           if (nd.is_loaded[a])
             fx += nd.external[a].fx, fy += nd.external[a].fy;
           nd.fx[a] = fx, nd.fy[a] = fy;
           if (kick) {
-            double vx = nodes.state[a - base].vx, vy = nodes.state[a - base].vy;
-            if (unit.level == 0) {
-              halfKick(a, 0.5 * dt, fx, fy, true, vx, vy, sums);
-            } else { // the held external force gives way to the new one (see substeps)
-              const Nodes::External e = nd.is_loaded[a] ? nd.external[a] : Nodes::External{};
-              const Nodes::External &old = held_[a];
-              subKick(a, 0.5 * h, {fx, fy}, e, 0.5 * (dt - h),
-                      {e.fx - old.fx, e.fy - old.fy, e.friction_x - old.friction_x, e.friction_y - old.friction_y},
-                      0.5 * dt, true, vx, vy, sums);
-            }
+            double vx = state[a - base].vx, vy = state[a - base].vy;
+            halfKick(a, 0.5 * dt, fx, fy, true, vx, vy, sums);
             nd.vx[a] = vx, nd.vy[a] = vy;
           }
         }
@@ -607,117 +516,9 @@ void Solver::forces(double dt, bool kick) {
         << " s, step " << steps_ + 1;
     throw RunFailure(msg.str());
   }
-  next_dt_ = s_.safety * step_scale_ * loopStep(dt_min);
+  next_dt_ = s_.safety * step_scale_ * dt_min;
   shortest_step_ = dt_min;
   shareNodes();
-}
-
-// The unit's nodes' positions and velocities copied into the thread's buffers (numbered from its
-// first node).
-Solver::UnitNodes Solver::loadUnit(const Unit &unit, UnitBuffers &buffers) const {
-  const Nodes &nd = m_.nodes;
-  const std::size_t base = unit.node_lo;
-  buffers.state.resize(unit.node_hi - base);
-  buffers.force.resize(buffers.state.size());
-  buffers.jacobian.resize(unit.averaged_volume ? buffers.state.size() : 0);
-  for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
-    for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a)
-      buffers.state[a - base] = {nd.x[a], nd.y[a], nd.vx[a], nd.vy[a]};
-  return {buffers.state.data(), buffers.force.data(), buffers.jacobian.data(), base};
-}
-
-// The unit's element passes over a step h: its nodes' forces, gravity's first and then the
-// elements' in element order, into nodes.force; each chunk's sums into sums[chunk].
-void Solver::unitPasses(const Unit &unit, double h, const UnitNodes &nodes, ChunkSums *sums) {
-  const Nodes &nd = m_.nodes;
-  const double gx = s_.gravity_x, gy = s_.gravity_y;
-  const bool gravity = gx != 0.0 || gy != 0.0;
-  for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
-    for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a)
-      nodes.force[a - nodes.base] = gravity ? NodeForce{nd.mass[a] * gx, nd.mass[a] * gy} : NodeForce{0.0, 0.0};
-  if (unit.averaged_volume)
-    nodalVolumes(unit, nodes);
-  for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
-    elementPass(chunks_[i], h, nodes, sums[i]);
-}
-
-// A kick of a node of a subcycled body (see substeps): v += (t_f f + t_held held) / m, f the node's
-// force with its external part `in_f`, `held` an external force added apart. The work of the
-// external forces, each times the mean velocity over the kick and its duration, and of gravity
-// (in f) go into the sums over half_dt, as halfKick's; after the second half, the leapfrog's
-// kinetic energy.
-void Solver::subKick(std::size_t a, double t_f, NodeForce f, const Nodes::External &in_f, double t_held,
-                     const Nodes::External &held, double half_dt, bool second_half, double &vx,
-                     double &vy, KickSums &sums) const {
-  const Nodes &nd = m_.nodes;
-  const double dvx = (t_f * f.x + t_held * held.fx) * inv_mass_[a];
-  const double dvy = (t_f * f.y + t_held * held.fy) * inv_mass_[a];
-  const double mean_vx = vx + 0.5 * dvx, mean_vy = vy + 0.5 * dvy;
-  const double w_f = t_f / half_dt, w_held = t_held / half_dt;
-  sums.provider += (w_f * in_f.fx + w_held * held.fx) * mean_vx + (w_f * in_f.fy + w_held * held.fy) * mean_vy;
-  sums.friction += (w_f * in_f.friction_x + w_held * held.friction_x) * mean_vx +
-                   (w_f * in_f.friction_y + w_held * held.friction_y) * mean_vy;
-  if (s_.gravity_x != 0.0 || s_.gravity_y != 0.0)
-    sums.gravity += w_f * nd.mass[a] * (s_.gravity_x * mean_vx + s_.gravity_y * mean_vy);
-  vx += dvx, vy += dvy;
-  if (second_half)
-    sums.kinetic += 0.5 * nd.mass[a] * (vx * vx + vy * vy - dvx * dvx - dvy * dvy);
-}
-
-// A subcycled unit's substeps in the step dt (Belytschko, Yen & Mullen 1979 partition each body
-// alone here: bodies share no nodes, only contact forces): its bodies take N = 2^level substeps
-// h = dt / N. The first half-kick takes f(n), its internal part over h/2 and the external part
-// (contact) over dt/2, as every other node does; then N - 1 inner substeps, each an element pass
-// at x(n + k h) and the kick v += h f_int / m (the two half-kicks of a substep in one) and drift
-// x += h v. The last element pass, at x(n+1), and the last half-kick, its external part the
-// contact force at n+1 over dt/2, come in forces() as for every unit. The inner passes' plastic
-// and viscous work goes to inner_sums_; the inner kicks do no work but gravity's.
-void Solver::substeps(const Unit &unit, double dt, UnitBuffers &buffers, KickSums &sums) {
-  Nodes &nd = m_.nodes;
-  const int n_sub = 1 << unit.level;
-  const double h = dt / n_sub, half_dt = 0.5 * dt;
-  const UnitNodes nodes = loadUnit(unit, buffers);
-  NodeState *state = buffers.state.data();
-  const std::size_t base = unit.node_lo;
-  auto eachNode = [&](auto &&f) {
-    for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
-      for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a)
-        f(a, state[a - base]);
-  };
-  eachNode([&](std::size_t a, NodeState &s) {
-    held_[a] = nd.is_loaded[a] ? nd.external[a] : Nodes::External{};
-    subKick(a, 0.5 * h, {nd.fx[a], nd.fy[a]}, held_[a], 0.0, {}, half_dt, false, s.vx, s.vy, sums);
-    s.x += h * s.vx, s.y += h * s.vy;
-  });
-  for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
-    inner_sums_[i] = {0.0, 0.0, 0.0, HUGE_VAL, -1, false};
-  buffers.sums.resize(chunks_.size());
-  for (int k = 1; k < n_sub; ++k) {
-    unitPasses(unit, h, nodes, buffers.sums.data());
-    for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i) {
-      const ChunkSums &pass = buffers.sums[i];
-      ChunkSums &inner = inner_sums_[i];
-      inner.plastic += pass.plastic, inner.viscous += pass.viscous;
-      inner.dt_min = std::min(inner.dt_min, pass.dt_min);
-      inner.eroding = inner.eroding || pass.eroding;
-      if (inner.inverted < 0)
-        inner.inverted = pass.inverted;
-    }
-    eachNode([&](std::size_t a, NodeState &s) {
-      subKick(a, h, nodes.force[a - base], {}, h, held_[a], half_dt, false, s.vx, s.vy, sums);
-      s.x += h * s.vx, s.y += h * s.vy;
-    });
-  }
-  // The contact sees the mean velocity of the step, (x(n+1) - x(n)) / dt, as it does for a node
-  // without substeps (the last substep's velocity carries the body's fast vibration: its damping
-  // and friction forces, with that velocity, did work of either sign, 53 J/m of run 6 put in);
-  // the element pass and the half-kick at n+1 take the last substep's (fine_vx_).
-  const double inv_dt = 1.0 / dt;
-  eachNode([&](std::size_t a, const NodeState &s) {
-    nd.vx[a] = (s.x - nd.x[a]) * inv_dt, nd.vy[a] = (s.y - nd.y[a]) * inv_dt;
-    nd.x[a] = s.x, nd.y[a] = s.y;
-    fine_vx_[a] = s.vx, fine_vy_[a] = s.vy;
-  });
 }
 
 // Every process's values of `mine`, summed in process order (one process: as they are).
@@ -962,16 +763,6 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
         step[i] *= criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i], shear_share[i]);
       }
       dt_min = std::min(dt_min, step[i]);
-    }
-  }
-  if (s_.subcycle_levels > 0) { // each body's shortest step in this step's passes
-    const std::uint32_t *body = el.body.data() + e0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t b = body[i];
-      if (body_stamp_[b] != stamp_)
-        body_stamp_[b] = stamp_, body_step_[b] = step[i];
-      else
-        body_step_[b] = std::min(body_step_[b], step[i]);
     }
   }
   // Into the unit's nodes, in element order.

@@ -48,12 +48,6 @@ struct SolverSettings {
   // of explicit codes, e.g. LS-DYNA's DTMIN with ERODE); 0: never. The thesis runs that finish
   // without it go no lower than 0.038 (docs/solver.md).
   double erode_dt_ratio = 0.01;
-  // Subcycling: a body whose elements' stable step is shorter than the time loop's step takes
-  // 2, 4, ... 2^subcycle_levels substeps of its own within it, its contact forces held over the
-  // step (Solver::substeps); the loop's step is then up to 2^subcycle_levels times the shortest
-  // element step, and no longer than the first step of the run. 0: one step for all (off; also
-  // when the element work is shared by processes).
-  int subcycle_levels = 0;
   double gravity_x = 0.0, gravity_y = 0.0; // body force per unit mass [m/s^2]
   std::size_t chunk = 256;          // elements per material batch
   const Sharing *sharing = nullptr; // the element work shared by processes (null: one)
@@ -109,10 +103,6 @@ public:
   void addForceProvider(ForceProvider *provider);
   // Elements updated in the last step (bodies at rest and eroded elements are skipped).
   std::size_t activeElements() const { return active_elements_; }
-  // Element updates in the last step: each active element once per substep of its body.
-  std::size_t elementUpdates() const { return element_updates_; }
-  // Bodies that took substeps in the last step.
-  std::size_t subcycledBodies() const { return subcycled_bodies_; }
   std::size_t erodedElements() const { return eroded_elements_; } // over the run
   // Of those, the ones eroded for a collapsed step (erode_dt_ratio).
   std::size_t collapsedElements() const { return collapsed_elements_; }
@@ -138,8 +128,6 @@ private:
     std::size_t nodes_begin, nodes_end; // in unit_nodes_
     std::size_t node_lo, node_hi;       // its nodes lie in [node_lo, node_hi)
     bool averaged_volume;               // some chunk needs the nodal volumes
-    unsigned level;                     // its bodies take 2^level substeps a step
-    std::size_t elements;
   };
   // A unit's nodes, numbered from its first node `base`: position and velocity side by side (the
   // element pass reads all four at once), the force being assembled, the nodal volume ratio J.
@@ -160,33 +148,17 @@ private:
     long inverted; // an inverted element, or -1
     bool eroding;  // an element failed (erosion strain, crushed, collapsed step): see erode
   };
-  // A thread's copies of a unit's nodes (cache-resident while its passes run).
-  struct UnitBuffers {
-    std::vector<NodeState> state;
-    std::vector<NodeForce> force;
-    std::vector<double> jacobian;
-    std::vector<ChunkSums> sums; // of an inner substep's passes, per chunk
-  };
 
   void updateActivity();
-  void assignLevels(double dt);
-  double loopStep(double dt_min) const;
-  std::vector<std::size_t> splitUnits(std::size_t first, std::size_t last, bool inner) const;
   void shareAmongThreads();
   struct KickSums {
     double gravity = 0.0, kinetic = 0.0, provider = 0.0, friction = 0.0;
   };
   void halfKick(std::size_t a, double half_dt, double fx, double fy, bool second_half, double &vx,
                 double &vy, KickSums &sums) const;
-  void subKick(std::size_t a, double t_f, NodeForce f, const Nodes::External &in_f, double t_held,
-               const Nodes::External &held, double half_dt, bool second_half, double &vx, double &vy,
-               KickSums &sums) const;
   void addKickSums(const std::vector<KickSums> &sums, double half_dt);
   void kickAndDrift(double dt);
   void forces(double dt, bool kick);
-  UnitNodes loadUnit(const Unit &unit, UnitBuffers &buffers) const;
-  void unitPasses(const Unit &unit, double h, const UnitNodes &nodes, ChunkSums *sums);
-  void substeps(const Unit &unit, double dt, UnitBuffers &buffers, KickSums &sums);
   void nodalVolumes(const Unit &unit, const UnitNodes &nodes);
   void elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums);
   void applyConstraints(double half_dt, bool second_half);
@@ -214,21 +186,6 @@ private:
   // Each thread's units and node blocks, [bounds[t], bounds[t + 1]): contiguous, of about equal
   // element counts, fixed while the same bodies move (see shareAmongThreads).
   std::vector<std::size_t> thread_units_, thread_blocks_;
-  std::vector<std::size_t> thread_inner_units_; // the subcycled units' inner substeps
-  std::size_t subcycled_units_ = 0;  // the first units, which take substeps
-  std::vector<ChunkSums> inner_sums_; // per chunk: its inner substeps' sums (plastic, viscous work)
-  // Per body: its substep level in this step, the shortest stable step of its elements (before
-  // the safety factor) in the passes of the pass group `body_stamp_` (the last step's, or the
-  // first pass), whether it has imposed velocities (never subcycled).
-  std::vector<std::uint8_t> level_, levels_seen_, constrained_;
-  std::vector<double> body_step_;
-  std::vector<double> fine_vx_, fine_vy_; // subcycled nodes: the velocity of their last substep
-  std::vector<Nodes::External> held_;     // subcycled nodes: the external force held over the step
-  std::vector<std::uint32_t> body_stamp_;
-  std::vector<std::uint32_t> constrained_bodies_;
-  std::uint32_t stamp_ = 0;
-  double start_step_ = 0.0; // the shortest element step of the first pass
-  std::size_t element_updates_ = 0, subcycled_bodies_ = 0;
   std::vector<KickSums> kick_sums_; // per node block (first half-kick) or unit (second)
   std::vector<double> inv_mass_;
   std::vector<std::uint8_t> at_rest_seen_; // Model::at_rest when the work ranges were laid out

@@ -307,7 +307,7 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
       const auto step_start = Clock::now();
       solver.step();
       result.solver_seconds += secondsSince(step_start);
-      result.element_steps += static_cast<double>(solver.elementUpdates());
+      result.element_steps += static_cast<double>(solver.activeElements());
       const bool due = solver.steps() % every == 0;
       if (due)
         series.sample(model, solver);
@@ -347,8 +347,7 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
               {"spin", scene.run.spin},
               {"grains", scene.run.grains},
               {"projectile_material", scene.projectile_material.name},
-              {"grain_material", scene.grain_material.name},
-              {"subcycle_levels", scene.run.subcycle_levels}};
+              {"grain_material", scene.grain_material.name}};
   j["model"] = {{"bodies", model.bodies.size()},
                 {"nodes", model.nodes.size()},
                 {"elements", model.elements.size()},
@@ -363,9 +362,7 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
   j["steps_per_second"] = solver.steps() / std::max(loop.seconds, 1e-9);
   j["solver_seconds"] = loop.solver_seconds;
   j["element_steps_per_second"] = loop.element_steps / std::max(loop.solver_seconds, 1e-9);
-  // Bodies at rest are skipped: the element-steps computed (a subcycled body's substeps each
-  // count), against every element every step.
-  j["subcycled_bodies_last_step"] = solver.subcycledBodies();
+  // Bodies at rest are skipped: the element-steps computed, against every element every step.
   j["element_steps"] = loop.element_steps;
   j["active_element_share"] =
       loop.element_steps / std::max(1.0, static_cast<double>(model.elements.size()) * solver.steps());
@@ -461,7 +458,6 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
                              .anti_locking = run.anti_locking,
                              .max_dt = dem_step,
                              .erode_dt_ratio = run.erode_step_ratio,
-                             .subcycle_levels = static_cast<int>(run.subcycle_levels),
                              .sharing = world.size > 1 ? &sharing : nullptr});
   std::unique_ptr<fem::Contact> contact;
   if (scene.contact.enabled) {

@@ -253,12 +253,6 @@ const std::vector<Key> &keys() {
         real("run", "erode_step_ratio", r, &R::erode_step_ratio, "", 0, false, 1,
              "an element whose stable step falls below this fraction of the shortest element step "
              "at the start is eroded (a collapsed element; docs/solver.md); 0: never"),
-        integer("run", "subcycle_levels", r, &R::subcycle_levels, 0, 6,
-                "subcycling: a body whose elements' stable step is shorter than the time step takes "
-                "up to 2^subcycle_levels substeps of its own, its contact forces held over the step; "
-                "the step is up to that many times the shortest element step, no longer than the "
-                "first. Run 6 twice as fast, its contacts resolved at the longer step (docs/solver.md); "
-                "0: one step for all"),
         integer("run", "series_interval", r, &R::series_interval, 1, 1e9,
                 "steps between samples of the series in run.h5"),
         real("run", "end_depth", r, &R::end_depth, "", 0, false, 100,

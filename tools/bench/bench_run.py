@@ -7,7 +7,7 @@ one the table gives the median (min-max), since the machine may be shared.
 
     python3 tools/bench/bench_run.py [--mesopen build/bin/mesopen] [--out build/bench]
         [--scene examples/baseline.toml] [--threads 2] [--runs 1] [--omp-wait-policy ACTIVE|PASSIVE]
-        [--end-depth LENGTHS] [--subcycle-levels N]
+        [--end-depth LENGTHS]
 
 On this shared machine two-thread timings drift with its load (run 6 from about 60 to 95 s within
 a day), and so does the contact's share of them; on one thread the share is steady (within 0.003
@@ -56,8 +56,6 @@ def main():
     ap.add_argument("--omp-wait-policy", choices=["ACTIVE", "PASSIVE"])
     ap.add_argument("--end-depth", type=float,
                     help="run.end_depth, in projectile lengths (default: the scene's)")
-    ap.add_argument("--subcycle-levels", type=int,
-                    help="run.subcycle_levels (default: the scene's; docs/solver.md, Subcycling)")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     with open(args.scene) as f:
@@ -67,12 +65,6 @@ def main():
             ap.error(f"--end-depth {args.end_depth}: allowed 0 < end depth <= 10 projectile lengths")
         text = re.sub(r"(?m)^end_depth\s*=.*$", "", text)
         text = re.sub(r"(?m)^\[run\]\s*$", f"[run]\nend_depth = {args.end_depth}", text, count=1)
-    if args.subcycle_levels is not None:
-        if not 0 <= args.subcycle_levels <= 6:
-            ap.error(f"--subcycle-levels {args.subcycle_levels}: allowed 0 to 6")
-        text = re.sub(r"(?m)^subcycle_levels\s*=.*$", "", text)
-        text = re.sub(r"(?m)^\[run\]\s*$", f"[run]\nsubcycle_levels = {args.subcycle_levels}",
-                      text, count=1)
     length = float(re.search(r"(?m)^length\s*=\s*(\S+)", text).group(1))
 
     summaries = []
@@ -94,12 +86,9 @@ def main():
             summaries.append(s)
 
     policy = env.get("OMP_WAIT_POLICY", "the runtime's default")
-    levels = summaries[0]["run"].get("subcycle_levels", 0)
     print(f"mesopen run {os.path.relpath(args.scene, ROOT)}, {args.threads} threads "
-          f"(OMP_WAIT_POLICY {policy}), subcycle levels {levels}, {args.runs} run(s), no frames; "
-          f"median (min-max)")
+          f"(OMP_WAIT_POLICY {policy}), {args.runs} run(s), no frames; median (min-max)")
     result = {"scene": os.path.relpath(args.scene, ROOT), "threads": args.threads,
-              "subcycle_levels": levels,
               "runs": args.runs, "omp_wait_policy": policy, "elements": summaries[0]["model"]["elements"],
               "status": [s["status"] for s in summaries]}
     for key, label, get in FIGURES:
