@@ -22,6 +22,12 @@ struct MieGruneisen {
     const double m = std::max(mu, 0.0);
     return std::max(K, (1.0 + m) * ((3.0 * K2 * m + 2.0 * K1) * m + K)) + gamma * std::max(p, 0.0);
   }
+  // The tangent bulk modulus: bulkModulus, or 0 where the pressure is held at the cut-off p_min,
+  // the equation of state's pressure at the new volume and energy, p_eos, being below it: there
+  // the pressure does not follow the volume.
+  double tangentBulk(double mu, double p, double p_eos, double p_min) const {
+    return p_eos < p_min ? 0.0 : bulkModulus(mu, p);
+  }
 };
 
 } // namespace mesopen::fem
