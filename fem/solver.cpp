@@ -305,10 +305,9 @@ void Solver::updateActivity() {
 }
 
 // Each thread takes a contiguous run of units with about its share of the elements, and the node
-// blocks beside them: the nodes it kicks and moves are those whose elements it computes. Nodes
-// written on one core and read on the other cost a transfer between the cores' caches at each
-// pass; with the units taken as they came (a dynamic schedule) and the blocks in halves, the node
-// passes cost 2.5 to 3 times more on two threads than on one (run 6 to 0.4 length).
+// blocks beside them: the nodes it kicks and moves are those whose elements it computes, so that
+// a node is not written on one core and read on the other at each pass (with the units taken as
+// they came and the blocks in halves, run 6 to 0.4 length took 3 % longer on two threads).
 void Solver::shareAmongThreads() {
   const auto threads = static_cast<std::size_t>(omp_get_max_threads());
   std::vector<std::size_t> elements(units_.size(), 0);
@@ -323,7 +322,8 @@ void Solver::shareAmongThreads() {
   std::size_t before = 0; // elements in the units before u
   for (std::size_t u = 0, t = 0; u < units_.size(); ++u) {
     // the thread whose share holds the unit's middle element
-    const std::size_t owner = std::min(threads - 1, (2 * before + elements[u]) * threads / (2 * std::max<std::size_t>(total, 1)));
+    const std::size_t owner = std::min(
+        threads - 1, (2 * before + elements[u]) * threads / (2 * std::max<std::size_t>(total, 1)));
     while (t < owner)
       thread_units_[++t] = u;
     before += elements[u];
@@ -332,8 +332,9 @@ void Solver::shareAmongThreads() {
   thread_blocks_.assign(threads + 1, node_ranges_.size());
   thread_blocks_[0] = 0;
   for (std::size_t t = 1, i = 0; t < threads; ++t) {
-    const std::size_t first_node = thread_units_[t] < units_.size() ? units_[thread_units_[t]].node_lo
-                                                                    : std::numeric_limits<std::size_t>::max();
+    const std::size_t first_node = thread_units_[t] < units_.size()
+                                       ? units_[thread_units_[t]].node_lo
+                                       : std::numeric_limits<std::size_t>::max();
     while (i < node_ranges_.size() && node_ranges_[i].begin < first_node)
       ++i;
     thread_blocks_[t] = i;
