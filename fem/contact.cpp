@@ -299,41 +299,42 @@ void Contact::Hits::clear() {
 // The contact forces into the nodes, every body loaded woken. Each block of bodies (fixed,
 // whatever the number of threads) is one thread's: it adds the forces on its nodes, run by run in
 // the order of the contacts, and lists its newly loaded nodes, so that every node sums its forces
-// in the same order, and the loaded nodes come block by block, for any number of threads.
+// in the same order, and the loaded nodes come block by block, for any number of threads. A
+// thread takes a contiguous run of blocks with about its share of the loads: as the solver's
+// threads take contiguous runs of bodies, the forces are mostly added on the core that reads them
+// next, and the loads, gathered under the tip, are shared evenly (run 6, the two ways taken at
+// alternate steps of one run: 1.04 s against 1.55 s with the blocks dealt out in turn).
 void Contact::addHits(Model &model) {
   Nodes &nd = model.nodes;
+  const std::size_t blocks = block_loaded_.size();
   std::size_t n_loads = 0, contacts = 0, deep_steps = 0;
   double deepest = 0.0;
+  std::vector<std::size_t> block_loads(blocks, 0);
   for (const Hits &hits : run_hits_) {
-    for (const auto &block : hits.loads)
-      n_loads += block.size();
+    for (std::size_t k = 0; k < blocks; ++k)
+      block_loads[k] += hits.loads[k].size();
     contacts += hits.count, deep_steps += hits.deep, deepest = std::max(deepest, hits.depth);
   }
-  const long blocks = static_cast<long>(block_loaded_.size());
-#pragma omp parallel for schedule(static, 1) if (n_loads > 1024)
-  for (long k = 0; k < blocks; ++k) {
-    std::uint32_t woken = no_node;
-    // the depths the block's nodes are pushed at, for the next step's hits
-    for (std::uint32_t p : block_pushed_[k])
-      pushed_[p] = 0.0;
-    block_pushed_[k].clear();
-    for (const Hits &hits : run_hits_)
-      for (std::size_t i = 0, n = hits.loads[k].size(); i < n; ++i) {
-        const Load &l = hits.loads[k][i];
-        if (i + prefetch_ahead < n) {
-          const std::uint32_t ahead = hits.loads[k][i + prefetch_ahead].node;
-          __builtin_prefetch(&nd.external[ahead], 1);
-          __builtin_prefetch(&nd.is_loaded[ahead], 1);
-        }
-        if (l.depth > 0.0 && l.depth > pushed_[l.node]) { // (a reaction is pushed at 0)
-          if (pushed_[l.node] == 0.0)
-            block_pushed_[k].push_back(l.node);
-          pushed_[l.node] = l.depth;
-        }
-        nd.addExternal(l.node, l.fx, l.fy, l.friction_x, l.friction_y, block_loaded_[k]);
-        if (l.body != woken) // the loads of a body come together
-          model.wake(l.body), woken = l.body;
-      }
+  const auto threads = static_cast<std::size_t>(omp_get_max_threads());
+  std::vector<std::size_t> bounds(threads + 1, blocks);
+  bounds[0] = 0;
+  for (std::size_t k = 0; k < blocks; ++k)
+    n_loads += block_loads[k];
+  for (std::size_t k = 0, t = 0, before = 0; k < blocks; before += block_loads[k++]) {
+    // the thread whose share holds the block's middle load
+    const std::size_t owner = std::min(
+        threads - 1, (2 * before + block_loads[k]) * threads / (2 * std::max<std::size_t>(n_loads, 1)));
+    while (t < owner)
+      bounds[++t] = k;
+  }
+#pragma omp parallel if (n_loads > 1024)
+  {
+    const auto t = static_cast<std::size_t>(omp_get_thread_num());
+    const auto n = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t first = n == threads ? bounds[t] : (t == 0 ? 0 : blocks);
+    const std::size_t last = n == threads ? bounds[t + 1] : blocks;
+    for (std::size_t k = first; k < last; ++k)
+      addBlock(model, k);
   }
   for (auto &loaded : block_loaded_) {
     nd.loaded.insert(nd.loaded.end(), loaded.begin(), loaded.end());
@@ -348,6 +349,33 @@ void Contact::addHits(Model &model) {
   stats_.contacts = contacts;
   stats_.depth = deepest;
   stats_.deep += deep_steps;
+}
+
+// The loads of block k into the nodes (see addHits).
+void Contact::addBlock(Model &model, std::size_t k) {
+  Nodes &nd = model.nodes;
+  std::uint32_t woken = no_node;
+  // the depths the block's nodes are pushed at, for the next step's hits
+  for (std::uint32_t p : block_pushed_[k])
+    pushed_[p] = 0.0;
+  block_pushed_[k].clear();
+  for (const Hits &hits : run_hits_)
+    for (std::size_t i = 0, n = hits.loads[k].size(); i < n; ++i) {
+      const Load &l = hits.loads[k][i];
+      if (i + prefetch_ahead < n) {
+        const std::uint32_t ahead = hits.loads[k][i + prefetch_ahead].node;
+        __builtin_prefetch(&nd.external[ahead], 1);
+        __builtin_prefetch(&nd.is_loaded[ahead], 1);
+      }
+      if (l.depth > 0.0 && l.depth > pushed_[l.node]) { // (a reaction is pushed at 0)
+        if (pushed_[l.node] == 0.0)
+          block_pushed_[k].push_back(l.node);
+        pushed_[l.node] = l.depth;
+      }
+      nd.addExternal(l.node, l.fx, l.fy, l.friction_x, l.friction_y, block_loaded_[k]);
+      if (l.body != woken) // the loads of a body come together
+        model.wake(l.body), woken = l.body;
+    }
 }
 
 // A body's boundary node positions and its bounding box now, and how far its nodes

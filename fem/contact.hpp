@@ -153,6 +153,7 @@ private:
   void allow(std::uint32_t node, double depth);
   void measure(const Model &model, std::size_t body);
   void addHits(Model &model);
+  void addBlock(Model &model, std::size_t k);
   void findPairs();
   void addPairsOfWoken(const Model &model);
   template <class Wanted, class Add>
