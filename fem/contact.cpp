@@ -1,4 +1,5 @@
 #include "contact.hpp"
+#include "threads.hpp"
 
 #include <omp.h>
 
@@ -312,28 +313,14 @@ void Contact::addHits(Model &model) {
   std::vector<std::size_t> block_loads(blocks, 0);
   for (const Hits &hits : run_hits_) {
     for (std::size_t k = 0; k < blocks; ++k)
-      block_loads[k] += hits.loads[k].size();
+      block_loads[k] += hits.loads[k].size(), n_loads += hits.loads[k].size();
     contacts += hits.count, deep_steps += hits.deep, deepest = std::max(deepest, hits.depth);
   }
-  const auto threads = static_cast<std::size_t>(omp_get_max_threads());
-  std::vector<std::size_t> bounds(threads + 1, blocks);
-  bounds[0] = 0;
-  for (std::size_t k = 0; k < blocks; ++k)
-    n_loads += block_loads[k];
-  for (std::size_t k = 0, t = 0, before = 0; k < blocks; before += block_loads[k++]) {
-    // the thread whose share holds the block's middle load
-    const std::size_t owner = std::min(
-        threads - 1, (2 * before + block_loads[k]) * threads / (2 * std::max<std::size_t>(n_loads, 1)));
-    while (t < owner)
-      bounds[++t] = k;
-  }
+  const std::vector<std::size_t> bounds =
+      contiguousShares(block_loads, static_cast<std::size_t>(omp_get_max_threads()));
 #pragma omp parallel if (n_loads > 1024)
   {
-    const auto t = static_cast<std::size_t>(omp_get_thread_num());
-    const auto n = static_cast<std::size_t>(omp_get_num_threads());
-    const std::size_t first = n == threads ? bounds[t] : (t == 0 ? 0 : blocks);
-    const std::size_t last = n == threads ? bounds[t + 1] : blocks;
-    for (std::size_t k = first; k < last; ++k)
+    for (auto [k, last] = threadShare(bounds); k < last; ++k)
       addBlock(model, k);
   }
   for (auto &loaded : block_loaded_) {

@@ -1,9 +1,9 @@
 #include "solver.hpp"
+#include "threads.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <omp.h>
 #include <sstream>
 #ifdef __AVX__
 #include <immintrin.h>
@@ -24,17 +24,6 @@ constexpr double refine_margin = 1.05; // refine the steps below this times the 
 constexpr double crushed_area = 0.2;
 bool hasFailed(double plastic_strain, double area, double area0, double erosion) {
   return plastic_strain >= erosion || (erosion < HUGE_VAL && area < crushed_area * area0);
-}
-
-// This thread's part [begin, end) of work split among threads at `bounds` (one bound more than
-// threads); a team of another size splits the whole evenly.
-std::pair<std::size_t, std::size_t> threadShare(const std::vector<std::size_t> &bounds) {
-  const auto t = static_cast<std::size_t>(omp_get_thread_num());
-  const auto n = static_cast<std::size_t>(omp_get_num_threads());
-  if (bounds.size() == n + 1)
-    return {bounds[t], bounds[t + 1]};
-  const std::size_t all = bounds.back() - bounds.front();
-  return {bounds.front() + t * all / n, bounds.front() + (t + 1) * all / n};
 }
 
 // Appends the range `piece` to `ranges` in pieces of at most `limit`, first filling up the last
@@ -311,23 +300,10 @@ void Solver::updateActivity() {
 void Solver::shareAmongThreads() {
   const auto threads = static_cast<std::size_t>(omp_get_max_threads());
   std::vector<std::size_t> elements(units_.size(), 0);
-  std::size_t total = 0;
-  for (std::size_t u = 0; u < units_.size(); ++u) {
+  for (std::size_t u = 0; u < units_.size(); ++u)
     for (std::size_t c = units_[u].chunk_begin; c < units_[u].chunk_end; ++c)
       elements[u] += chunks_[c].end - chunks_[c].begin;
-    total += elements[u];
-  }
-  thread_units_.assign(threads + 1, units_.size());
-  thread_units_[0] = 0;
-  std::size_t before = 0; // elements in the units before u
-  for (std::size_t u = 0, t = 0; u < units_.size(); ++u) {
-    // the thread whose share holds the unit's middle element
-    const std::size_t owner = std::min(
-        threads - 1, (2 * before + elements[u]) * threads / (2 * std::max<std::size_t>(total, 1)));
-    while (t < owner)
-      thread_units_[++t] = u;
-    before += elements[u];
-  }
+  thread_units_ = contiguousShares(elements, threads);
   // A block goes with the units that hold its first node.
   thread_blocks_.assign(threads + 1, node_ranges_.size());
   thread_blocks_[0] = 0;

@@ -1,0 +1,44 @@
+// Work split among OpenMP threads in contiguous runs, so that a thread keeps the same items (and
+// their data in its core's cache) from one pass to the next.
+#pragma once
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+namespace mesopen::fem {
+
+// Bounds of `parts` contiguous runs of items with about equal sums of `weights`: run t is
+// [bounds[t], bounds[t + 1]). An item goes to the run whose share holds its middle.
+inline std::vector<std::size_t> contiguousShares(const std::vector<std::size_t> &weights,
+                                                 std::size_t parts) {
+  std::size_t total = 0;
+  for (std::size_t w : weights)
+    total += w;
+  std::vector<std::size_t> bounds(parts + 1, weights.size());
+  bounds[0] = 0;
+  std::size_t before = 0; // the weight of the items before i
+  for (std::size_t i = 0, t = 0; i < weights.size(); before += weights[i++]) {
+    const std::size_t owner =
+        std::min(parts - 1, (2 * before + weights[i]) * parts / (2 * std::max<std::size_t>(total, 1)));
+    while (t < owner)
+      bounds[++t] = i;
+  }
+  return bounds;
+}
+
+// This thread's run [begin, end) of work split at `bounds` (one bound more than threads); a team
+// of another size splits the whole evenly.
+inline std::pair<std::size_t, std::size_t> threadShare(const std::vector<std::size_t> &bounds) {
+  const auto t = static_cast<std::size_t>(omp_get_thread_num());
+  const auto n = static_cast<std::size_t>(omp_get_num_threads());
+  if (bounds.size() == n + 1)
+    return {bounds[t], bounds[t + 1]};
+  const std::size_t all = bounds.back() - bounds.front();
+  return {bounds.front() + t * all / n, bounds.front() + (t + 1) * all / n};
+}
+
+} // namespace mesopen::fem
