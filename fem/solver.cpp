@@ -183,6 +183,7 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
   failed_.assign(el.size(), 0);
   internalForces(0.0);
   erode_below_ = s_.erode_dt_ratio * shortest_step_;
+  scale_below_ = s_.mass_scaling_dt_ratio * shortest_step_;
   dt_ = std::min(next_dt_, s_.max_dt);
   for (const Range &r : node_ranges_)
     for (std::size_t a = r.begin; a < r.end; ++a)
@@ -215,6 +216,7 @@ void Solver::step() {
   forces(dt, true);         // stresses at n+1, f(n+1), the next stable step, and unit by unit
                             // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
   applyConstraints(0.5 * dt, true); // the imposed velocities at n+1
+  scaleMasses(0.5 * dt);    // mass for the elements whose step fell below scale_below_
   time_ += dt;
   ++steps_;
   if (steps_ == 1)
@@ -652,6 +654,7 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   }
   sums.inverted = -1;
   sums.eroding = false;
+  sums.scaled.clear();
   if (!(min_area > 0.0)) {
     for (std::size_t i = 0; i < n; ++i)
       if (!(area[i] > 0.0 && vmid[i] > 0.0))
@@ -742,6 +745,26 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
       dt_min = std::min(dt_min, step[i]);
     }
   }
+  // Selective mass scaling: an element whose step is below scale_below_ needs the mass
+  //   m_e ((scale_below_ / dt_e)^2 - 1)
+  // added on its nodes, a third on each: the lumped element's frequencies scale as 1 / sqrt(mass),
+  // so its step becomes scale_below_ (scaleMasses adds it after the pass).
+  if (dt_min < scale_below_) {
+    dt_min = HUGE_VAL;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (step[i] < scale_below_) {
+        const auto e = static_cast<std::uint32_t>(e0 + i);
+        const double mass = rho0 * area0[i], needed = mass * (sq(scale_below_ / step[i]) - 1.0);
+        const auto it = added_mass_.find(e);
+        const double added = it == added_mass_.end() ? 0.0 : it->second;
+        if (needed > added)
+          sums.scaled.emplace_back(e, needed), step[i] = scale_below_;
+        else
+          step[i] *= std::sqrt(1.0 + added / mass);
+      }
+      dt_min = std::min(dt_min, step[i]);
+    }
+  }
   // Into the unit's nodes, in element order.
   for (std::size_t i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) {
@@ -821,6 +844,66 @@ void Solver::erode() {
     provider->boundaryChanged(m_, bodies);
 }
 
+// The mass the element pass asked for (mass_scaling_dt_ratio), added at v(n+1) to each element's
+// three nodes, a third each. The nodes keep their momentum, v' = v m / m' (a velocity imposed by a
+// constraint is kept); the change of the leapfrog kinetic energy 1/2 m (|v|^2 - |dv|^2), dv the
+// half-kick dt/2 f / m, is booked as mass_scaling.
+void Solver::scaleMasses(double half_dt) {
+  std::vector<std::pair<std::uint32_t, double>> scaled;
+  for (std::size_t i = 0; i < chunks_.size(); ++i)
+    scaled.insert(scaled.end(), sums_[i].scaled.begin(), sums_[i].scaled.end());
+  if (s_.sharing) { // every process's, in element order
+    std::vector<double> mine;
+    for (auto [e, mass] : scaled)
+      mine.insert(mine.end(), {static_cast<double>(e), mass});
+    const std::vector<double> all = s_.sharing->allGather(mine);
+    scaled.clear();
+    for (std::size_t k = 0; k < all.size(); k += 2)
+      scaled.emplace_back(static_cast<std::uint32_t>(all[k]), all[k + 1]);
+    std::sort(scaled.begin(), scaled.end());
+  }
+  if (scaled.empty())
+    return;
+  Nodes &nd = m_.nodes;
+  if (constrained_.size() != nd.size()) {
+    constrained_.assign(nd.size(), 0);
+    for (const auto &c : m_.constraints)
+      for (std::uint32_t a : c.nodes)
+        constrained_[a] |= (c.constrain_x ? 1 : 0) | (c.constrain_y ? 2 : 0);
+  }
+  auto kinetic = [&](std::size_t a) {
+    const double dvx = half_dt * nd.fx[a] / nd.mass[a], dvy = half_dt * nd.fy[a] / nd.mass[a];
+    return 0.5 * nd.mass[a] * (nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a] - dvx * dvx - dvy * dvy);
+  };
+  for (auto [e, needed] : scaled) {
+    double &added = added_mass_[e];
+    const double share = (needed - added) / 3.0;
+    added_mass_total_ += needed - added;
+    added = needed;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = m_.elements.node[3 * e + k];
+      const double before = kinetic(a), ratio = nd.mass[a] / (nd.mass[a] + share);
+      nd.mass[a] += share;
+      inv_mass_[a] = 1.0 / nd.mass[a];
+      if (!(constrained_[a] & 1))
+        nd.vx[a] *= ratio;
+      if (!(constrained_[a] & 2))
+        nd.vy[a] *= ratio;
+      const double change = kinetic(a) - before;
+      energy_.kinetic += change;
+      energy_.mass_scaling -= change;
+    }
+  }
+}
+
+double Solver::addedMass(std::size_t body) const {
+  double mass = 0.0;
+  for (auto [e, added] : added_mass_)
+    if (m_.elements.body[e] == body)
+      mass += added;
+  return mass;
+}
+
 void Solver::accountEnergy() {
   // Element sums of this step's pass (chunk order: the same for any thread count).
   double internal = 0.0, plastic = 0.0, viscous = 0.0;
@@ -839,7 +922,8 @@ void Solver::accountEnergy() {
   energy_.friction -= friction_work_;
   energy_.contact -= provider_work_ - friction_work_;
   energy_.external += kick_work_;
-  const double total = energy_.kinetic + internal + energy_.friction + energy_.contact + energy_.eroded;
+  const double total = energy_.kinetic + internal + energy_.friction + energy_.contact + energy_.eroded +
+                       energy_.mass_scaling;
   const double scale = std::max({std::abs(total), std::abs(energy_.initial), std::abs(energy_.external)});
   energy_.balance_error = scale > 0.0 ? (total - energy_.initial - energy_.external) / scale : 0.0;
 }

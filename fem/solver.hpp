@@ -12,6 +12,8 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace mesopen::fem {
@@ -48,6 +50,11 @@ struct SolverSettings {
   // of explicit codes, e.g. LS-DYNA's DTMIN with ERODE); 0: never. The thesis runs that finish
   // without it go no lower than 0.038 (docs/solver.md).
   double erode_dt_ratio = 0.01;
+  // Selective mass scaling (LS-DYNA's DT2MS < 0): an element whose stable step falls below this
+  // fraction of the shortest element step at the start gets mass on its nodes, enough to bring its
+  // step back to that fraction; the mass is not taken back, and the nodes keep their momentum
+  // (the kinetic energy this takes is booked, Energy::mass_scaling). 0: never.
+  double mass_scaling_dt_ratio = 0.0;
   double gravity_x = 0.0, gravity_y = 0.0; // body force per unit mass [m/s^2]
   std::size_t chunk = 256;          // elements per material batch
   const Sharing *sharing = nullptr; // the element work shared by processes (null: one)
@@ -57,13 +64,14 @@ struct SolverSettings {
 // Friction is the energy the frictional forces took out (minus their work), contact the energy the
 // normal contact forces took out (held in the penalty springs or dissipated by their damping);
 // external is the work of the imposed velocities and of gravity; eroded the internal energy the
-// eroded elements took with them. The balance error is
-//   (kinetic + internal + friction + contact + eroded - external - initial)
+// eroded elements took with them; mass_scaling the kinetic energy that mass added at constant
+// momentum took (mass_scaling_dt_ratio). The balance error is
+//   (kinetic + internal + friction + contact + eroded + mass_scaling - external - initial)
 //     / max(|total|, initial, |external|)
 // (0 when nothing moves).
 struct Energy {
   double kinetic = 0, internal = 0, plastic = 0, viscous = 0, friction = 0, contact = 0,
-         external = 0, eroded = 0;
+         external = 0, eroded = 0, mass_scaling = 0;
   double initial = 0, balance_error = 0;
 };
 
@@ -106,6 +114,11 @@ public:
   std::size_t erodedElements() const { return eroded_elements_; } // over the run
   // Of those, the ones eroded for a collapsed step (erode_dt_ratio).
   std::size_t collapsedElements() const { return collapsed_elements_; }
+  // Mass scaling (mass_scaling_dt_ratio) over the run: the elements that took mass, and the mass
+  // added [kg/m].
+  std::size_t massScaledElements() const { return added_mass_.size(); }
+  double addedMass() const { return added_mass_total_; }
+  double addedMass(std::size_t body) const; // of one body
 
   // The element pass alone, as the time loop calls it: stresses and forces at the current
   // positions with the current velocities over a step dt (for benchmarks).
@@ -147,6 +160,7 @@ private:
     double internal, plastic, viscous, dt_min;
     long inverted; // an inverted element, or -1
     bool eroding;  // an element failed (erosion strain, crushed, collapsed step): see erode
+    std::vector<std::pair<std::uint32_t, double>> scaled; // elements and the mass they need
   };
 
   void updateActivity();
@@ -163,6 +177,7 @@ private:
   void elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums);
   void applyConstraints(double half_dt, bool second_half);
   void erode();
+  void scaleMasses(double half_dt);
   std::string thinnestElement() const;
   bool owns(std::size_t body) const {
     return !s_.sharing || static_cast<int>(body % s_.sharing->size()) == s_.sharing->rank();
@@ -195,6 +210,10 @@ private:
   double step_scale_ = 1.0; // sqrt(1 - kappa_n / 4) for the providers' stiffness kappa_n
   double first_dt_ = 0.0;   // the first step (after the providers' scaling)
   double erode_below_ = 0.0; // erode_dt_ratio times the shortest element step at the start
+  double scale_below_ = 0.0; // mass_scaling_dt_ratio times it
+  std::unordered_map<std::uint32_t, double> added_mass_; // by element, what mass scaling added
+  double added_mass_total_ = 0.0;
+  std::vector<std::uint8_t> constrained_; // by node: 1 x imposed, 2 y imposed
   std::vector<std::uint8_t> failed_; // per element: failed in this step's pass, 2 for a collapsed step
   // The shortest element step of the last element pass, before the safety factor and the
   // providers' scaling (elementPass refines the steps near it)

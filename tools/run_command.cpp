@@ -369,10 +369,19 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
   j["ns_per_element_step"] = 1e9 * loop.solver_seconds / std::max(loop.element_steps, 1.0);
   j["energy"] = {{"kinetic", e.kinetic},   {"internal", e.internal},   {"plastic", e.plastic},
                  {"viscous", e.viscous},   {"friction", e.friction},   {"contact", e.contact},
-                 {"external", e.external}, {"eroded", e.eroded},       {"initial", e.initial},
-                 {"balance_error", e.balance_error}};
+                 {"external", e.external}, {"eroded", e.eroded},       {"mass_scaling", e.mass_scaling},
+                 {"initial", e.initial},   {"balance_error", e.balance_error}};
   j["eroded_elements"] = solver.erodedElements();
   j["collapsed_elements"] = solver.collapsedElements(); // of those, eroded for a collapsed step
+  if (scene.run.mass_scaling_step_ratio > 0.0) {
+    double mass = 0.0;
+    for (double m : model.nodes.mass)
+      mass += m;
+    j["mass_scaling"] = {{"elements", solver.massScaledElements()},
+                         {"added_mass", solver.addedMass()},
+                         {"added_mass_share", solver.addedMass() / std::max(mass - solver.addedMass(), 1e-300)},
+                         {"projectile_added_mass", solver.addedMass(0)}};
+  }
   if (contact) {
     const fem::ContactStatistics &c = contact->statistics();
     j["contact"] = {{"seconds", c.seconds},
@@ -458,6 +467,7 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
                              .anti_locking = run.anti_locking,
                              .max_dt = dem_step,
                              .erode_dt_ratio = run.erode_step_ratio,
+                             .mass_scaling_dt_ratio = run.mass_scaling_step_ratio,
                              .sharing = world.size > 1 ? &sharing : nullptr});
   std::unique_ptr<fem::Contact> contact;
   if (scene.contact.enabled) {

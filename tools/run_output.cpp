@@ -57,6 +57,7 @@ const Series::Column series_columns[] = {
      {}},
     {"energy/external", "J/m", "work of the imposed velocities (fixed nodes) and gravity", {}},
     {"energy/eroded", "J/m", "internal energy the eroded elements took with them", {}},
+    {"energy/mass_scaling", "J/m", "kinetic energy the mass added by mass scaling took (momentum kept)", {}},
     {"energy/balance_error",
      "",
      "(kinetic + internal + friction + contact + eroded - initial - external) / max(|total|, initial, "
@@ -225,6 +226,7 @@ void Series::sample(const fem::Model &model, const fem::Solver &solver) {
                            e.contact,
                            e.external,
                            e.eroded,
+                           e.mass_scaling,
                            e.balance_error};
   static_assert(std::size(values) == std::size(series_columns));
   for (std::size_t c = 0; c < columns_.size(); ++c)

@@ -253,6 +253,10 @@ const std::vector<Key> &keys() {
         real("run", "erode_step_ratio", r, &R::erode_step_ratio, "", 0, false, 1,
              "an element whose stable step falls below this fraction of the shortest element step "
              "at the start is eroded (a collapsed element; docs/solver.md); 0: never"),
+        real("run", "mass_scaling_step_ratio", r, &R::mass_scaling_step_ratio, "", 0, false, 1,
+             "selective mass scaling: an element whose stable step falls below this fraction of the "
+             "shortest element step at the start gets mass on its nodes (momentum kept) to bring its "
+             "step back to it (docs/solver.md); 0: never"),
         integer("run", "series_interval", r, &R::series_interval, 1, 1e9,
                 "steps between samples of the series in run.h5"),
         real("run", "end_depth", r, &R::end_depth, "", 0, false, 100,

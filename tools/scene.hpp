@@ -41,6 +41,8 @@ struct RunSpec {
   bool anti_locking = false;       // averaged nodal volume where plastic flow is on (see docs)
   double erode_step_ratio = 0.01;  // an element whose stable step falls below this fraction of
                                    // the shortest at the start is eroded; 0: never
+  double mass_scaling_step_ratio = 0.0; // an element whose stable step falls below this fraction
+                                   // of the shortest at the start gets mass; 0: never
   std::int64_t series_interval = 1;  // steps between series samples
   double end_depth = 0.0;          // stop when the depth reaches this many projectile lengths
   double frame_interval = 1e-7;    // simulated time between frames [s]; 0: no frames

@@ -93,10 +93,13 @@ TEST(Mpi, OneTwoAndFourRanksAgree) {
 // states are copied exactly and the step is the least of the same values: the projectile's series
 // and the frames' fields agree bit for bit (tolerance 1e-14 of the largest value); the energies are
 // summed over the ranks in another order (internal energy and balance error to 1e-9 of their
-// largest value).
+// largest value). And the same with mass scaling at 0.5 of the first step (the mass the elements
+// ask for is gathered, and both ranks add the same).
 TEST(Mpi, TwoRanksShareTheElementWork) {
-  for (const std::string extra : {"", "erode_step_ratio = 0.4\n"}) {
-    ScratchDir dir(extra.empty() ? "mpi-fe" : "mpi-fe-eroding");
+  for (const std::string extra : {"", "erode_step_ratio = 0.4\n", "mass_scaling_step_ratio = 0.5\n"}) {
+    const bool eroding = extra.starts_with("erode"), scaling = extra.starts_with("mass");
+    ScratchDir dir(eroding ? "mpi-fe-eroding" : scaling ? "mpi-fe-mass-scaling" : "mpi-fe");
+    const char *label = eroding ? ", eroding" : scaling ? ", mass scaling" : "";
     std::ifstream in(std::string(MESOPEN_SOURCE_DIR) + "/examples/quickstart.toml");
     std::string text((std::istreambuf_iterator<char>(in)), {}), line, scene;
     std::istringstream lines(text);
@@ -115,24 +118,24 @@ TEST(Mpi, TwoRanksShareTheElementWork) {
     const std::string one_summary = test::readFile(dir / "one/summary.json"),
                       two_summary = test::readFile(dir / "two/summary.json");
     EXPECT_NE(two_summary.find("\"ranks\": 2"), std::string::npos);
-    if (!extra.empty()) { // the same elements eroded
-      const std::size_t at = one_summary.find("\"eroded_elements\"");
+    if (!extra.empty()) { // the same elements eroded, the same mass added
+      const std::size_t at = one_summary.find(eroding ? "\"eroded_elements\"" : "\"added_mass\"");
       ASSERT_NE(at, std::string::npos);
-      const std::string eroded = one_summary.substr(at, one_summary.find(',', at) - at);
-      EXPECT_EQ(eroded.find(": 0"), std::string::npos) << eroded;
-      EXPECT_NE(two_summary.find(eroded), std::string::npos) << eroded;
+      const std::string count = one_summary.substr(at, one_summary.find(',', at) - at);
+      EXPECT_EQ(count.find(": 0"), std::string::npos) << count;
+      EXPECT_NE(two_summary.find(count), std::string::npos) << count;
     }
     for (const char *series : {"projectile/vy", "projectile/vx", "projectile/lateral_force",
                                "projectile/rotational_momentum", "projectile/depth"}) {
       const double d = difference(dir / "one/run.h5", dir / "two/run.h5", series);
       std::printf("2 ranks sharing the elements%s: %s differs by %.2e of its largest value\n",
-                  extra.empty() ? "" : ", eroding", series, d);
+                  label, series, d);
       EXPECT_LE(d, 1e-14) << series;
     }
     for (const char *series : {"energy/internal", "energy/kinetic", "energy/balance_error"}) {
       const double d = difference(dir / "one/run.h5", dir / "two/run.h5", series);
       std::printf("2 ranks sharing the elements%s: %s differs by %.2e of its largest value\n",
-                  extra.empty() ? "" : ", eroding", series, d);
+                  label, series, d);
       EXPECT_LT(d, 1e-9) << series;
     }
     const H5File one = H5File::open(dir / "one/run.h5"), two = H5File::open(dir / "two/run.h5");
@@ -144,7 +147,7 @@ TEST(Mpi, TwoRanksShareTheElementWork) {
       for (std::size_t i = 0; i < a.size(); ++i)
         diff = std::max(diff, std::abs(a[i] - b[i])), scale = std::max(scale, std::abs(a[i]));
       std::printf("2 ranks sharing the elements%s: frame 3's %s differs by %.2e of its largest "
-                  "value\n", extra.empty() ? "" : ", eroding", field, diff / scale);
+                  "value\n", label, field, diff / scale);
       EXPECT_LE(diff, 1e-14 * scale) << field;
     }
   }
