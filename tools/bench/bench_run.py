@@ -7,7 +7,7 @@ one the table gives the median (min-max), since the machine may be shared.
 
     python3 tools/bench/bench_run.py [--mesopen build/bin/mesopen] [--out build/bench]
         [--scene examples/baseline.toml] [--threads 2] [--runs 1] [--omp-wait-policy ACTIVE|PASSIVE]
-        [--end-depth LENGTHS]
+        [--end-depth LENGTHS] [--mass-scaling RATIO]
 
 On this shared machine two-thread timings drift with its load (run 6 from about 60 to 95 s within
 a day), and so does the contact's share of them; on one thread the share is steady (within 0.003
@@ -38,10 +38,15 @@ FIGURES = [
 ]
 
 
+def with_run_key(scene_text, key, value):
+    """The scene with `key = value` in its [run] table (in place of the scene's own)."""
+    text = re.sub(rf"(?m)^{key}\s*=.*$", "", scene_text)
+    return re.sub(r"(?m)^\[run\]\s*$", f"[run]\n{key} = {value}", text, count=1)
+
+
 def without_frames(scene_text):
     """The scene with frame_interval = 0 in its [run] table."""
-    text = re.sub(r"(?m)^frame_interval\s*=.*$", "", scene_text)
-    return re.sub(r"(?m)^\[run\]\s*$", "[run]\nframe_interval = 0", text, count=1)
+    return with_run_key(scene_text, "frame_interval", 0)
 
 
 def main():
@@ -56,6 +61,8 @@ def main():
     ap.add_argument("--omp-wait-policy", choices=["ACTIVE", "PASSIVE"])
     ap.add_argument("--end-depth", type=float,
                     help="run.end_depth, in projectile lengths (default: the scene's)")
+    ap.add_argument("--mass-scaling", type=float,
+                    help="run.mass_scaling_step_ratio (default: the scene's; 0: off)")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     with open(args.scene) as f:
@@ -63,8 +70,11 @@ def main():
     if args.end_depth is not None:
         if not 0.0 < args.end_depth <= 10.0:
             ap.error(f"--end-depth {args.end_depth}: allowed 0 < end depth <= 10 projectile lengths")
-        text = re.sub(r"(?m)^end_depth\s*=.*$", "", text)
-        text = re.sub(r"(?m)^\[run\]\s*$", f"[run]\nend_depth = {args.end_depth}", text, count=1)
+        text = with_run_key(text, "end_depth", args.end_depth)
+    if args.mass_scaling is not None:
+        if not 0.0 <= args.mass_scaling <= 1.0:
+            ap.error(f"--mass-scaling {args.mass_scaling}: allowed 0 <= ratio <= 1")
+        text = with_run_key(text, "mass_scaling_step_ratio", args.mass_scaling)
     length = float(re.search(r"(?m)^length\s*=\s*(\S+)", text).group(1))
 
     summaries = []
@@ -88,7 +98,11 @@ def main():
     policy = env.get("OMP_WAIT_POLICY", "the runtime's default")
     print(f"mesopen run {os.path.relpath(args.scene, ROOT)}, {args.threads} threads "
           f"(OMP_WAIT_POLICY {policy}), {args.runs} run(s), no frames; median (min-max)")
+    found = re.search(r"(?m)^mass_scaling_step_ratio\s*=\s*(\S+)", text)
+    ratio = float(found.group(1)) if found else 0.0
+    print(f"  (mass scaling: {ratio if ratio > 0.0 else 'off'})")
     result = {"scene": os.path.relpath(args.scene, ROOT), "threads": args.threads,
+              "mass_scaling_step_ratio": ratio,
               "runs": args.runs, "omp_wait_policy": policy, "elements": summaries[0]["model"]["elements"],
               "status": [s["status"] for s in summaries]}
     for key, label, get in FIGURES:
