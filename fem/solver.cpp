@@ -849,6 +849,8 @@ void Solver::erode() {
 // constraint is kept); the change of the leapfrog kinetic energy 1/2 m (|v|^2 - |dv|^2), dv the
 // half-kick dt/2 f / m, is booked as mass_scaling.
 void Solver::scaleMasses(double half_dt) {
+  if (!(scale_below_ > 0.0)) // off (the same on every process: no gathering)
+    return;
   std::vector<std::pair<std::uint32_t, double>> scaled;
   for (std::size_t i = 0; i < chunks_.size(); ++i)
     scaled.insert(scaled.end(), sums_[i].scaled.begin(), sums_[i].scaled.end());
