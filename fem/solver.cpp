@@ -880,7 +880,6 @@ void Solver::scaleMasses(double half_dt) {
   for (auto [e, needed] : scaled) {
     double &added = added_mass_[e];
     const double share = (needed - added) / 3.0;
-    added_mass_total_ += needed - added;
     added = needed;
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = m_.elements.node[3 * e + k];
@@ -901,7 +900,7 @@ void Solver::scaleMasses(double half_dt) {
 double Solver::addedMass(std::size_t body) const {
   double mass = 0.0;
   for (auto [e, added] : added_mass_)
-    if (m_.elements.body[e] == body)
+    if (body == all_bodies || m_.elements.body[e] == body)
       mass += added;
   return mass;
 }

@@ -115,10 +115,10 @@ public:
   // Of those, the ones eroded for a collapsed step (erode_dt_ratio).
   std::size_t collapsedElements() const { return collapsed_elements_; }
   // Mass scaling (mass_scaling_dt_ratio) over the run: the elements that took mass, and the mass
-  // added [kg/m].
+  // added [kg/m] to all bodies, or to one.
+  static constexpr std::size_t all_bodies = static_cast<std::size_t>(-1);
   std::size_t massScaledElements() const { return added_mass_.size(); }
-  double addedMass() const { return added_mass_total_; }
-  double addedMass(std::size_t body) const; // of one body
+  double addedMass(std::size_t body = all_bodies) const;
 
   // The element pass alone, as the time loop calls it: stresses and forces at the current
   // positions with the current velocities over a step dt (for benchmarks).
@@ -212,7 +212,6 @@ private:
   double erode_below_ = 0.0; // erode_dt_ratio times the shortest element step at the start
   double scale_below_ = 0.0; // mass_scaling_dt_ratio times it
   std::unordered_map<std::uint32_t, double> added_mass_; // by element, what mass scaling added
-  double added_mass_total_ = 0.0;
   std::vector<std::uint8_t> constrained_; // by node: 1 x imposed, 2 y imposed
   std::vector<std::uint8_t> failed_; // per element: failed in this step's pass, 2 for a collapsed step
   // The shortest element step of the last element pass, before the safety factor and the

@@ -60,7 +60,8 @@ const Series::Column series_columns[] = {
     {"energy/mass_scaling", "J/m", "kinetic energy the mass added by mass scaling took (momentum kept)", {}},
     {"energy/balance_error",
      "",
-     "(kinetic + internal + friction + contact + eroded - initial - external) / max(|total|, initial, "
+     "(kinetic + internal + friction + contact + eroded + mass_scaling - initial - external) / "
+     "max(|total|, initial, "
      "|external|)",
      {}},
 };

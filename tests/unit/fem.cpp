@@ -224,7 +224,7 @@ TEST(StableStep, MassScalingHoldsTheStepAndMomentum) {
                                .maxCoeff());
   };
   struct Result {
-    double first, shortest, px = 0, py = 0, balance = 0, added = 0;
+    double first = 0, shortest = 0, px = 0, py = 0, balance = 0, added = 0;
     double lowest_ratio = HUGE_VAL, highest_ratio = 0; // dt / critical at the steps adding mass
     fem::Energy energy;
   };
@@ -238,7 +238,8 @@ TEST(StableStep, MassScalingHoldsTheStepAndMomentum) {
     model.nodes.vx = {-150.0, -150.0, 300.0};
     fem::Solver solver(model, {.viscosity_linear = 0.0, .viscosity_quadratic = 0.0, // undamped
                                .mass_scaling_dt_ratio = ratio});
-    Result r{solver.dt(), solver.dt()};
+    Result r;
+    r.first = r.shortest = solver.dt();
     for (int i = 0; i < 300; ++i) {
       const double added = solver.addedMass();
       solver.step();
