@@ -226,6 +226,7 @@ private:
              double travel, double &until, std::uint32_t *hot, std::uint32_t &n_hot, Hits &hits,
              Scratch &scratch) const;
   enum class At { segment, vertex, unknown }; // see atVertex
+  static bool atInside(const Near &near, const Closest &c);
   At atVertex(const Near &near, Closest &c, double px, double py, double &depth, double &nx,
               double &ny, double &w2) const;
   bool inside(std::size_t B, double px, double py) const;
@@ -236,6 +237,7 @@ private:
   ContactSettings s_;
   double damping_[2] = {}; // the damping coefficient c of hit, between bodies and at a wall
   std::size_t n_materials_;
+  std::vector<std::uint16_t> material_; // per body: its material (Model::materials index)
   std::vector<std::size_t> node_begin_, segment_begin_; // per body, into nodes_ and segment_ends_ / 2
   std::vector<std::uint32_t> nodes_;                    // boundary nodes, body by body
   // A boundary node's position this step, the two coordinates side by side: the narrow phase reads
