@@ -499,9 +499,12 @@ MESOPEN_INLINE Contact::Closest Contact::closest(const Near &near, double px, do
 }
 
 // Of body `body`'s segments given by their ends, those of nonzero length whose boxes come within
-// its reach (see touch) of the rectangle: into scratch.near, in the given order. Their ends are
-// gathered first, then the geometry of all is computed in one pass (vectorized). Returns the
-// rectangle widened by that reach: a segment not taken lies wholly outside it.
+// its reach (see touch) of the rectangle: into scratch.near, in the given order. The ends of those
+// whose boxes come within reach are gathered first, side by side (a list of a whole boundary, as
+// a pair's lists are taken, has most of its segments far: run 6, the loop over the pairs 6-9 %
+// faster than with every listed segment in a lane), then the geometry of all is computed in one
+// pass (vectorized). Returns the rectangle widened by that reach: a segment not taken lies wholly
+// outside it.
 MESOPEN_INLINE Contact::Box Contact::nearSegments(std::size_t body, const std::uint32_t *ends,
                                                  const std::uint32_t *ends_end, const Box &region,
                                                  Scratch &scratch) const {
@@ -509,21 +512,26 @@ MESOPEN_INLINE Contact::Box Contact::nearSegments(std::size_t body, const std::u
   const Box wide = region.widened(check_depth * size_[body]);
   Near &near = scratch.near;
   const std::size_t listed = static_cast<std::size_t>(ends_end - ends) / 2;
-  const std::size_t size = (listed + L - 1) / L * L;
-  if (near.ax.size() < size) {
+  const std::size_t room = (listed + L - 1) / L * L;
+  if (near.ax.size() < room) {
     for (auto *v : {&near.ax, &near.ay, &near.tx, &near.ty, &near.length, &near.nx, &near.ny})
-      v->resize(size);
-    near.ends.resize(2 * size);
+      v->resize(room);
+    near.ends.resize(2 * room);
   }
   // The start in (ax, ay), the end in (tx, ty) for now.
   double *ax = near.ax.data(), *ay = near.ay.data(), *tx = near.tx.data(), *ty = near.ty.data(),
          *length = near.length.data(), *nx = near.nx.data(), *ny = near.ny.data();
+  // (each written where the next near one goes, and counted if its box comes within reach)
+  std::size_t m = 0;
   for (std::size_t i = 0; i < listed; ++i) {
     const Point &a = points_[ends[2 * i]], &b = points_[ends[2 * i + 1]];
-    ax[i] = a.x, ay[i] = a.y, tx[i] = b.x, ty[i] = b.y;
-    near.ends[2 * i] = ends[2 * i], near.ends[2 * i + 1] = ends[2 * i + 1];
+    ax[m] = a.x, ay[m] = a.y, tx[m] = b.x, ty[m] = b.y;
+    near.ends[2 * m] = ends[2 * i], near.ends[2 * m + 1] = ends[2 * i + 1];
+    m += (wide.x0 <= std::max(a.x, b.x)) & (std::min(a.x, b.x) <= wide.x1) &
+         (wide.y0 <= std::max(a.y, b.y)) & (std::min(a.y, b.y) <= wide.y1);
   }
-  for (std::size_t i = listed; i < size; ++i) {
+  const std::size_t size = (m + L - 1) / L * L;
+  for (std::size_t i = m; i < size; ++i) {
     ax[i] = ay[i] = tx[i] = ty[i] = 0.0;
     near.ends[2 * i] = near.ends[2 * i + 1] = no_node;
   }
