@@ -599,9 +599,22 @@ void Contact::Grid::build(const std::vector<Box> &boxes, const std::vector<std::
 // of them moving, in the order of their numbers; each pair found once, in the cell that holds
 // the lower-left corner of the overlap. Moving bodies meet each other in a grid of their boxes
 // widened by half the margin, built here; the bodies at rest in the grid built at the start.
-// The runs of pairs are shared evenly among the threads; their lists are taken when first needed.
+// The runs of pairs are shared evenly among the threads. A pair found before keeps its lists (they
+// hold what they must while its two bodies move less than their margin, whatever the search), the
+// others' are taken when first needed; after a change of the boundaries all are taken anew.
 void Contact::findPairs() {
   ++stats_.searches;
+  std::vector<Pair> before;
+  std::vector<std::vector<std::uint32_t>> arenas_before(arenas_.size());
+  std::vector<std::uint32_t> run_before; // per pair before: its run
+  if (!run_pairs_.empty()) {
+    before.swap(pairs_);
+    for (std::size_t r = 0; r < arenas_.size(); ++r) {
+      arenas_before[r].swap(arenas_[r]);
+      run_before.insert(run_before.end(), run_pairs_[r + 1] - run_pairs_[r],
+                        static_cast<std::uint32_t>(r));
+    }
+  }
   pairs_.clear();
   std::vector<Box> wide(boxes_.size());
   for (std::uint32_t b : moving_) {
@@ -629,6 +642,31 @@ void Contact::findPairs() {
     run_pairs_[r] = pairs_.size() * r / runs;
   for (auto &arena : arenas_)
     arena.clear();
+  // The pairs before in the order of the new ones (those the bodies that woke added come last),
+  // matched; each listed one's lists and hot nodes into its new run's arena.
+  std::vector<std::uint32_t> order(before.size());
+  for (std::uint32_t j = 0; j < order.size(); ++j)
+    order[j] = j;
+  std::sort(order.begin(), order.end(), [&](std::uint32_t i, std::uint32_t j) {
+    return std::tie(before[i].a, before[i].b) < std::tie(before[j].a, before[j].b);
+  });
+  auto old = order.begin();
+  for (std::size_t r = 0; r < runs; ++r)
+    for (std::size_t i = run_pairs_[r]; i < run_pairs_[r + 1]; ++i) {
+      Pair &pair = pairs_[i];
+      while (old != order.end() &&
+             std::tie(before[*old].a, before[*old].b) < std::tie(pair.a, pair.b))
+        ++old;
+      if (old == order.end() || before[*old].a != pair.a || before[*old].b != pair.b ||
+          before[*old].capacity == 0)
+        continue;
+      const Pair &kept = before[*old];
+      const std::vector<std::uint32_t> &from = arenas_before[run_before[*old]];
+      std::vector<std::uint32_t> &arena = arenas_[r];
+      pair = kept;
+      pair.begin = static_cast<std::uint32_t>(arena.size());
+      arena.insert(arena.end(), from.begin() + kept.begin, from.begin() + kept.begin + kept.capacity);
+    }
 }
 
 // The pairs of the bodies that woke since the last step with the bodies at rest (or woken now):
