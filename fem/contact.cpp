@@ -634,8 +634,8 @@ void Contact::findPairs() {
       }
   for (std::uint32_t a : moving_)
     restNeighbours(a, search_margin_, [&](std::uint32_t b) { return !listed_[b]; }, add);
-  std::sort(pairs_.begin(), pairs_.end(),
-            [](const Pair &p, const Pair &q) { return std::tie(p.a, p.b) < std::tie(q.a, q.b); });
+  auto earlier = [](const Pair &p, const Pair &q) { return std::tie(p.a, p.b) < std::tie(q.a, q.b); };
+  std::sort(pairs_.begin(), pairs_.end(), earlier);
   const std::size_t runs = arenas_.size();
   run_pairs_.resize(runs + 1);
   for (std::size_t r = 0; r <= runs; ++r)
@@ -647,15 +647,13 @@ void Contact::findPairs() {
   std::vector<std::uint32_t> order(before.size());
   for (std::uint32_t j = 0; j < order.size(); ++j)
     order[j] = j;
-  std::sort(order.begin(), order.end(), [&](std::uint32_t i, std::uint32_t j) {
-    return std::tie(before[i].a, before[i].b) < std::tie(before[j].a, before[j].b);
-  });
+  std::sort(order.begin(), order.end(),
+            [&](std::uint32_t i, std::uint32_t j) { return earlier(before[i], before[j]); });
   auto old = order.begin();
   for (std::size_t r = 0; r < runs; ++r)
     for (std::size_t i = run_pairs_[r]; i < run_pairs_[r + 1]; ++i) {
       Pair &pair = pairs_[i];
-      while (old != order.end() &&
-             std::tie(before[*old].a, before[*old].b) < std::tie(pair.a, pair.b))
+      while (old != order.end() && earlier(before[*old], pair))
         ++old;
       if (old == order.end() || before[*old].a != pair.a || before[*old].b != pair.b ||
           before[*old].capacity == 0)
@@ -819,7 +817,7 @@ bool Contact::atInside(const Near &near, const Closest &c) {
 }
 
 // The closest point when the foot on the closest segment c falls at one of its ends V (within
-// `tie` of it, or beyond): V itself if the foot on the other segment at V falls at V or beyond it
+// `end_tie` of it, or beyond): V itself if the foot on the other segment at V falls at V or beyond it
 // too, else the inside of that other segment (as close as c or closer: round-off chose c), which
 // c then becomes (At::segment). At V, the node is behind B's boundary by its depth along V's
 // normal, the mean of the two segments' normals (At::vertex; depth < 0: in front), and the
@@ -832,7 +830,6 @@ bool Contact::atInside(const Near &near, const Closest &c) {
 // At::unknown: c's foot is beyond V and the other segment is not near.
 Contact::At Contact::atVertex(const Near &near, Closest &c, double px, double py, double &depth,
                               double &nx, double &ny, double &w2) const {
-  constexpr double tie = end_tie;
   const double length = near.length[c.segment];
   const bool at_start = c.along < 0.5 * length;
   const std::uint32_t vertex = near.ends[2 * c.segment + (at_start ? 0 : 1)];
@@ -846,7 +843,7 @@ Contact::At Contact::atVertex(const Near &near, Closest &c, double px, double py
       continue;
     const Segment o = near[j];
     const Segment::Foot f = o.foot(px, py);
-    if (at_start ? f.t < (1.0 - tie) * o.length : f.t > tie * o.length) {
+    if (at_start ? f.t < (1.0 - end_tie) * o.length : f.t > end_tie * o.length) {
       c = {j, f.distance, f.g, f.t, false};
       return At::segment;
     }
