@@ -10,13 +10,13 @@ namespace mesopen {
 
 namespace {
 
-// Distance from (px, py) to the boundary of grain g (its centre lies outside the grain).
-double distanceToPolygon(const Polygons &grains, std::size_t g, double px, double py) {
+// Distance from (px, py) to the boundary of polygon g of `polygons` (the point lies outside it).
+double distanceToPolygon(const Polygons &polygons, std::size_t g, double px, double py) {
   double best = INFINITY;
-  const std::size_t first = grains.offset[g], n = grains.corners(g);
+  const std::size_t first = polygons.offset[g], n = polygons.corners(g);
   for (std::size_t k = 0; k < n; ++k) {
-    const double ax = grains.x[first + k], ay = grains.y[first + k];
-    const double dx = grains.x[first + (k + 1) % n] - ax, dy = grains.y[first + (k + 1) % n] - ay;
+    const double ax = polygons.x[first + k], ay = polygons.y[first + k];
+    const double dx = polygons.x[first + (k + 1) % n] - ax, dy = polygons.y[first + (k + 1) % n] - ay;
     const double l2 = dx * dx + dy * dy;
     const double t = l2 > 0.0 ? std::clamp(((px - ax) * dx + (py - ay) * dy) / l2, 0.0, 1.0) : 0.0;
     best = std::min(best, std::hypot(ax + t * dx - px, ay + t * dy - py));
@@ -26,9 +26,10 @@ double distanceToPolygon(const Polygons &grains, std::size_t g, double px, doubl
 
 } // namespace
 
-Disks grainDisks(const Polygons &grains, double density, const std::vector<char> &meshed) {
+Disks grainDisks(const Polygons &grains, double density, const DiskBounds &bounds) {
   const GrainFigures f = grainFigures(grains);
   const std::size_t n = grains.size();
+  const std::vector<char> &meshed = bounds.meshed;
   auto isDisk = [&](std::size_t g) { return meshed.empty() || !meshed[g]; };
   std::vector<double> equal(n), radius(n);
   double r_max = 0.0, width = 0.0, height = 0.0;
@@ -54,6 +55,10 @@ Disks grainDisks(const Polygons &grains, double density, const std::vector<char>
       else
         radius[g] = std::min(radius[g], distanceToPolygon(grains, o.index, x, y));
     });
+    if (bounds.width > 0.0) // inside the walls: touching at most
+      radius[g] = std::min({radius[g], x, bounds.width - x, y});
+    for (std::size_t b = 0; b < bounds.bodies.size(); ++b)
+      radius[g] = std::min(radius[g], distanceToPolygon(bounds.bodies, b, x, y));
   }
   Disks disks;
   for (std::size_t g = 0; g < n; ++g) {
@@ -65,6 +70,14 @@ Disks grainDisks(const Polygons &grains, double density, const std::vector<char>
     disks.density.push_back(density * f.area[g] / (M_PI * radius[g] * radius[g]));
   }
   return disks;
+}
+
+Disks targetDisks(const Target &target, const std::vector<char> &meshed,
+                  const PlacedProjectile *projectile) {
+  DiskBounds bounds{target.spec.width, meshed, {}};
+  if (projectile)
+    bounds.bodies.add(projectile->outline_x, projectile->outline_y);
+  return grainDisks(target.grains, target.spec.density, bounds);
 }
 
 } // namespace mesopen

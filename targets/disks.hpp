@@ -3,11 +3,14 @@
 // target 6,483 pairs, a quarter of a radius on average, up to 0.85): a DEM target built from them
 // would burst at the first step. So a disk's radius is the equal-area radius, or less where it
 // would overlap: two disks share the distance between their centres in proportion to their
-// equal-area radii, and a disk keeps out of the meshed grains' polygons. Its density is then
-// rho A / (pi r^2), which keeps its mass per metre rho A (baseline: radii 0.86 of the equal-area
-// ones on average, none below 0.70; the disks cover 52 % of the box).
+// equal-area radii, a disk keeps out of the meshed grains' polygons and of the other FE bodies
+// (the projectile), and inside the box's walls (left x = 0, right x = width, bottom y = 0; the top
+// is open). At t = 0 no disk then presses on anything: a target at rest stays at rest. Its
+// density is rho A / (pi r^2), which keeps its mass per metre rho A (baseline: radii 0.86 of the
+// equal-area ones on average, none below 0.70; the disks cover 52 % of the box).
 #pragma once
 
+#include "projectile.hpp"
 #include "target.hpp"
 
 #include <cstdint>
@@ -21,7 +24,19 @@ struct Disks {
   std::size_t size() const { return grain.size(); }
 };
 
-// The disks of the grains not marked in `meshed` (empty: every grain a disk), in grain order.
-Disks grainDisks(const Polygons &grains, double density, const std::vector<char> &meshed = {});
+// What the disks keep out of besides each other.
+struct DiskBounds {
+  double width = 0.0;        // the box's walls x = 0, x = width and y = 0; 0: no walls
+  std::vector<char> meshed;  // per grain, 1: meshed (an FE body, not a disk); empty: none
+  Polygons bodies;           // other FE bodies' outlines, e.g. the placed projectile
+};
+
+// The disks of the grains not marked in `bounds.meshed`, in grain order.
+Disks grainDisks(const Polygons &grains, double density, const DiskBounds &bounds = {});
+
+// The disks of a target inside its box's walls: of the grains not marked in `meshed` (every grain
+// if empty), clear of the projectile when one is given.
+Disks targetDisks(const Target &target, const std::vector<char> &meshed = {},
+                  const PlacedProjectile *projectile = nullptr);
 
 } // namespace mesopen

@@ -107,9 +107,7 @@ void writeTargetH5(const std::string &path, const Target &target,
   });
 }
 
-void writeLiggghtsData(const std::string &path, const Target &target,
-                       const std::vector<char> &meshed) {
-  const Disks disks = grainDisks(target.grains, target.spec.density, meshed);
+void writeLiggghtsData(const std::string &path, const Target &target, const Disks &disks) {
   const std::size_t n = disks.size();
   // LIGGGHTS in 2D still needs a z extent holding z = 0: a slab as thick as the largest disk.
   double d_max = 0.0;
@@ -222,15 +220,21 @@ void writeVtu(const std::string &path, vtkUnstructuredGrid *grid) {
   });
 }
 
-void writeYadeSpheres(const std::string &path, const Target &target) {
-  const GrainFigures f = grainFigures(target.grains);
-  std::string text = "# x y z r [m]: grain centroid (z = 0) and equivalent radius sqrt(A/pi)\n";
-  for (std::size_t g = 0; g < f.area.size(); ++g) {
-    appendNumber(text, f.centroid_x[g]);
+void writeYadeSpheres(const std::string &path, const Disks &disks) {
+  std::string text =
+      "# mesopen target as YADE spheres (yade.ymport.text reads x y z r; lines with # are skipped)\n"
+      "# one per grain at its centroid, z = 0; radii of the LIGGGHTS disks: no two overlap, none\n"
+      "# crosses the walls x = 0, x = width, y = 0\n"
+      "# density: the grain's mass per metre over pi r^2 (a disk 1 m thick keeps the grain's mass)\n"
+      "# x y z r [m] density [kg/m^3]\n";
+  for (std::size_t i = 0; i < disks.size(); ++i) {
+    appendNumber(text, disks.x[i]);
     text += ' ';
-    appendNumber(text, f.centroid_y[g]);
+    appendNumber(text, disks.y[i]);
     text += " 0 ";
-    appendNumber(text, 0.5 * f.diameter[g]);
+    appendNumber(text, disks.radius[i]);
+    text += ' ';
+    appendNumber(text, disks.density[i]);
     text += '\n';
   }
   writeText(path, text);

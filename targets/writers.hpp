@@ -4,6 +4,7 @@
 // either whole or absent. HDF5 files carry no time stamps: the same target gives the same bytes.
 #pragma once
 
+#include "disks.hpp"
 #include "projectile.hpp"
 #include "target.hpp"
 
@@ -23,19 +24,18 @@ namespace mesopen {
 //                nose_length, tip_cut, offset_x, offset_y                       when enabled
 void writeTargetH5(const std::string &path, const Target &target, const PlacedProjectile *projectile);
 
-// LIGGGHTS data file for atom_style granular in 2D: the disks of the grains not marked in
-// `meshed` (every grain if empty), as grainDisks makes them (disks.hpp): at the centroid, of the
-// grain's mass per metre rho A, touching but not overlapping their neighbours. Columns: id type
-// diameter density x y z.
-void writeLiggghtsData(const std::string &path, const Target &target,
-                       const std::vector<char> &meshed = {});
+// LIGGGHTS data file for atom_style granular in 2D: `disks` (as targetDisks makes them: at the
+// centroids, of the grains' masses per metre rho A, touching but not overlapping each other, the
+// walls or the FE bodies) in the target's box. Columns: id type diameter density x y z.
+void writeLiggghtsData(const std::string &path, const Target &target, const Disks &disks);
 
 // ParaView: grain polygons (or their triangles when meshed) and the projectile, with cell data
 // body (0 projectile, 1.. grains), grain diameter.
 void writeTargetVtu(const std::string &path, const Target &target, const PlacedProjectile *projectile);
 
-// YADE sphere list: one line "x y z r" per grain (equivalent radius, z = 0).
-void writeYadeSpheres(const std::string &path, const Target &target);
+// YADE sphere list: one line "x y z r density" per disk (z = 0), the disks of the LIGGGHTS file,
+// so that no two overlap; yade.ymport.text reads the first four columns.
+void writeYadeSpheres(const std::string &path, const Disks &disks);
 
 // An unstructured grid as a binary appended .vtu file (uncompressed), written atomically.
 void writeVtu(const std::string &path, vtkUnstructuredGrid *grid);

@@ -452,7 +452,7 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
   std::unique_ptr<coupling::FeDemCoupling> coupled;
   if (target && std::find(meshed.begin(), meshed.end(), 0) != meshed.end()) {
     if (writer)
-      writeLiggghtsData(dir + "/dem.data", *target, meshed);
+      writeLiggghtsData(dir + "/dem.data", *target, targetDisks(*target, meshed, &projectile));
     world.barrier();
     dem = std::make_unique<coupling::LiggghtsDem>(shareDirectory() + "/liggghts-inputs/dem.in",
                                                   demVariables(scene, dir + "/dem.data"),

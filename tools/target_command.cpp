@@ -144,8 +144,10 @@ int targetCommand(const TargetOptions &options) {
     std::vector<std::future<void>> writes;
     writes.push_back(std::async(std::launch::async, [&] { writeTargetH5(dir + "/target.h5", target, pp); }));
     writes.push_back(std::async(std::launch::async, [&] { writeTargetVtu(dir + "/target.vtu", target, pp); }));
-    writes.push_back(std::async(std::launch::async, [&] { writeLiggghtsData(dir + "/target.data", target); }));
-    writeYadeSpheres(dir + "/target.spheres", target);
+    // The disks of both DEM files, inside the walls; the projectile is not in them.
+    const Disks disks = targetDisks(target);
+    writes.push_back(std::async(std::launch::async, [&] { writeLiggghtsData(dir + "/target.data", target, disks); }));
+    writeYadeSpheres(dir + "/target.spheres", disks);
     for (auto &w : writes)
       w.get(); // passes on the first failure
     const double seconds = secondsSince(start);

@@ -68,3 +68,36 @@ TEST(LiggghtsRun, HybridBandEndsAtItsDepth) {
   EXPECT_LT(limited, 0.1e-3 + 60e-6);
   EXPECT_GT(whole, limited + 60e-6);
 }
+
+// A target of disks, and a hybrid one, with the projectile at rest on them: nothing presses on
+// anything at t = 0 (no disk overlaps a wall, another disk, a meshed grain or the projectile), so
+// after 1 us every disk and node is still at rest. Tolerance 1e-6 m/s: round-off of touching
+// contacts gives about 1e-11 m/s; a disk started across a wall by a few per cent of its radius
+// leaves at metres per second.
+TEST(LiggghtsRun, TargetAtRestStaysAtRest) {
+  for (const char *representation : {"dem", "hybrid"}) {
+    ScratchDir dir(std::string("run-rest-") + representation);
+    const auto r = test::runScene(
+        dir, "[target]\nwidth = 0.8e-3\nheight = 0.5e-3\ndiameter = [42e-6, 78e-6]\n"
+             "mesh_size = 12e-6\nseed = 2\n[projectile]\nlength = 0.6e-3\n"
+             "[run]\nvelocity = 0\nend_time = 1e-6\nframe_interval = 0.5e-6\nvtk = false\n"
+             "band_half_width = 0.15e-3\nrepresentation = \"" +
+                 std::string(representation) + "\"\n");
+    ASSERT_EQ(r.code, 0) << r.output;
+    const H5File h5 = H5File::open(dir / "out/run.h5");
+    for (const char *frame : {"000001", "000002"}) {
+      const std::string f = std::string("/frames/") + frame;
+      const auto vx = h5.read<double>(f + "/disks/vx"), vy = h5.read<double>(f + "/disks/vy");
+      ASSERT_GT(vx.size(), 20u) << representation;
+      double fastest = 0.0;
+      for (std::size_t i = 0; i < vx.size(); ++i)
+        fastest = std::max(fastest, std::hypot(vx[i], vy[i]));
+      EXPECT_LT(fastest, 1e-6) << representation << " frame " << frame;
+      const auto nx = h5.read<double>(f + "/vx"), ny = h5.read<double>(f + "/vy");
+      double node = 0.0;
+      for (std::size_t a = 0; a < nx.size(); ++a)
+        node = std::max(node, std::hypot(nx[a], ny[a]));
+      EXPECT_LT(node, 1e-6) << representation << " frame " << frame;
+    }
+  }
+}

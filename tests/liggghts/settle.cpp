@@ -27,7 +27,7 @@ TEST(Liggghts, DemTargetSettlesInItsBox) {
   const fs::path dir = fs::temp_directory_path() / "mesopen-liggghts-settle";
   fs::create_directories(dir);
   const std::string data = (dir / "target.data").string();
-  writeLiggghtsData(data, target);
+  writeLiggghtsData(data, target, targetDisks(target));
   const double g = 1e6, kn = 1e10;
   coupling::LiggghtsDem dem(MESOPEN_SOURCE_DIR "/liggghts-inputs/dem.in",
                             {{"data", data}, {"kn", "1e10"}, {"kt", "1e10"}, {"gn", "80"},

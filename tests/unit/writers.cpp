@@ -155,15 +155,15 @@ TEST_F(WritersTest, ByteIdenticalRepeats) {
   const Target t = smallTarget(true);
   const PlacedProjectile p = smallProjectile();
   writeTargetH5(file("a.h5"), t, &p);
-  writeLiggghtsData(file("a.data"), t);
+  writeLiggghtsData(file("a.data"), t, targetDisks(t));
   writeTargetVtu(file("a.vtu"), t, &p);
-  writeYadeSpheres(file("a.txt"), t);
+  writeYadeSpheres(file("a.txt"), targetDisks(t));
   // HDF5 time stamps have one-second resolution: wait past a second so that any would differ.
   std::this_thread::sleep_for(std::chrono::milliseconds(1100));
   writeTargetH5(file("b.h5"), t, &p);
-  writeLiggghtsData(file("b.data"), t);
+  writeLiggghtsData(file("b.data"), t, targetDisks(t));
   writeTargetVtu(file("b.vtu"), t, &p);
-  writeYadeSpheres(file("b.txt"), t);
+  writeYadeSpheres(file("b.txt"), targetDisks(t));
   EXPECT_EQ(readFile(dir / "a.h5"), readFile(dir / "b.h5"));
   EXPECT_EQ(readFile(dir / "a.data"), readFile(dir / "b.data"));
   EXPECT_EQ(readFile(dir / "a.vtu"), readFile(dir / "b.vtu"));
@@ -176,7 +176,7 @@ TEST_F(WritersTest, ByteIdenticalRepeats) {
 
 TEST_F(WritersTest, LiggghtsDataParses) {
   const Target t = smallTarget(false);
-  writeLiggghtsData(file("target.data"), t);
+  writeLiggghtsData(file("target.data"), t, targetDisks(t));
   std::ifstream in(file("target.data"));
   std::string line;
   std::getline(in, line); // title
@@ -226,21 +226,37 @@ TEST_F(WritersTest, LiggghtsDataParses) {
         gap = std::min(gap, std::hypot(disks[i][0] - disks[j][0], disks[i][1] - disks[j][1]) -
                                 disks[i][2] - disks[j][2]);
     EXPECT_GE(gap, -1e-12 * disks[i][2]) << "disk " << i;
+    EXPECT_GE(disks[i][0] - disks[i][2], 0.0) << "disk " << i; // inside the walls
+    EXPECT_LE(disks[i][0] + disks[i][2], t.spec.width) << "disk " << i;
+    EXPECT_GE(disks[i][1] - disks[i][2], 0.0) << "disk " << i;
   }
 }
 
+// The YADE list holds the LIGGGHTS file's disks: the grain's mass per metre in each, no two
+// overlapping, none across the walls.
 TEST_F(WritersTest, YadeSpheres) {
   const Target t = smallTarget(false);
-  writeYadeSpheres(file("spheres.txt"), t);
+  const Disks disks = targetDisks(t);
+  writeYadeSpheres(file("spheres.txt"), disks);
   std::ifstream in(file("spheres.txt"));
   std::string line;
-  std::getline(in, line);
-  EXPECT_EQ(line.rfind("#", 0), 0u);
   std::size_t n = 0;
-  double x, y, z, r;
-  while (in >> x >> y >> z >> r) {
+  while (std::getline(in, line)) {
+    ASSERT_FALSE(line.empty());
+    if (line[0] == '#')
+      continue;
+    std::istringstream s(line);
+    double x, y, z, r, rho;
+    ASSERT_TRUE(s >> x >> y >> z >> r >> rho) << line;
+    ASSERT_LT(n, disks.size());
     EXPECT_EQ(z, 0.0);
-    EXPECT_NEAR(M_PI * r * r, polygonArea(t.grains, n), 1e-12 * polygonArea(t.grains, n));
+    EXPECT_EQ(x, disks.x[n]);
+    EXPECT_EQ(r, disks.radius[n]);
+    const double mass = t.spec.density * polygonArea(t.grains, n);
+    EXPECT_NEAR(rho * M_PI * r * r, mass, 1e-12 * mass);
+    EXPECT_GE(x - r, 0.0);
+    EXPECT_LE(x + r, t.spec.width);
+    EXPECT_GE(y - r, 0.0);
     ++n;
   }
   EXPECT_EQ(n, t.grains.size());
@@ -266,9 +282,11 @@ TEST_F(WritersTest, MissingDirectoryThrowsAndLeavesNothing) {
   const PlacedProjectile p = smallProjectile();
   const fs::path missing = dir / "no" / "such";
   EXPECT_THROW(writeTargetH5((missing / "target.h5").string(), t, &p), std::runtime_error);
-  EXPECT_THROW(writeLiggghtsData((missing / "target.data").string(), t), std::runtime_error);
+  EXPECT_THROW(writeLiggghtsData((missing / "target.data").string(), t, targetDisks(t)),
+               std::runtime_error);
   EXPECT_THROW(writeTargetVtu((missing / "target.vtu").string(), t, &p), std::runtime_error);
-  EXPECT_THROW(writeYadeSpheres((missing / "spheres.txt").string(), t), std::runtime_error);
+  EXPECT_THROW(writeYadeSpheres((missing / "spheres.txt").string(), targetDisks(t)),
+               std::runtime_error);
   EXPECT_FALSE(fs::exists(dir / "no"));
   EXPECT_TRUE(fs::is_empty(dir));
 }
@@ -278,7 +296,7 @@ TEST_F(WritersTest, FailedWriteKeepsOldFile) {
   const Target t = smallTarget(false);
   fs::create_directory(dir / "target.data");
   fs::create_directory(dir / "target.data" / "keep");
-  EXPECT_ANY_THROW(writeLiggghtsData(file("target.data"), t));
+  EXPECT_ANY_THROW(writeLiggghtsData(file("target.data"), t, targetDisks(t)));
   EXPECT_TRUE(fs::exists(dir / "target.data" / "keep"));
   EXPECT_FALSE(anyTemporary());
 }
@@ -328,9 +346,37 @@ TEST(GrainDisks, TouchWithoutOverlapAndKeepOutOfMeshedGrains) {
   EXPECT_NEAR(all.radius[0], 0.5 * pitch, 1e-15); // shares the distance with its equal neighbour
   EXPECT_LT(all.radius[0], r_equal);
   // the middle grain meshed: its neighbours' disks reach its faces, no farther
-  const Disks beside = grainDisks(grains, rho, {0, 1, 0});
+  DiskBounds middle_meshed;
+  middle_meshed.meshed = {0, 1, 0};
+  const Disks beside = grainDisks(grains, rho, middle_meshed);
   ASSERT_EQ(beside.size(), 2u);
   EXPECT_EQ(beside.grain[1], 2u);
   EXPECT_NEAR(beside.radius[0], 0.5 * s + gap, 1e-15);
   EXPECT_NEAR(beside.radius[1], 0.5 * s + gap, 1e-15);
+}
+
+// A square grain 2 um from the left wall and the bottom and a lone one under a plate (another FE
+// body) 3 um above it: their equal-area disks (28.2 um for 50 um squares) would cross the walls and
+// the plate; the disks touch them instead. Without walls they do not.
+TEST(GrainDisks, KeepInsideTheWallsAndOutOfOtherBodies) {
+  Polygons grains;
+  const double s = 50e-6, r_equal = s / std::sqrt(M_PI);
+  grains.add({2e-6, 2e-6 + s, 2e-6 + s, 2e-6}, {2e-6, 2e-6, 2e-6 + s, 2e-6 + s});
+  grains.add({200e-6, 200e-6 + s, 200e-6 + s, 200e-6}, {100e-6, 100e-6, 100e-6 + s, 100e-6 + s});
+  DiskBounds bounds;
+  bounds.width = 400e-6;
+  bounds.bodies.add({150e-6, 300e-6, 300e-6, 150e-6}, {153e-6, 153e-6, 170e-6, 170e-6});
+  const Disks d = grainDisks(grains, 2650.0, bounds);
+  ASSERT_EQ(d.size(), 2u);
+  EXPECT_NEAR(d.radius[0], 2e-6 + 0.5 * s, 1e-15); // touches both walls
+  EXPECT_NEAR(d.radius[1], 3e-6 + 0.5 * s, 1e-15); // touches the plate
+  const Disks free = grainDisks(grains, 2650.0);
+  EXPECT_NEAR(free.radius[0], r_equal, 1e-15);
+  EXPECT_NEAR(free.radius[1], r_equal, 1e-15);
+  // a disk in the right wall's reach: x = 390 um, 10 um from the wall x = 400 um
+  Polygons right;
+  right.add({380e-6, 400e-6, 400e-6, 380e-6}, {100e-6, 100e-6, 120e-6, 120e-6});
+  DiskBounds walls;
+  walls.width = 400e-6;
+  EXPECT_NEAR(grainDisks(right, 2650.0, walls).radius[0], 10e-6, 1e-15);
 }

@@ -61,10 +61,10 @@ int main(int argc, char **argv) {
   GeneratorReport report;
   const Target target = generateTarget(spec, report);
   const std::string data = out + "/bench_coupling.data";
-  writeLiggghtsData(data, target);
   ProjectileSpec ps;
   ps.length = 1.7e-3, ps.tip_facet_length = 40e-6;
   const PlacedProjectile p = placeProjectile(ps, 10e-6, spec, target.grains);
+  writeLiggghtsData(data, target, targetDisks(target, {}, &p));
   const std::string script = std::string(MESOPEN_SOURCE_DIR) + "/liggghts-inputs/dem.in";
   auto variables = [&](double dt) {
     char text[32];
