@@ -195,13 +195,35 @@ TriangleMesh projectileMesh(const ProjectileShape &shape, const ProjectileSpec &
   return qualityMesh(outline_x.data(), outline_y.data(), outline_x.size(), edge, spec.min_angle);
 }
 
+// A plate W wide and `length` thick in the body frame: its face on y = 0 from x = -W/2 to W/2,
+// counter-clockwise, edges no longer than `edge`; and its quality mesh.
+static TriangleMesh plateMesh(const ProjectileSpec &spec, double width, double edge,
+                       std::vector<double> &x, std::vector<double> &y) {
+  const int nw = edgePieces(width, edge), nt = edgePieces(spec.length, edge);
+  x.clear(), y.clear();
+  for (int k = 0; k < nw; ++k) // face
+    x.push_back(width * (static_cast<double>(k) / nw - 0.5)), y.push_back(0.0);
+  for (int k = 0; k < nt; ++k) // right side
+    x.push_back(0.5 * width), y.push_back(spec.length * k / nt);
+  for (int k = 0; k < nw; ++k) // back
+    x.push_back(width * (0.5 - static_cast<double>(k) / nw)), y.push_back(spec.length);
+  for (int k = 0; k < nt; ++k) // left side
+    x.push_back(-0.5 * width), y.push_back(spec.length * (1.0 - static_cast<double>(k) / nt));
+  return qualityMesh(x.data(), y.data(), x.size(), edge, spec.min_angle);
+}
+
 PlacedProjectile placeProjectile(const ProjectileSpec &spec, double default_mesh_size,
                                  const TargetSpec &target, const Polygons &grains) {
   PlacedProjectile p;
-  p.shape = projectileShape(spec);
   const double h = spec.mesh_size > 0.0 ? spec.mesh_size : default_mesh_size;
   std::vector<double> bx, by;
-  p.mesh = projectileMesh(p.shape, spec, h, bx, by);
+  if (spec.shape == ProjectileKind::plate) {
+    p.shape = {target.width, 0.0, 0.0, spec.length, 0.0, 0.0};
+    p.mesh = plateMesh(spec, target.width, h, bx, by);
+  } else {
+    p.shape = projectileShape(spec);
+    p.mesh = projectileMesh(p.shape, spec, h, bx, by);
+  }
 
   // Start with the blunted tip at (W/2, H); then lower by the smallest vertical gap between the
   // projectile and any grain below it (both convex: the gap's minimum over a common abscissa

@@ -11,8 +11,15 @@
 
 namespace mesopen {
 
+// An ogive penetrator (thesis) or a flat plate as wide as the box: a piston for planar compaction
+// (shock) tests.
+enum class ProjectileKind { ogive, plate };
+inline constexpr Named<ProjectileKind> projectile_kind_names[] = {{"ogive", ProjectileKind::ogive},
+                                                                  {"plate", ProjectileKind::plate}};
+
 struct ProjectileSpec {
   bool enabled = true;
+  ProjectileKind shape = ProjectileKind::ogive; // a plate is `length` thick and the box's width
   double length = 1.7e-3;          // sharp-ogive length L, tip to base [m]
   double length_over_diameter = 3.85;
   double crh = 3.5;                // psi = ogive radius / diameter
@@ -57,7 +64,8 @@ struct PlacedProjectile {
   double offset_x = 0.0, offset_y = 0.0; // body frame -> target frame translation
 };
 
-// Tip down at x = W/2, lowered from above the box until it first touches a grain.
+// Tip down at x = W/2, lowered from above the box until it first touches a grain. A plate spans
+// the box, 0 <= x <= W, its face down (its shape: diameter W, length its thickness, no nose).
 PlacedProjectile placeProjectile(const ProjectileSpec &spec, double default_mesh_size,
                                  const TargetSpec &target, const Polygons &grains);
 

@@ -119,7 +119,8 @@ void writeLiggghtsData(const std::string &path, const Target &target, const Disk
   std::string text =
       "LIGGGHTS data file by mesopen: atom_style granular, dimension 2, SI units; one disk per "
       "grain at its centroid, of its mass, touching but not overlapping its neighbours\n\n";
-  text += std::to_string(n) + " atoms\n1 atom types\n\n";
+  // type 2 is left for the walls' material (liggghts-inputs/dem.in)
+  text += std::to_string(n) + " atoms\n2 atom types\n\n";
   text += "0 ";
   appendNumber(text, target.spec.width);
   text += " xlo xhi\n0 ";

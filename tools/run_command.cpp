@@ -140,15 +140,26 @@ Meshes runMeshes(const Meshes *grains, const PlacedProjectile &p) {
 }
 
 // The grain nodes on the box's left, right and bottom edges (within 1e-3 mesh sizes), held at rest.
-fem::VelocityConstraint boxEdges(const fem::Model &model, const TargetSpec &box) {
+std::vector<fem::VelocityConstraint> boxEdges(const fem::Model &model, const TargetSpec &box,
+                                              bool smooth) {
   const double tol = 1e-3 * box.mesh_size;
   fem::VelocityConstraint fixed{"box edges", {}, true, true, 0.0, 0.0};
+  fem::VelocityConstraint sides{"box sides", {}, true, false, 0.0, 0.0};
+  fem::VelocityConstraint bottom{"box bottom", {}, false, true, 0.0, 0.0};
   for (std::size_t a = model.bodies[0].node_end; a < model.nodes.size(); ++a) {
     const double x = model.nodes.x[a], y = model.nodes.y[a];
-    if (x <= tol || x >= box.width - tol || y <= tol)
-      fixed.nodes.push_back(static_cast<std::uint32_t>(a));
+    const bool side = x <= tol || x >= box.width - tol, low = y <= tol;
+    const auto node = static_cast<std::uint32_t>(a);
+    if (!smooth && (side || low))
+      fixed.nodes.push_back(node);
+    if (smooth && side)
+      sides.nodes.push_back(node);
+    if (smooth && low)
+      bottom.nodes.push_back(node);
   }
-  return fixed;
+  if (!smooth)
+    return {fixed};
+  return {sides, bottom};
 }
 
 // One model of the projectile (body 0, "projectile") and the meshed grains ("grain-<g>", g the
@@ -172,8 +183,15 @@ fem::Model buildRunModel(const Scene &scene, const Target *target, const PlacedP
   fem::Model model = fem::buildModel({all.node_offset, all.tri_offset, all.x, all.y, all.tri},
                                      std::move(materials), body_material, names);
   if (target && scene.run.fix_edges)
-    model.constraints.push_back(boxEdges(model, scene.target));
+    for (fem::VelocityConstraint &c : boxEdges(model, scene.target, scene.run.smooth_walls))
+      model.constraints.push_back(std::move(c));
   fem::setBodyVelocity(model, 0, 0.0, -scene.run.velocity, scene.run.spin);
+  if (scene.run.constant_velocity) {
+    fem::VelocityConstraint driven{"projectile driven", {}, true, true, 0.0, -scene.run.velocity};
+    for (std::size_t a = model.bodies[0].node_begin; a < model.bodies[0].node_end; ++a)
+      driven.nodes.push_back(static_cast<std::uint32_t>(a));
+    model.constraints.push_back(std::move(driven));
+  }
   return model;
 }
 
@@ -197,6 +215,7 @@ std::vector<std::pair<std::string, std::string>> demVariables(const Scene &scene
           {"gn", text(d.damping)},
           {"gt", text(d.tangential_damping)},
           {"mu", text(scene.contact.friction)},
+          {"mu_wall", text(scene.run.smooth_walls ? 0.0 : scene.contact.friction)},
           {"xlo", "0"},
           {"xhi", text(scene.target.width)},
           {"ylo", "0"},
@@ -211,7 +230,8 @@ fem::ContactSettings contactSettings(const Scene &scene, bool walls) {
   const ContactSpec &c = scene.contact;
   fem::ContactSettings s;
   s.friction = {0.0, c.projectile_friction, c.projectile_friction, c.friction};
-  s.wall_friction = c.friction; // grains meet the walls; the projectile does not reach them
+  // grains meet the walls; the projectile does not reach them
+  s.wall_friction = scene.run.smooth_walls ? 0.0 : c.friction;
   s.stiffness = c.stiffness;
   s.damping = c.damping;
   if (walls)
@@ -326,6 +346,15 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
   return result;
 }
 
+// The nodes held by the box's edges.
+std::size_t fixedNodes(const fem::Model &model) {
+  std::size_t n = 0;
+  for (const fem::VelocityConstraint &c : model.constraints)
+    if (c.name.starts_with("box "))
+      n += c.nodes.size();
+  return n;
+}
+
 std::string runStatus(const LoopResult &loop) {
   return loop.failure.empty() ? "completed" : loop.interrupted ? "interrupted" : "failed";
 }
@@ -351,7 +380,7 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
   j["model"] = {{"bodies", model.bodies.size()},
                 {"nodes", model.nodes.size()},
                 {"elements", model.elements.size()},
-                {"fixed_nodes", model.constraints.empty() ? 0 : model.constraints[0].nodes.size()}};
+                {"fixed_nodes", fixedNodes(model)}};
   if (!loop.end.empty())
     j["ended_by"] = loop.end;
   j["steps"] = solver.steps();

@@ -212,6 +212,9 @@ const std::vector<Key> &keys() {
         real("target", "density", t, &T::density, "kg/m^3", 0, true, 1e5,
              "grain density, for target.data (quartz: 2648.5, Table 3.3)"),
         boolean("projectile", "enabled", p, &P::enabled, "make and place the projectile"),
+        choice("projectile", "shape", p, &P::shape, projectile_kind_names,
+               "an ogive penetrator (the thesis's), or a flat plate as wide as the box and `length` "
+               "thick: a piston for planar compaction (docs/hugoniot.md)"),
         real("projectile", "length", p, &P::length, "m", 0, true, 1, "length L of the sharp ogive body"),
         real("projectile", "length_over_diameter", p, &P::length_over_diameter, "", 1, false, 50,
              "l/d (thesis: 3.85)"),
@@ -242,6 +245,12 @@ const std::vector<Key> &keys() {
         boolean("run", "grains", r, &R::grains, "include the grains; false: the projectile alone"),
         boolean("run", "fix_edges", r, &R::fix_edges,
                 "fix the grain nodes on the box's left, right and bottom edges"),
+        boolean("run", "smooth_walls", r, &R::smooth_walls,
+                "frictionless box walls: the edge nodes slide along their edge (held normal to it "
+                "only), and the walls' contact, FE and DEM, has no friction; uniaxial strain"),
+        boolean("run", "constant_velocity", r, &R::constant_velocity,
+                "hold the projectile's velocity at run.velocity, downward, throughout (a rigid "
+                "piston or a driven penetrator); false: it flies free from it"),
         real("run", "safety", r, &R::safety, "", 0, true, 1, "time step over the stable step"),
         real("run", "viscosity_linear", r, &R::viscosity_linear, "", 0, false, 10,
              "artificial viscosity, linear coefficient C_L (thesis Table 3.1: 0.5)"),
@@ -349,12 +358,15 @@ void checkTogether(const Scene &s) {
       bad("target.mesh_size = " + show(t.mesh_size) + " gives about " + show(triangles) +
           " triangles; allowed: at most 5e7 (a larger mesh_size, or mesh = \"none\")");
   }
-  if (s.projectile.enabled && s.projectile.mesh_size > 0) {
-    const double d = s.projectile.length / s.projectile.length_over_diameter;
-    const double triangles = s.projectile.length * d / (0.43 * s.projectile.mesh_size * s.projectile.mesh_size);
+  if (s.projectile.enabled) {
+    const bool plate = s.projectile.shape == ProjectileKind::plate;
+    const double d = plate ? t.width : s.projectile.length / s.projectile.length_over_diameter;
+    const double h = s.projectile.mesh_size > 0 ? s.projectile.mesh_size : t.mesh_size;
+    const double triangles = s.projectile.length * d / (0.43 * h * h);
     if (triangles > 5.0e7)
-      bad("projectile.mesh_size = " + show(s.projectile.mesh_size) + " gives about " + show(triangles) +
-          " triangles; allowed: at most 5e7");
+      bad("projectile.length = " + show(s.projectile.length) + (plate ? " (a plate as wide as the box)" : "") +
+          " at a mesh size of " + show(h) + " m gives about " + show(triangles) +
+          " triangles; allowed: at most 5e7 (a larger projectile.mesh_size)");
   }
   const ModalSpec &m = s.modal;
   if (m.body == ModalBody::projectile && m.support == ModalSupport::clamped)
@@ -370,7 +382,10 @@ void checkTogether(const Scene &s) {
           show(m.length * m.height / (0.43 * size * size)) +
           " triangles for the beam; allowed: at most 5e6");
   }
-  if (s.projectile.enabled) {
+  if (s.run.constant_velocity && s.run.spin != 0.0)
+    bad("run.spin = " + show(s.run.spin) + " with run.constant_velocity = true (a velocity held "
+        "without rotation); allowed: 0");
+  if (s.projectile.enabled && s.projectile.shape == ProjectileKind::ogive) {
     try {
       projectileShape(s.projectile);
     } catch (const std::invalid_argument &e) {

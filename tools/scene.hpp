@@ -35,6 +35,8 @@ struct RunSpec {
   double spin = 0.0;               // projectile's initial spin about its centre of mass [rad/s]
   bool grains = true;              // false: the projectile alone, in free flight
   bool fix_edges = true;           // grain nodes on the box's left, right and bottom edges fixed
+  bool smooth_walls = false;       // frictionless walls: edge nodes held normal to their edge only
+  bool constant_velocity = false;  // the projectile's velocity held at (0, -velocity)
   double safety = 0.9;             // time step over the stable step
   double viscosity_linear = 0.5;   // artificial viscosity C_L (thesis Table 3.1)
   double viscosity_quadratic = 4.0;

@@ -14,6 +14,7 @@ MESOPEN_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # - LIGGGHTS (libliggghts-dev) needs libopenmpi-dev for mpi.h; openmpi-bin provides mpirun.
 #   Both, and Spectra/SuiteSparse, are used by later parts of the project (solver, coupling, modal).
 # - python3-matplotlib/numpy/h5py are used through /usr/bin/python3 (plots, post-processing).
+# - yade runs the test yade_spheres_at_rest (label yade): 63 packages, 118 MB download, 0.8 GB disk.
 MESOPEN_PACKAGES=(
   build-essential cmake ninja-build pkg-config
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libeigen3-dev
@@ -22,6 +23,7 @@ MESOPEN_PACKAGES=(
   libspectra-dev libsuitesparse-dev
   python3 python3-matplotlib python3-numpy python3-h5py
   clang-format
+  yade
 )
 
 # Prints the packages of MESOPEN_PACKAGES that are not installed, one per line.

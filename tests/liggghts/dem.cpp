@@ -30,7 +30,7 @@ std::string oneDisk(double x, double y, double r, double vx = 0.0, double vy = 0
   const std::string path = (dir / "one.data").string();
   std::ofstream out(path);
   out.precision(17);
-  out << "one disk\n\n1 atoms\n1 atom types\n\n-1e-3 1e-3 xlo xhi\n-1e-3 1e-3 ylo yhi\n"
+  out << "one disk\n\n1 atoms\n2 atom types\n\n-1e-3 1e-3 xlo xhi\n-1e-3 1e-3 ylo yhi\n"
       << -r << ' ' << r << " zlo zhi\n\nAtoms\n\n1 1 " << 2 * r << " 2650 " << x << ' ' << y
       << " 0\n\nVelocities\n\n1 " << vx << ' ' << vy << " 0 0 0 " << omega << "\n";
   return path;
@@ -38,7 +38,7 @@ std::string oneDisk(double x, double y, double r, double vx = 0.0, double vy = 0
 
 std::vector<std::pair<std::string, std::string>> variables(const std::string &data) {
   return {{"data", data}, {"kn", "1e5"}, {"kt", "1e5"},   {"gn", "0"},   {"gt", "0"},
-          {"mu", "0.3"},  {"xlo", "-1e-3"}, {"xhi", "1e-3"}, {"ylo", "-1e-3"}, {"skin", "1e-6"},
+          {"mu", "0.3"}, {"mu_wall", "0.3"},  {"xlo", "-1e-3"}, {"xhi", "1e-3"}, {"ylo", "-1e-3"}, {"skin", "1e-6"},
           {"gravity", "0"}, {"dt", "1e-9"}};
 }
 

@@ -31,7 +31,7 @@ std::string twoDisks(double v) {
   const double r = 0.5 * quartz.diameter, x = r + 5e-9;
   std::ofstream out(path);
   out.precision(17);
-  out << "two disks\n\n2 atoms\n1 atom types\n\n-1e-3 1e-3 xlo xhi\n-1e-3 1e-3 ylo yhi\n"
+  out << "two disks\n\n2 atoms\n2 atom types\n\n-1e-3 1e-3 xlo xhi\n-1e-3 1e-3 ylo yhi\n"
       << -r << ' ' << r << " zlo zhi\n\nAtoms\n\n"
       << "1 1 " << 2 * r << ' ' << quartz.density << ' ' << -x << " 0 0\n"
       << "2 1 " << 2 * r << ' ' << quartz.density << ' ' << x << " 0 0\n"
@@ -61,7 +61,7 @@ Measured collide(const coupling::SpringDashpot &law, double v, double dt) {
                              {"kt", number(law.kn / 3.0)},
                              {"gn", number(law.gn)},
                              {"gt", number(law.gn / 3.0)},
-                             {"mu", "0.3"},
+                             {"mu", "0.3"}, {"mu_wall", "0.3"},
                              {"xlo", "-1e-3"},
                              {"xhi", "1e-3"},
                              {"ylo", "-1e-3"},
