@@ -127,3 +127,29 @@ TEST(Cli, TooLargeTargetsAreRefusedBeforeTheyStart) {
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("allowed: at most 5e7"), std::string::npos) << r.output;
 }
+
+// The planar compaction test's keys: a plate projectile, its velocity held, smooth walls. A held
+// velocity with spin is refused (the plate is held without rotation), as are an unknown shape and
+// a plate too large to mesh.
+TEST(Scene, PlateDrivenBetweenSmoothWalls) {
+  ScratchDir dir("scene-plate");
+  mesopen::test::writeFile(dir / "s.toml", "[projectile]\nshape = \"plate\"\nlength = 1e-4\n"
+                                           "[run]\nconstant_velocity = true\nsmooth_walls = true\n");
+  const Scene s = readScene(dir / "s.toml");
+  EXPECT_EQ(s.projectile.shape, ProjectileKind::plate);
+  EXPECT_TRUE(s.run.constant_velocity);
+  EXPECT_TRUE(s.run.smooth_walls);
+  const Scene d = readScene(std::string(MESOPEN_SOURCE_DIR) + "/examples/baseline.toml");
+  EXPECT_EQ(d.projectile.shape, ProjectileKind::ogive);
+  EXPECT_FALSE(d.run.constant_velocity);
+  EXPECT_FALSE(d.run.smooth_walls);
+  std::string e = errorOf(dir, "[run]\nconstant_velocity = true\nspin = 100\n");
+  EXPECT_NE(e.find("run.spin = 100"), std::string::npos) << e;
+  EXPECT_NE(e.find("allowed: 0"), std::string::npos) << e;
+  e = errorOf(dir, "[projectile]\nshape = \"disk\"\n");
+  EXPECT_NE(e.find("projectile.shape"), std::string::npos) << e;
+  EXPECT_NE(e.find("\"plate\""), std::string::npos) << e;
+  e = errorOf(dir, "[projectile]\nshape = \"plate\"\nlength = 0.5\n");
+  EXPECT_NE(e.find("projectile.length = 0.5 (a plate as wide as the box)"), std::string::npos) << e;
+  EXPECT_NE(e.find("allowed: at most 5e7"), std::string::npos) << e;
+}
