@@ -216,6 +216,11 @@ std::vector<std::pair<std::string, std::string>> demVariables(const Scene &scene
           {"gt", text(d.tangential_damping)},
           {"mu", text(scene.contact.friction)},
           {"mu_wall", text(scene.run.smooth_walls ? 0.0 : scene.contact.friction)},
+          {"hertz", d.normal_law == NormalLaw::hertz ? "1" : "0"},
+          {"h", text(d.hertz_length)},
+          // the effective mass of a pair of mean grains, m / 2
+          {"mref", text(0.25 * M_PI * scene.target.density * scene.target.meanDiameter() *
+                        scene.target.meanDiameter() / 2.0)},
           {"xlo", "0"},
           {"xhi", text(scene.target.width)},
           {"ylo", "0"},
@@ -481,7 +486,7 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
   std::unique_ptr<coupling::FeDemCoupling> coupled;
   if (target && std::find(meshed.begin(), meshed.end(), 0) != meshed.end()) {
     if (writer)
-      writeLiggghtsData(dir + "/dem.data", *target, targetDisks(*target, meshed, &projectile));
+      writeLiggghtsData(dir + "/dem.data", *target, targetDisks(*target, scene.dem.disk_size, meshed, &projectile));
     world.barrier();
     dem = std::make_unique<coupling::LiggghtsDem>(shareDirectory() + "/liggghts-inputs/dem.in",
                                                   demVariables(scene, dir + "/dem.data"),

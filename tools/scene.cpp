@@ -294,6 +294,16 @@ const std::vector<Key> &keys() {
              "normal damping g_n (absolute): f_n = k_n d - g_n v_n"),
         real("dem", "tangential_damping", d, &D::tangential_damping, "N s/m^2", 0, false, 1e6,
              "tangential damping g_t (absolute)"),
+        choice("dem", "disk_size", d, &D::disk_size, disk_size_names,
+               "inscribed: at the grain's centroid, its equal-area radius or less where it would "
+               "overlap (covers less than the grains); equal_area: the equal-area radius, the disks "
+               "pushed apart until none overlaps (covers what the grains cover; docs/coupling.md)"),
+        choice("dem", "normal_law", d, &D::normal_law, normal_law_names,
+               "the disks' normal law: hooke, f_n = k_n d - g_n v_n; hertz, the same times "
+               "sqrt(r_eff d) / hertz_length (stiffer as the disks are pressed together)"),
+        real("dem", "hertz_length", d, &D::hertz_length, "m", 1e-9, false, 1e-3,
+             "hertz: the length sqrt(r_eff d) at which the Hertzian law has the stiffness "
+             "dem.stiffness and damping dem.damping (a 60 um pair: d = 0.14 r at 8e-6)"),
         real("dem", "skin", d, &D::skin, "m", 0, false, 1,
              "LIGGGHTS's neighbour skin; 0: half the mean grain diameter"),
         real("dem", "step", d, &D::step, "s", 0, false, 1e-6,

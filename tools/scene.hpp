@@ -3,6 +3,7 @@
 // prints that table (docs/scene-keys.md is its copy).
 #pragma once
 
+#include "disks.hpp"
 #include "projectile.hpp"
 #include "spring_dashpot.hpp"
 #include "target.hpp"
@@ -61,6 +62,12 @@ struct ContactSpec {
   double damping = 0.1;             // fraction of the contact spring's critical damping
 };
 
+// The disks' normal contact law in LIGGGHTS (liggghts-inputs/dem.in): linear (hooke/stiffness) or
+// Hertzian (hertz/stiffness), stiffening with the overlap as the grains' contacts do.
+enum class NormalLaw { hooke, hertz };
+inline constexpr Named<NormalLaw> normal_law_names[] = {{"hooke", NormalLaw::hooke},
+                                                        {"hertz", NormalLaw::hertz}};
+
 // The DEM grains (table [dem]): LIGGGHTS's hooke/stiffness law per metre of thickness, f_n =
 // k_n d - g_n v_n (liggghts-inputs/dem.in), between disks and with the walls; the disks meet the FE
 // bodies with the FE contact law (coupling/disk_contact.hpp) and [contact]'s friction.
@@ -70,6 +77,9 @@ struct DemSpec {
   double tangential_stiffness = coupling::quartz_grains.kt; // k_t [N/m per m]
   double damping = coupling::quartz_grains.gn;              // g_n, absolute [N s/m per m]
   double tangential_damping = coupling::quartz_grains.gt;   // g_t [N s/m per m]
+  DiskSize disk_size = DiskSize::inscribed; // the disks' radii and places (targets/disks.hpp)
+  NormalLaw normal_law = NormalLaw::hooke;  // the disks' normal contact law
+  double hertz_length = 8e-6; // hertz: sqrt(r_eff d) where the law has stiffness k_n [m]
   double skin = 0.0;                  // neighbour skin [m]; 0: half the mean diameter
   double step = 0.0; // the disks' step, a time window of many FE steps [s]; 0: their stable step
 };

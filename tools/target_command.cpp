@@ -145,7 +145,7 @@ int targetCommand(const TargetOptions &options) {
     writes.push_back(std::async(std::launch::async, [&] { writeTargetH5(dir + "/target.h5", target, pp); }));
     writes.push_back(std::async(std::launch::async, [&] { writeTargetVtu(dir + "/target.vtu", target, pp); }));
     // The disks of both DEM files, inside the walls; the projectile is not in them.
-    const Disks disks = targetDisks(target);
+    const Disks disks = targetDisks(target, scene.dem.disk_size);
     writes.push_back(std::async(std::launch::async, [&] { writeLiggghtsData(dir + "/target.data", target, disks); }));
     writeYadeSpheres(dir + "/target.spheres", disks);
     for (auto &w : writes)
