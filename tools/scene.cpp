@@ -162,6 +162,19 @@ Key diameter() {
   return k;
 }
 
+// dem.preset: sets the preset's keys too (readScene applies it before the table's other keys).
+Key demPreset() {
+  Key k = choice("dem", "preset", &Scene::dem, &DemSpec::preset, dem_preset_names,
+                 "a named set of the [dem] keys, applied first: quartz-pair (linear law on "
+                 "inscribed disks, calibrated on a pair of grains) or quartz-bulk (Hertzian law on "
+                 "equal-area disks, calibrated on the meshed target's Hugoniot; docs/coupling.md)");
+  k.set = [set = k.set](Scene &s, const toml::node &n, const std::string &where) {
+    set(s, n, where);
+    s.dem.apply(s.dem.preset);
+  };
+  return k;
+}
+
 const std::vector<Key> &keys() {
   static const std::vector<Key> all = [] {
     using T = TargetSpec;
@@ -294,6 +307,7 @@ const std::vector<Key> &keys() {
              "normal damping g_n (absolute): f_n = k_n d - g_n v_n"),
         real("dem", "tangential_damping", d, &D::tangential_damping, "N s/m^2", 0, false, 1e6,
              "tangential damping g_t (absolute)"),
+        demPreset(),
         choice("dem", "disk_size", d, &D::disk_size, disk_size_names,
                "inscribed: at the grain's centroid, its equal-area radius or less where it would "
                "overlap (covers less than the grains); equal_area: the equal-area radius, the disks "
@@ -538,6 +552,16 @@ toml::table parseToml(const std::string &path) {
 
 Scene readScene(const std::string &path) { return readScene(parseToml(path), path); }
 
+void DemSpec::apply(DemPreset p) {
+  preset = p;
+  stiffness = coupling::quartz_grains.kn, tangential_stiffness = coupling::quartz_grains.kt;
+  damping = coupling::quartz_grains.gn, tangential_damping = coupling::quartz_grains.gt;
+  const bool bulk = p == DemPreset::quartz_bulk;
+  disk_size = bulk ? DiskSize::equal_area : DiskSize::inscribed;
+  normal_law = bulk ? NormalLaw::hertz : NormalLaw::hooke;
+  hertz_length = 8e-6; // quartz-bulk: the calibration's choice (docs/coupling.md)
+}
+
 Scene readScene(const toml::table &root, const std::string &path) {
   Scene scene;
   scene.path = path;
@@ -553,7 +577,11 @@ Scene readScene(const toml::table &root, const std::string &path) {
     const toml::table *tab = tnode.as_table();
     if (!tab)
       throw InputError(path + ": " + table + " must be a table ([" + table + "])");
+    if (const toml::node *preset = tab->get("preset"); preset && findKey(table, "preset"))
+      findKey(table, "preset")->set(scene, *preset, path); // before the keys it may set
     for (const auto &[kname, knode] : *tab) {
+      if (kname.str() == "preset" && findKey(table, "preset"))
+        continue;
       const Key *k = findKey(table, std::string(kname.str()));
       if (!k)
         throw InputError(path + ": unknown key " + table + "." + std::string(kname.str()) +

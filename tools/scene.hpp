@@ -68,11 +68,20 @@ enum class NormalLaw { hooke, hertz };
 inline constexpr Named<NormalLaw> normal_law_names[] = {{"hooke", NormalLaw::hooke},
                                                         {"hertz", NormalLaw::hertz}};
 
+// Named sets of the [dem] keys (dem.preset, applied before the table's other keys):
+// quartz-pair, the linear law calibrated on a pair of meshed grains colliding, on inscribed disks;
+// quartz-bulk, the Hertzian law on equal-area disks, calibrated on the planar compaction
+// (Hugoniot) of the meshed target (tools/studies/calibrate_dem.py; docs/coupling.md).
+enum class DemPreset { quartz_pair, quartz_bulk };
+inline constexpr Named<DemPreset> dem_preset_names[] = {{"quartz-pair", DemPreset::quartz_pair},
+                                                        {"quartz-bulk", DemPreset::quartz_bulk}};
+
 // The DEM grains (table [dem]): LIGGGHTS's hooke/stiffness law per metre of thickness, f_n =
 // k_n d - g_n v_n (liggghts-inputs/dem.in), between disks and with the walls; the disks meet the FE
 // bodies with the FE contact law (coupling/disk_contact.hpp) and [contact]'s friction.
 // The defaults: quartz grains' law, calibrated against pairs of meshed grains (docs/coupling.md).
 struct DemSpec {
+  DemPreset preset = DemPreset::quartz_pair;
   double stiffness = coupling::quartz_grains.kn;            // k_n [N/m per m]
   double tangential_stiffness = coupling::quartz_grains.kt; // k_t [N/m per m]
   double damping = coupling::quartz_grains.gn;              // g_n, absolute [N s/m per m]
@@ -82,6 +91,8 @@ struct DemSpec {
   double hertz_length = 8e-6; // hertz: sqrt(r_eff d) where the law has stiffness k_n [m]
   double skin = 0.0;                  // neighbour skin [m]; 0: half the mean diameter
   double step = 0.0; // the disks' step, a time window of many FE steps [s]; 0: their stable step
+  // The preset's values for every key it names (the others are left as they are).
+  void apply(DemPreset p);
 };
 
 // What `mesopen modal` analyses (table [modal]): the scene's projectile, free, or a rectangular

@@ -153,3 +153,21 @@ TEST(Scene, PlateDrivenBetweenSmoothWalls) {
   EXPECT_NE(e.find("projectile.length = 0.5 (a plate as wide as the box)"), std::string::npos) << e;
   EXPECT_NE(e.find("allowed: at most 5e7"), std::string::npos) << e;
 }
+
+// dem.preset sets its keys first, whatever the order in the file; keys given beside it win.
+TEST(Scene, DemPresetFirstThenTheTablesKeys) {
+  ScratchDir dir("scene-dem-preset");
+  mesopen::test::writeFile(dir / "s.toml", "[dem]\nhertz_length = 5e-6\npreset = \"quartz-bulk\"\n");
+  const Scene s = readScene(dir / "s.toml");
+  EXPECT_EQ(s.dem.preset, DemPreset::quartz_bulk);
+  EXPECT_EQ(s.dem.disk_size, DiskSize::equal_area);
+  EXPECT_EQ(s.dem.normal_law, NormalLaw::hertz);
+  EXPECT_DOUBLE_EQ(s.dem.hertz_length, 5e-6);
+  mesopen::test::writeFile(dir / "p.toml", "[dem]\npreset = \"quartz-pair\"\ndisk_size = \"equal_area\"\n");
+  const Scene p = readScene(dir / "p.toml");
+  EXPECT_EQ(p.dem.normal_law, NormalLaw::hooke);
+  EXPECT_EQ(p.dem.disk_size, DiskSize::equal_area);
+  const std::string e = errorOf(dir, "[dem]\npreset = \"sand\"\n");
+  EXPECT_NE(e.find("dem.preset"), std::string::npos) << e;
+  EXPECT_NE(e.find("\"quartz-bulk\""), std::string::npos) << e;
+}

@@ -380,3 +380,50 @@ TEST(GrainDisks, KeepInsideTheWallsAndOutOfOtherBodies) {
   walls.width = 400e-6;
   EXPECT_NEAR(grainDisks(right, 2650.0, walls).radius[0], 10e-6, 1e-15);
 }
+
+// Equal-area disks: a row of touching squares, staggered by 5 um (their equal-area disks overlap
+// by 6 um), under a plate, between walls, with one square meshed: relaxed apart (into a zigzag:
+// the row's five diameters are longer than its room), every disk keeps its
+// grain's equal-area radius and mass, none overlaps another, a wall, the meshed square or the
+// plate (to 1e-6 of a radius, the sweeps' end), and the result does not depend on the order of
+// the grains.
+TEST(GrainDisks, EqualAreaDisksRelaxedApart) {
+  const double s = 50e-6, width = 400e-6, height = 150e-6, rho = 2650.0;
+  auto squares = [&](bool reversed) {
+    Polygons grains;
+    for (int j = 0; j < 6; ++j) {
+      const int k = reversed ? 5 - j : j;
+      const double x0 = 20e-6 + k * s;
+      const double y0 = 20e-6 + (k % 2) * 5e-6;
+      grains.add({x0, x0 + s, x0 + s, x0}, {y0, y0, y0 + s, y0 + s});
+    }
+    return grains;
+  };
+  DiskBounds bounds;
+  bounds.width = width, bounds.height = height, bounds.size = DiskSize::equal_area;
+  bounds.meshed = {0, 0, 0, 0, 0, 1};
+  bounds.bodies.add({0.0, width, width, 0.0}, {75e-6, 75e-6, 90e-6, 90e-6}); // a plate on top
+  const Polygons grains = squares(false);
+  const Disks d = grainDisks(grains, rho, bounds);
+  ASSERT_EQ(d.size(), 5u);
+  const double r_equal = s / std::sqrt(M_PI), tol = 1e-6 * r_equal;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    EXPECT_NEAR(d.radius[i], r_equal, tol) << i;
+    EXPECT_NEAR(d.density[i] * M_PI * d.radius[i] * d.radius[i], rho * s * s, 1e-9 * rho * s * s);
+    EXPECT_GE(d.x[i] - d.radius[i], -tol);
+    EXPECT_LE(d.x[i] + d.radius[i], width + tol);
+    EXPECT_GE(d.y[i] - d.radius[i], -tol);
+    EXPECT_LE(d.y[i] + d.radius[i], 75e-6 + tol); // under the plate
+    EXPECT_LE(d.x[i] + d.radius[i], 20e-6 + 5 * s + tol); // left of the meshed square
+    for (std::size_t j = 0; j < i; ++j)
+      EXPECT_GE(std::hypot(d.x[i] - d.x[j], d.y[i] - d.y[j]), d.radius[i] + d.radius[j] - tol);
+  }
+  // the same grains in the other order give the same disks
+  DiskBounds reversed = bounds;
+  reversed.meshed = {1, 0, 0, 0, 0, 0};
+  const Disks r = grainDisks(squares(true), rho, reversed);
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    EXPECT_DOUBLE_EQ(r.x[4 - i], d.x[i]);
+    EXPECT_DOUBLE_EQ(r.y[4 - i], d.y[i]);
+  }
+}
