@@ -34,8 +34,9 @@ Nearest nearestOnPolygon(const Polygons &polygons, std::size_t g, double px, dou
   return best;
 }
 
-// Jacobi sweeps that push overlapping disks apart (each pair by half its overlap each, along the
-// line of centres), out of the walls (x = 0, x = width, y = 0 and, while relaxing, the box's top
+// Jacobi sweeps that push overlapping disks apart (each of a pair by 0.8 of the overlap along the
+// line of centres: over-relaxed, since a disk's neighbours push it back; the baseline's 6,198
+// disks need 186 sweeps so, 634 at 0.5), out of the walls (x = 0, x = width, y = 0 and, while relaxing, the box's top
 // y = height, so that the target keeps its box and bulk density) and out of the obstacles (meshed
 // grains, other FE bodies: the whole overlap), all from the positions before the sweep, so that
 // the result does not depend on the order. Until the largest overlap is below 1e-6 of the mean
@@ -59,11 +60,15 @@ void relaxApart(std::vector<double> &x, std::vector<double> &y, const std::vecto
     const auto [y0, y1] = std::minmax_element(bodies.y.begin() + first, bodies.y.begin() + last);
     box.insert(box.end(), {*x0, *x1, *y0, *y1});
   }
+  constexpr double push = 0.8;
+  const bool any_meshed = std::find(is_disk.begin(), is_disk.end(), 0) != is_disk.end();
   CellGrid grid(width, height, 2.0 * r_max);
   for (int sweep = 0; sweep < sweeps; ++sweep) {
     grid.fill(x.data(), y.data(), r.data(), 0, static_cast<std::uint32_t>(n));
     double worst = 0.0;
-    for (std::size_t i = 0; i < n; ++i) {
+#pragma omp parallel for reduction(max : worst) schedule(static)
+    for (long k = 0; k < static_cast<long>(n); ++k) {
+      const auto i = static_cast<std::size_t>(k);
       dx[i] = dy[i] = 0.0;
       if (!is_disk[i])
         continue;
@@ -77,7 +82,7 @@ void relaxApart(std::vector<double> &x, std::vector<double> &y, const std::vecto
         worst = std::max(worst, overlap);
         // coincident centres: apart along x, the lower index to the left
         const double ux = d > 0.0 ? ex / d : (i < o.index ? -1.0 : 1.0), uy = d > 0.0 ? ey / d : 0.0;
-        dx[i] += 0.5 * overlap * ux, dy[i] += 0.5 * overlap * uy;
+        dx[i] += push * overlap * ux, dy[i] += push * overlap * uy;
       });
       const double walls[4] = {r[i] - x[i], x[i] + r[i] - width, r[i] - y[i], y[i] + r[i] - height};
       dx[i] += std::max(walls[0], 0.0) - std::max(walls[1], 0.0);
@@ -96,10 +101,11 @@ void relaxApart(std::vector<double> &x, std::vector<double> &y, const std::vecto
         dx[i] += sign * overlap * (x[i] - c.x) / c.distance;
         dy[i] += sign * overlap * (y[i] - c.y) / c.distance;
       };
-      grain_grid.forNear(x[i], y[i], grain_reach + r[i], [&](const CellGrid::Item &o) {
-        if (!is_disk[o.index])
-          pushOut(grains, o.index);
-      });
+      if (any_meshed)
+        grain_grid.forNear(x[i], y[i], grain_reach + r[i], [&](const CellGrid::Item &o) {
+          if (!is_disk[o.index])
+            pushOut(grains, o.index);
+        });
       for (std::size_t b = 0; b < bodies.size(); ++b)
         if (x[i] + r[i] > box[4 * b] && x[i] - r[i] < box[4 * b + 1] && y[i] + r[i] > box[4 * b + 2] &&
             y[i] - r[i] < box[4 * b + 3])

@@ -217,6 +217,7 @@ std::vector<std::pair<std::string, std::string>> demVariables(const Scene &scene
           {"mu", text(scene.contact.friction)},
           {"mu_wall", text(scene.run.smooth_walls ? 0.0 : scene.contact.friction)},
           {"hertz", d.normal_law == NormalLaw::hertz ? "1" : "0"},
+          {"rolling", text(d.rolling_friction)},
           {"h", text(d.hertz_length)},
           // the effective mass of a pair of mean grains, m / 2
           {"mref", text(0.25 * M_PI * scene.target.density * scene.target.meanDiameter() *

@@ -318,6 +318,9 @@ const std::vector<Key> &keys() {
         real("dem", "hertz_length", d, &D::hertz_length, "m", 1e-9, false, 1e-3,
              "hertz: the length sqrt(r_eff d) at which the Hertzian law has the stiffness "
              "dem.stiffness and damping dem.damping (a 60 um pair: d = 0.14 r at 8e-6)"),
+        real("dem", "rolling_friction", d, &D::rolling_friction, "", 0, false, 10,
+             "rolling resistance between disks (LIGGGHTS epsd2: an elastic-plastic torque up to "
+             "this times r_eff f_n), standing in for the grains' corners; 0: none"),
         real("dem", "skin", d, &D::skin, "m", 0, false, 1,
              "LIGGGHTS's neighbour skin; 0: half the mean grain diameter"),
         real("dem", "step", d, &D::step, "s", 0, false, 1e-6,
@@ -559,7 +562,9 @@ void DemSpec::apply(DemPreset p) {
   const bool bulk = p == DemPreset::quartz_bulk;
   disk_size = bulk ? DiskSize::equal_area : DiskSize::inscribed;
   normal_law = bulk ? NormalLaw::hertz : NormalLaw::hooke;
-  hertz_length = 8e-6; // quartz-bulk: the calibration's choice (docs/coupling.md)
+  // quartz-bulk: the calibration's choices (tools/studies/calibrate_dem.py, docs/coupling.md)
+  hertz_length = 8e-6;
+  rolling_friction = bulk ? 0.1 : 0.0;
 }
 
 Scene readScene(const toml::table &root, const std::string &path) {

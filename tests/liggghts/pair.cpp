@@ -61,7 +61,7 @@ Measured collide(const coupling::SpringDashpot &law, double v, double dt) {
                              {"kt", number(law.kn / 3.0)},
                              {"gn", number(law.gn)},
                              {"gt", number(law.gn / 3.0)},
-                             {"mu", "0.3"}, {"mu_wall", "0.3"}, {"hertz", "0"}, {"h", "1"}, {"mref", "1"},
+                             {"mu", "0.3"}, {"mu_wall", "0.3"}, {"hertz", "0"}, {"rolling", "0"}, {"h", "1"}, {"mref", "1"},
                              {"xlo", "-1e-3"},
                              {"xhi", "1e-3"},
                              {"ylo", "-1e-3"},

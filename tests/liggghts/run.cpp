@@ -69,20 +69,22 @@ TEST(LiggghtsRun, HybridBandEndsAtItsDepth) {
   EXPECT_GT(whole, limited + 60e-6);
 }
 
-// A target of disks, and a hybrid one, with the projectile at rest on them: nothing presses on
-// anything at t = 0 (no disk overlaps a wall, another disk, a meshed grain or the projectile), so
-// after 1 us every disk and node is still at rest. Tolerance 1e-6 m/s: round-off of touching
-// contacts gives about 1e-11 m/s; a disk started across a wall by a few per cent of its radius
-// leaves at metres per second.
+// A target of disks, and a hybrid one, with the projectile at rest on them, with either preset
+// of disks (inscribed, linear law; equal-area disks pushed apart, Hertzian law with rolling
+// resistance): nothing presses on anything at t = 0 (no disk overlaps a wall, another disk, a
+// meshed grain or the projectile), so after 1 us every disk and node is still at rest. Tolerance
+// 1e-6 m/s: round-off of touching contacts gives about 1e-11 m/s; a disk started across a wall by
+// a few per cent of its radius leaves at metres per second (120 m/s measured).
 TEST(LiggghtsRun, TargetAtRestStaysAtRest) {
-  for (const char *representation : {"dem", "hybrid"}) {
-    ScratchDir dir(std::string("run-rest-") + representation);
+  for (const std::string representation :
+       {"dem", "hybrid", "dem\"\n[dem]\npreset = \"quartz-bulk", "hybrid\"\n[dem]\npreset = \"quartz-bulk"}) {
+    ScratchDir dir("run-rest-" + std::to_string(representation.size()));
     const auto r = test::runScene(
         dir, "[target]\nwidth = 0.8e-3\nheight = 0.5e-3\ndiameter = [42e-6, 78e-6]\n"
              "mesh_size = 12e-6\nseed = 2\n[projectile]\nlength = 0.6e-3\n"
              "[run]\nvelocity = 0\nend_time = 1e-6\nframe_interval = 0.5e-6\nvtk = false\n"
              "band_half_width = 0.15e-3\nrepresentation = \"" +
-                 std::string(representation) + "\"\n");
+                 representation + "\"\n");
     ASSERT_EQ(r.code, 0) << r.output;
     const H5File h5 = H5File::open(dir / "out/run.h5");
     for (const char *frame : {"000001", "000002"}) {

@@ -4,13 +4,16 @@
 1. The Hugoniot of the meshed grains (tools/studies/hugoniot.py, fe) and of equal-area disks with
    the Hertzian law at each --lengths value of dem.hertz_length; the length whose shock velocities
    U_s lie closest to fe's (the least of the largest relative difference over u_p) is chosen.
-2. Run 6's projectile driven at constant velocity (run.constant_velocity) to one length in fe,
-   in dem with the chosen disks and in dem with the disks calibrated on a pair (the defaults):
-   the resisting force (the grains' axial force on the projectile) averaged over the time to one
-   length, per seed, and its mean.
+2. Run 6's projectile driven at constant velocity (run.constant_velocity) to one length: the
+   resisting force (the grains' axial force on the projectile) averaged over the time to one
+   length, per seed, and its mean. At the lowest --driven velocity, dem with each --rolling value
+   of dem.rolling_friction: the value whose force lies closest to fe's is chosen, if its Hugoniot
+   stays within 5 % of fe's (else the next closest). Then at every --driven velocity: fe, dem with
+   the chosen disks and dem with the disks calibrated on a pair (the defaults).
 
     python3 tools/studies/calibrate_dem.py -o DIR [--seeds 1,2,3] [--velocities 250,...]
-        [--lengths 6e-6,7e-6,8e-6,9e-6,10e-6] [--driven 500,1500] [--threads 2] [--docs DIR]
+        [--lengths 6e-6,7e-6,8e-6,9e-6,10e-6] [--rolling 0,0.1,0.3] [--driven 500,1500]
+        [--threads 2] [--docs DIR]
         [--mesopen build/bin/mesopen]
 
 Writes DIR/calibration.json, DIR/calibration.md, DIR/calibration.png and DIR/summary.json (and
@@ -25,6 +28,7 @@ import shutil
 import subprocess
 import sys
 import time
+import tomllib
 
 import h5py
 import numpy as np
@@ -66,22 +70,44 @@ def hugoniot(args, out, representation, settings):
         return json.load(f)["table"]
 
 
+def toml_value(v):
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, list):
+        return "[" + ", ".join(toml_value(x) for x in v) + "]"
+    return repr(v)
+
+
 def driven_scene(up, seed, settings):
-    text = open(os.path.join(ROOT, "examples", "baseline.toml")).read()
-    text = text.replace("velocity = 1500.0", "velocity = %r\nconstant_velocity = true" % up)
-    text = text.replace("frame_interval = 2.5e-7", "frame_interval = 0\nvtk = false")
-    text = text.replace("seed = 1", "seed = %d" % seed)
-    text = text.replace("end_time = 5e-6", "end_time = %r" % (1.5 * 1.7e-3 / up))
-    tables = {}
+    """Run 6 (examples/baseline.toml) with the projectile held at u_p, no frames, and the
+    settings (TABLE.KEY=VALUE) over it."""
+    with open(os.path.join(ROOT, "examples", "baseline.toml"), "rb") as f:
+        scene = tomllib.load(f)
+    scene["target"]["seed"] = seed
+    scene["run"].update({"velocity": float(up), "constant_velocity": True, "frame_interval": 0.0,
+                         "vtk": False, "end_time": 1.5 * 1.7e-3 / up})
     for s in settings:
         key, _, value = s.partition("=")
         table, _, name = key.rpartition(".")
-        tables.setdefault(table, []).append("%s = %s" % (name, value))
-    for table, lines in tables.items():
-        if table == "run":
-            text = text.replace("[run]\n", "[run]\n" + "\n".join(lines) + "\n")
-        else:
-            text += "\n[%s]\n%s\n" % (table, "\n".join(lines))
+        node = scene
+        for part in table.split("."):
+            node = node.setdefault(part, {})
+        node[name] = tomllib.loads("v = " + value)["v"]
+    text = ""
+
+    def write(prefix, table):
+        nonlocal text
+        plain = {k: v for k, v in table.items() if not isinstance(v, dict)}
+        if plain:
+            text += "\n[%s]\n" % prefix + "".join("%s = %s\n" % (k, toml_value(v))
+                                                  for k, v in plain.items())
+        for k, v in table.items():
+            if isinstance(v, dict):
+                write(prefix + "." + k if prefix else k, v)
+
+    write("", scene)
     return text
 
 
@@ -127,6 +153,7 @@ def main():
     ap.add_argument("--velocities", default="250,500,750,1000,1500")
     ap.add_argument("--lengths", default="6e-6,7e-6,8e-6,9e-6,10e-6")
     ap.add_argument("--driven", default="500,1500")
+    ap.add_argument("--rolling", default="0,0.1,0.3")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--docs", default="")
     ap.add_argument("--mesopen", default=os.path.join(ROOT, "build", "bin", "mesopen"))
@@ -135,6 +162,12 @@ def main():
     numbers(args.velocities, "velocities")
     lengths = numbers(args.lengths, "lengths")
     drives = numbers(args.driven, "driven")
+    try:
+        rollings = [float(v) for v in args.rolling.split(",") if v.strip()]
+    except ValueError:
+        rollings = []
+    if not rollings or any(not 0 <= v <= 10 for v in rollings):
+        fail_input("--rolling %r: allowed: comma-separated numbers from 0 to 10" % args.rolling)
     if not os.access(args.mesopen, os.X_OK):
         fail_input("--mesopen %s: not an executable" % args.mesopen)
     os.makedirs(args.out, exist_ok=True)
@@ -164,11 +197,37 @@ def main():
     print("calibrate_dem: chosen hertz_length %g m (largest U_s difference %.1f %%)" % (
         best["hertz_length"], 100 * best["worst"]), flush=True)
 
-    # 2. the projectile driven at constant velocity
-    chosen = BULK + ["dem.hertz_length=%r" % best["hertz_length"]]
+    # 2. the projectile driven at constant velocity: the rolling resistance at the lowest velocity
+    lengths_set = BULK + ["dem.hertz_length=%r" % best["hertz_length"]]
+    low = min(drives)
+    fe_low = mean_sd([driven(args, "fe", low, seed, []).get("force", float("nan"))
+                      for seed in seeds])[0]
+    rolling_rows = []
+    for mu_r in rollings:
+        settings = ['run.representation="dem"'] + lengths_set + ["dem.rolling_friction=%r" % mu_r]
+        force = mean_sd([driven(args, "dem-bulk-r%g" % mu_r, low, seed, settings).get(
+            "force", float("nan")) for seed in seeds])[0]
+        rolling_rows.append({"rolling_friction": mu_r, "force": force, "error": force / fe_low - 1})
+        print("calibrate_dem: rolling friction %g: resisting force at %g m/s %+.1f %% against fe" %
+              (mu_r, low, 100 * (force / fe_low - 1)), flush=True)
+    chosen_rolling, rolling_hugoniot = None, None
+    for row in sorted(rolling_rows, key=lambda r: abs(r["error"])):
+        table = hugoniot(args, os.path.join(args.out, "hugoniot-dem-h%g-r%g" % (
+            best["hertz_length"], row["rolling_friction"])), "dem",
+            lengths_set + ["dem.rolling_friction=%r" % row["rolling_friction"]])
+        errors = {r["up"]: r["Us"] / fe_us[r["up"]] - 1.0 for r in table} if table else {}
+        row["hugoniot_errors"] = errors
+        if errors and max(abs(e) for e in errors.values()) <= 0.05:
+            chosen_rolling, rolling_hugoniot = row["rolling_friction"], table
+            break
+    if chosen_rolling is None:
+        chosen_rolling = 0.0
+    print("calibrate_dem: chosen rolling friction %g" % chosen_rolling, flush=True)
+    chosen = lengths_set + ["dem.rolling_friction=%r" % chosen_rolling]
     rows = []
     for up in drives:
-        for name, settings in (("fe", []), ("dem-bulk", ['run.representation="dem"'] + chosen),
+        for name, settings in (("fe", []),
+                               ("dem-bulk-r%g" % chosen_rolling, ['run.representation="dem"'] + chosen),
                                ("dem-pair", ['run.representation="dem"'])):
             for seed in seeds:
                 row = driven(args, name, up, seed, settings)
@@ -180,15 +239,17 @@ def main():
     for up in drives:
         entry = {"up": up}
         for name in ("fe", "dem-bulk", "dem-pair"):
+            key = "dem-bulk-r%g" % chosen_rolling if name == "dem-bulk" else name
             entry[name], entry[name + "_sd"] = mean_sd(
-                [r.get("force", float("nan")) for r in rows if r["name"] == name and r["up"] == up])
+                [r.get("force", float("nan")) for r in rows if r["name"] == key and r["up"] == up])
         entry["dem-bulk_error"] = entry["dem-bulk"] / entry["fe"] - 1.0
         entry["dem-pair_error"] = entry["dem-pair"] / entry["fe"] - 1.0
         forces.append(entry)
 
     result = {"seeds": seeds, "velocities": args.velocities, "fe": fe, "dem_pair": pair,
               "candidates": candidates, "chosen_hertz_length": best["hertz_length"],
-              "driven": rows, "forces": forces}
+              "rolling": rolling_rows, "chosen_rolling_friction": chosen_rolling,
+              "chosen_hugoniot": rolling_hugoniot, "driven": rows, "forces": forces}
     with open(os.path.join(args.out, "calibration.json.tmp"), "w") as f:
         json.dump(result, f, indent=1, allow_nan=True)
     os.replace(os.path.join(args.out, "calibration.json.tmp"),
@@ -198,6 +259,7 @@ def main():
     failed = [r for r in rows if "error" in r]
     with open(os.path.join(args.out, "summary.json.tmp"), "w") as f:
         json.dump({"command": "calibrate_dem", "chosen_hertz_length": best["hertz_length"],
+                   "chosen_rolling_friction": chosen_rolling,
                    "largest_Us_difference": best["worst"], "forces": forces,
                    "failed": len(failed), "wall_seconds": time.time() - start,
                    "files": ["calibration.json", "calibration.md", "calibration.png"]}, f,
@@ -236,6 +298,15 @@ def write_markdown(path, r, args):
         lines.append("| %g | %s |" % (up, " | ".join(cells)))
     lines += ["", "Chosen: dem.hertz_length = %g m (the least of the largest difference)." %
               r["chosen_hertz_length"], "",
+              "## Rolling resistance: run 6's projectile driven at %g m/s" % min(
+                  f["up"] for f in r["forces"]), "",
+              "| dem.rolling_friction | resisting force against fe | Hugoniot U_s against fe "
+              "(by u_p) |", "|---|---|---|"]
+    for row in r["rolling"]:
+        hug = ", ".join("%g: %+.1f %%" % (float(u), 100 * e)
+                        for u, e in row.get("hugoniot_errors", {}).items()) or "not run"
+        lines.append("| %g | %+.1f %% | %s |" % (row["rolling_friction"], 100 * row["error"], hug))
+    lines += ["", "Chosen: dem.rolling_friction = %g." % r["chosen_rolling_friction"], "",
               "## Run 6's projectile driven at constant velocity to one length: the resisting "
               "force [kN/m], time-averaged", "",
               "| u_p [m/s] | fe | dem, bulk-calibrated | difference | dem, pair-calibrated | "

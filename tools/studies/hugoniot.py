@@ -17,13 +17,15 @@ uniaxial strain). From the run's frames:
 rho_00 is the target's mass over its box, W x H. The closed-form bound is the full-compaction
 Hugoniot of the grains' solid EOS (Mie-Grueneisen, docs/hugoniot.md), without strength.
 
-    python3 tools/studies/hugoniot.py -o DIR [--representations fe,dem,hybrid]
+    python3 tools/studies/hugoniot.py -o DIR [--representations fe,dem,hybrid:quartz-bulk,...]
         [--velocities 250,500,750,1000,1500] [--seeds 1,2,3] [--porosity 0.3] [--threads 2]
         [--mesopen build/bin/mesopen] [--width 1e-3] [--height 2.5e-3]
 
+A representation may name the disks' preset after a colon (dem.preset: dem:quartz-bulk).
 Writes DIR/hugoniot.csv (a row per run), DIR/hugoniot.json (runs, means per representation and
 velocity, the bound), DIR/hugoniot.png (U_s against u_p; stress against density) and
-DIR/summary.json; each run in DIR/runs/REP-UP-sSEED. Exit 2 on bad options, 1 if a run failed.
+DIR/summary.json; each run in DIR/runs/REP-UP-sSEED (a run completed before from the same scene is
+kept, not run again). Exit 2 on bad options, 1 if a run failed.
 """
 import argparse
 import csv
@@ -51,11 +53,13 @@ def scene_text(args, rep, up, seed, end_time):
                    "diameter": "[42e-6, 78e-6]", "porosity": repr(args.porosity),
                    "seed": str(seed), "mesh_size": "10e-6"},
         "projectile": {"shape": '"plate"', "length": "0.1e-3"},
-        "run": {"representation": '"%s"' % rep, "band_half_width": repr(0.25 * args.width),
+        "run": {"representation": '"%s"' % rep.split(":")[0], "band_half_width": repr(0.25 * args.width),
                 "velocity": repr(up), "constant_velocity": "true", "smooth_walls": "true",
                 "end_time": repr(end_time), "frame_interval": repr(end_time / 30), "vtk": "false"},
         "materials.projectile": {"preset": '"steel-elastic"'},
     }
+    if ":" in rep:
+        tables["dem"] = {"preset": '"%s"' % rep.split(":")[1]}
     for table, key, value in args.settings:
         tables.setdefault(table, {})[key] = value
     text = "# Planar compaction test (tools/studies/hugoniot.py)\n"
@@ -221,15 +225,26 @@ def measure(run_dir, up, width, height, diameter):
 
 
 def run_one(args, rep, up, seed):
-    name = "%s-%g-s%d" % (rep, up, seed)
+    name = "%s-%g-s%d" % (rep.replace(":", "-"), up, seed)
     run_dir = os.path.join(args.out, "runs", name)
     os.makedirs(run_dir, exist_ok=True)
     # until a wave of U_s = 1.5 km/s + 1.5 u_p (above every one measured) has crossed the box;
     # frames every 1/30 of that
     end_time = args.height / (1500.0 + 1.5 * up)
     scene = os.path.join(run_dir, "scene.toml")
+    text = scene_text(args, rep, up, seed, end_time)
+    summary = os.path.join(run_dir, "out", "summary.json")
+    # a run completed before from the same scene is kept
+    if os.path.exists(summary) and os.path.exists(scene) and open(scene).read() == text:
+        with open(summary) as f:
+            done = json.load(f)
+        if done.get("status") == "completed":
+            row = {"representation": rep, "up": up, "seed": seed,
+                   "wall_seconds": done["wall_seconds"], "exit_code": 0}
+            row.update(measure(os.path.join(run_dir, "out"), up, args.width, args.height, 60e-6))
+            return row
     with open(scene, "w") as f:
-        f.write(scene_text(args, rep, up, seed, end_time))
+        f.write(text)
     start = time.time()
     with open(os.path.join(run_dir, "log.txt"), "w") as log:
         code = subprocess.run([args.mesopen, "run", scene, "-o", os.path.join(run_dir, "out"),
@@ -261,6 +276,8 @@ def plot(path, table, bound):
     b.plot([r["rho"] for r in bound], [1e-9 * r["p"] for r in bound], "k--", lw=1,
            label="full compaction, solid EOS")
     markers = {"fe": "o", "dem": "s", "hybrid": "^"}
+    markers.update({k + ":quartz-bulk": v for k, v in list(markers.items())})
+    markers.update({k + ":quartz-pair": v for k, v in list(markers.items())})
     for rep in sorted({r["representation"] for r in table}):
         rows = [r for r in table if r["representation"] == rep]
         a.errorbar([r["up"] for r in rows], [r["Us"] for r in rows], yerr=[r["Us_sd"] for r in rows],
@@ -317,8 +334,12 @@ def main():
                        "dem.stiffness=1e11 (mesopen keys lists the keys)" % item)
         args.settings.append((table.strip(), name.strip(), value.strip()))
     reps = [r for r in args.representations.split(",") if r]
-    if not reps or any(r not in ("fe", "dem", "hybrid") for r in reps):
-        fail_input("--representations %r: allowed: fe, dem, hybrid, comma-separated" %
+    presets = ("", "quartz-pair", "quartz-bulk")
+    if not reps or any(r.split(":")[0] not in ("fe", "dem", "hybrid") or
+                       (r + ":").split(":")[1] not in presets or
+                       (r.startswith("fe") and ":" in r) for r in reps):
+        fail_input("--representations %r: allowed: fe, dem, hybrid, comma-separated; dem and "
+                   "hybrid may name a preset (dem:quartz-bulk, hybrid:quartz-pair)" %
                    args.representations)
     velocities = numbers(args.velocities, "velocities", 1.0, 5000.0)
     seeds = numbers(args.seeds, "seeds", 0, 9e15, int)
