@@ -50,7 +50,7 @@ def main():
         return 1
     with h5py.File(os.path.join(out, "runs", "fe-500-s1", "out", "run.h5"), "r") as h5:
         vy = h5["series/projectile/vy"][:]
-        x0, y0, node_body = h5["mesh/x"][:], h5["mesh/y"][:], h5["mesh/node_body"][:]
+        x0, node_body = h5["mesh/x"][:], h5["mesh/node_body"][:]
         last = h5["frames"][sorted(h5["frames"].keys())[-1]]
         x, y, fvx, fvy = last["x"][:], last["y"][:], last["vx"][:], last["vy"][:]
     if np.max(np.abs(vy + up)) > 1e-9 * up:

@@ -22,7 +22,6 @@ Exit 2 on bad options, 1 if a run failed.
 """
 import argparse
 import json
-import math
 import os
 import shutil
 import subprocess
@@ -35,6 +34,8 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, HERE)
+from hugoniot import mean_sd, write_atomic  # noqa: E402
 
 BULK = ['dem.disk_size="equal_area"', 'dem.normal_law="hertz"']
 
@@ -137,13 +138,6 @@ def driven(args, name, up, seed, settings):
     row["force"] = float(np.trapz(force, t) / (t[-1] - t[0]))
     row["time"] = float(t[-1])
     return row
-
-
-def mean_sd(values):
-    v = [x for x in values if x is not None and not math.isnan(x)]
-    if not v:
-        return float("nan"), float("nan")
-    return float(np.mean(v)), (float(np.std(v, ddof=1)) if len(v) > 1 else 0.0)
 
 
 def main():
@@ -250,21 +244,17 @@ def main():
               "candidates": candidates, "chosen_hertz_length": best["hertz_length"],
               "rolling": rolling_rows, "chosen_rolling_friction": chosen_rolling,
               "chosen_hugoniot": rolling_hugoniot, "driven": rows, "forces": forces}
-    with open(os.path.join(args.out, "calibration.json.tmp"), "w") as f:
-        json.dump(result, f, indent=1, allow_nan=True)
-    os.replace(os.path.join(args.out, "calibration.json.tmp"),
-               os.path.join(args.out, "calibration.json"))
+    write_atomic(os.path.join(args.out, "calibration.json"),
+                 json.dumps(result, indent=1, allow_nan=True))
     write_markdown(os.path.join(args.out, "calibration.md"), result, args)
     plot(os.path.join(args.out, "calibration.png"), result)
     failed = [r for r in rows if "error" in r]
-    with open(os.path.join(args.out, "summary.json.tmp"), "w") as f:
-        json.dump({"command": "calibrate_dem", "chosen_hertz_length": best["hertz_length"],
-                   "chosen_rolling_friction": chosen_rolling,
-                   "largest_Us_difference": best["worst"], "forces": forces,
-                   "failed": len(failed), "wall_seconds": time.time() - start,
-                   "files": ["calibration.json", "calibration.md", "calibration.png"]}, f,
-                  indent=1, allow_nan=True)
-    os.replace(os.path.join(args.out, "summary.json.tmp"), os.path.join(args.out, "summary.json"))
+    write_atomic(os.path.join(args.out, "summary.json"), json.dumps(
+        {"command": "calibrate_dem", "chosen_hertz_length": best["hertz_length"],
+         "chosen_rolling_friction": chosen_rolling, "largest_Us_difference": best["worst"],
+         "forces": forces, "failed": len(failed), "wall_seconds": time.time() - start,
+         "files": ["calibration.json", "calibration.md", "calibration.png"]},
+        indent=1, allow_nan=True))
     if args.docs:
         os.makedirs(args.docs, exist_ok=True)
         for ext in ("json", "md", "png"):
@@ -316,9 +306,7 @@ def write_markdown(path, r, args):
             f["up"], 1e-3 * f["fe"], 1e-3 * f["fe_sd"], 1e-3 * f["dem-bulk"],
             1e-3 * f["dem-bulk_sd"], 100 * f["dem-bulk_error"], 1e-3 * f["dem-pair"],
             1e-3 * f["dem-pair_sd"], 100 * f["dem-pair_error"]))
-    with open(path + ".tmp", "w") as f:
-        f.write("\n".join(lines) + "\n")
-    os.replace(path + ".tmp", path)
+    write_atomic(path, "\n".join(lines) + "\n")
 
 
 def plot(path, r):

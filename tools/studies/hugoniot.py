@@ -151,7 +151,7 @@ def measure(run_dir, up, width, height, diameter):
         frames = []
         for name in sorted(h5["frames"].keys()):
             fr = h5["frames"][name]
-            x, y, vy = fr["x"][:], fr["y"][:], fr["vy"][:]
+            y, vy = fr["y"][:], fr["vy"][:]
             plate = y[node_body == 0].min()
             ys = [y[tri[grains]].mean(axis=1)]
             vys = [vy[tri[grains]].mean(axis=1)]
@@ -287,7 +287,7 @@ def plot(path, table, bound):
                    capsize=3, ls="none", label=rep + " (plate stress, measured density)")
     top = max(r["up"] for r in table)
     a.set_xlim(0, 1.1 * top)
-    a.set_ylim(0, None)
+    a.set_ylim(0, 1.2 * max(r["Us"] + r["Us_sd"] for r in table))
     a.set_xlabel("particle velocity u_p [m/s]")
     a.set_ylabel("shock velocity U_s [m/s]")
     a.legend(fontsize=8)
@@ -295,12 +295,44 @@ def plot(path, table, bound):
     b.set_xlabel("density behind the front [kg/m^3]")
     b.set_ylabel("stress [GPa]")
     b.set_ylim(0, 1.3e-9 * max(r["sigma_plate"] for r in table))
-    b.legend(fontsize=8)
+    b.legend(fontsize=8, loc="upper left")
     b.grid(alpha=0.3)
     fig.tight_layout()
     tmp = path + ".tmp.png"
     fig.savefig(tmp, dpi=110)
     os.replace(tmp, path)
+
+
+def markdown(table, bound, reps, velocities, seeds):
+    """The tables of hugoniot.md: U_s, then stress and density, by u_p and representation."""
+    cell = {(r["representation"], r["up"]): r for r in table}
+    us_bound = lambda up: float(np.interp(up, [b["up"] for b in bound], [b["Us"] for b in bound]))
+    lines = ["# Planar compaction test: Hugoniot by representation", "",
+             "`python3 tools/studies/hugoniot.py --representations %s --velocities %s --seeds %s`; "
+             "mean +- standard deviation over the seeds; rho_00 %.0f kg/m^3." % (
+                 ",".join(reps), ",".join("%g" % v for v in velocities),
+                 ",".join(str(s) for s in seeds), table[0]["rho00"] if table else float("nan")),
+             "", "## Shock velocity U_s [m/s]", "",
+             "| u_p [m/s] | full-compaction bound | " + " | ".join(reps) + " |",
+             "|---|---|" + "---|" * len(reps)]
+    for up in velocities:
+        row = ["%g" % up, "%.0f" % us_bound(up) if bound else "-"]
+        for rep in reps:
+            r = cell.get((rep, up))
+            row.append("%.0f +- %.0f" % (r["Us"], r["Us_sd"]) if r and r["runs"] else "-")
+        lines.append("| " + " | ".join(row) + " |")
+    lines += ["", "## Plate stress against rho_00 U_s u_p [GPa]; density behind the front "
+              "against the jump's [kg/m^3]", "",
+              "| u_p [m/s] | " + " | ".join(reps) + " |", "|---|" + "---|" * len(reps)]
+    for up in velocities:
+        row = ["%g" % up]
+        for rep in reps:
+            r = cell.get((rep, up))
+            row.append("%.3g / %.3g; %.0f / %.0f" % (
+                1e-9 * r["sigma_plate"], 1e-9 * r["sigma_hugoniot"], r["rho_measured"],
+                r["rho_jump"]) if r and r["runs"] else "-")
+        lines.append("| " + " | ".join(row) + " |")
+    return "\n".join(lines) + "\n"
 
 
 def write_atomic(path, text):
@@ -392,7 +424,9 @@ def main():
         {"runs": runs, "table": table, "full_compaction": bound,
          "porosity_requested": args.porosity, "width": args.width, "height": args.height},
         indent=1, allow_nan=True))
-    files = ["hugoniot.csv", "hugoniot.json"]
+    write_atomic(os.path.join(args.out, "hugoniot.md"), markdown(table, bound, reps, velocities,
+                                                                 seeds))
+    files = ["hugoniot.csv", "hugoniot.json", "hugoniot.md"]
     if not args.no_plot and any(not math.isnan(r["Us"]) for r in table):
         plot(os.path.join(args.out, "hugoniot.png"), [r for r in table if not math.isnan(r["Us"])],
              bound)
