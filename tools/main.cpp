@@ -8,13 +8,35 @@
 
 namespace {
 
+// An output directory's name: not empty.
+const CLI::Validator output_directory(
+    [](const std::string &dir) {
+      return dir.empty() ? std::string("an empty name; allowed: a directory's path") : std::string();
+    },
+    "DIR");
+
+// A seed: a whole number in target.seed's range, checked before CLI11 reads it as unsigned (which
+// wraps -1 around).
+const CLI::Validator seed_range(
+    [](const std::string &text) {
+      const std::string allowed = "allowed: a whole number from 0 to 9e15 (target.seed's range)";
+      if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos ||
+          text.size() > 16 || std::stod(text) > 9.0e15)
+        return "'" + text + "': " + allowed;
+      return std::string();
+    },
+    "SEED");
+
 // A subcommand that reads a scene and writes into a directory.
 CLI::App *sceneCommand(CLI::App &app, const char *name, const char *about,
                        mesopen::SceneOptions &options) {
   auto *cmd = app.add_subcommand(name, about);
   cmd->add_option("scene", options.scene, "scene file (TOML)")->required();
-  cmd->add_option("-o,--output", options.out_dir, "output directory")->required();
-  cmd->add_option("--seed", options.seed, "random seed of the target (overrides target.seed)");
+  cmd->add_option("-o,--output", options.out_dir, "output directory")
+      ->required()
+      ->check(output_directory);
+  cmd->add_option("--seed", options.seed, "random seed of the target (overrides target.seed)")
+      ->check(seed_range);
   cmd->add_option("--threads", options.threads, "threads (default: all cores)")
       ->check(CLI::Range(1, 1024));
   return cmd;
@@ -42,7 +64,8 @@ int main(int argc, char **argv) {
                  "every run overlaid");
   analyze_cmd->add_option("dirs", analyze.dirs, "run directories (each with run.h5)")->required();
   analyze_cmd->add_option("-o,--output", analyze.out_dir,
-                          "directory for the plots (default: the first run's)");
+                          "directory for the plots (default: the first run's)")
+      ->check(output_directory);
   analyze_cmd->add_flag("--no-plot", analyze.no_plot, "no PNG plots");
 
   mesopen::ModalOptions modal;
@@ -50,7 +73,9 @@ int main(int argc, char **argv) {
       "modal", "free vibration modes of the projectile or a beam (scene's [modal] table), or of "
                "the projectile's mesh in target.h5 or run.h5");
   modal_cmd->add_option("input", modal.input, "scene (.toml), target.h5 or run.h5")->required();
-  modal_cmd->add_option("-o,--output", modal.out_dir, "output directory")->required();
+  modal_cmd->add_option("-o,--output", modal.out_dir, "output directory")
+      ->required()
+      ->check(output_directory);
   modal_cmd->add_option("--modes", modal.modes, "elastic modes wanted (overrides modal.modes)")
       ->check(CLI::Range(1, 200));
   modal_cmd->add_option("--threads", modal.threads, "threads (default: all cores)")
@@ -61,7 +86,9 @@ int main(int argc, char **argv) {
       "campaign", "run every scene of a campaign on its replicates (resumable), tabulate the "
                   "measures of instability with 95 % intervals, test its trends, plot");
   campaign_cmd->add_option("campaign", campaign.campaign, "campaign file (TOML)")->required();
-  campaign_cmd->add_option("-o,--output", campaign.out_dir, "output directory")->required();
+  campaign_cmd->add_option("-o,--output", campaign.out_dir, "output directory")
+      ->required()
+      ->check(output_directory);
   campaign_cmd->add_option("--replicates", campaign.replicates,
                            "target layouts per run (overrides campaign.replicates)")
       ->check(CLI::Range(1, 1000));

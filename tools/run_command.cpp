@@ -515,10 +515,14 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
     disk.friction[0] = scene.contact.projectile_friction;
     // Windows up to the disks' stable step (a longer one is refused: the disks' own contacts
     // would be unstable).
-    if (scene.dem.step > dem_step)
-      throw InputError(options.scene + ": dem.step = " + std::to_string(scene.dem.step) +
-                       " s is longer than the disks' stable step, " + std::to_string(dem_step) +
-                       " s (a tenth of the lightest disk's contact time); allowed: 0 to that");
+    if (scene.dem.step > dem_step) {
+      char text[160];
+      std::snprintf(text, sizeof text,
+                    ": dem.step = %.6g s is longer than the disks' stable step, %.6g s (a tenth of "
+                    "the lightest disk's contact time); allowed: 0 to %.6g [s]",
+                    scene.dem.step, dem_step, dem_step);
+      throw InputError(options.scene + text);
+    }
     coupled = std::make_unique<coupling::FeDemCoupling>(
         model, *dem, disk, scene.dem.step > 0.0 ? scene.dem.step : dem_step);
     solver.addForceProvider(coupled.get());
@@ -625,6 +629,11 @@ int runCommand(const RunOptions &options) {
     omp_set_num_threads(*options.threads);
   try {
     return simulate(scene, options, world, start);
+  } catch (const InputError &e) {
+    // found once the target or LIGGGHTS is made (dem.step against the disks' stable step): bad
+    // input all the same; no run.h5 or summary.json is written
+    std::cerr << "mesopen run: " << e.what() << '\n';
+    return 2;
   } catch (const std::exception &e) {
     // Before the time loop (target, model) or while writing the files: no run.h5, a summary
     // (rank 0's, the files' writer).

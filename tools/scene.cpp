@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <limits>
 #include <sstream>
@@ -544,6 +545,11 @@ std::string tomlText(const toml::node &n) {
 }
 
 toml::table parseToml(const std::string &path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    throw InputError(path + ": no such file; allowed: a scene file (TOML)");
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw InputError(path + ": not a file (a directory?); allowed: a scene file (TOML)");
   try {
     return toml::parse_file(path);
   } catch (const toml::parse_error &e) {

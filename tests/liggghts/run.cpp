@@ -103,3 +103,15 @@ TEST(LiggghtsRun, TargetAtRestStaysAtRest) {
     }
   }
 }
+
+// A dem.step longer than the disks' stable step is bad input: exit 2, the numbers in the message
+// readable (they were printed as 0.000000 s), no run.h5.
+TEST(LiggghtsRun, TooLongDemStepIsBadInput) {
+  ScratchDir dir("run-dem-step");
+  const auto r = test::runScene(dir, test::tinyScene("representation = \"dem\"\n[dem]\nstep = 1e-6\n"));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("dem.step = 1e-06 s is longer than the disks' stable step, "),
+            std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("0.000000"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/run.h5"));
+}

@@ -171,3 +171,29 @@ TEST(Scene, DemPresetFirstThenTheTablesKeys) {
   EXPECT_NE(e.find("dem.preset"), std::string::npos) << e;
   EXPECT_NE(e.find("\"quartz-bulk\""), std::string::npos) << e;
 }
+
+// Command lines a new user gets wrong end with exit 2 and say why: a directory or a missing file
+// given as the scene, an empty output directory, a seed outside target.seed's range (it was read
+// as unsigned and wrapped: -1 became 18446744073709551615).
+TEST(Cli, BadCommandLinesExitTwo) {
+  ScratchDir dir("cli-bad");
+  mesopen::test::writeFile(dir / "s.toml", "[target]\nwidth = 1e-3\nheight = 1e-3\nmesh = \"none\"\n"
+                                           "[projectile]\nenabled = false\n");
+  for (const char *command : {"target", "run"}) {
+    auto r = mesopen::test::runMesopen(std::string(command) + " " + dir.path.string() + " -o " + (dir / "out"));
+    EXPECT_EQ(r.code, 2) << command << ": " << r.output;
+    EXPECT_NE(r.output.find("not a file"), std::string::npos) << r.output;
+    r = mesopen::test::runMesopen(std::string(command) + " " + (dir / "missing.toml") + " -o " + (dir / "out"));
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("no such file"), std::string::npos) << r.output;
+    r = mesopen::test::runMesopen(std::string(command) + " " + (dir / "s.toml") + " -o ''");
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("empty name"), std::string::npos) << r.output;
+    for (const char *seed : {"-1", "9.1e15", "x"}) {
+      r = mesopen::test::runMesopen(std::string(command) + " " + (dir / "s.toml") + " -o " +
+                                    (dir / "out") + " --seed " + seed);
+      EXPECT_EQ(r.code, 2) << seed << ": " << r.output;
+    }
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/summary.json"));
+}
