@@ -331,7 +331,16 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
         break;
       }
       const auto step_start = Clock::now();
+      const double before = solver.time();
       solver.step();
+      if (!(solver.time() > before)) {
+        char text[200];
+        std::snprintf(text, sizeof text,
+                      "step %zu did not advance the time (t = %.6g s, dt = %.6g s): the stable "
+                      "step has fallen to nothing",
+                      solver.steps(), before, solver.dt());
+        throw std::runtime_error(text);
+      }
       result.solver_seconds += secondsSince(step_start);
       result.element_steps += static_cast<double>(solver.activeElements());
       const bool due = solver.steps() % every == 0;

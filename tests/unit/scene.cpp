@@ -197,3 +197,16 @@ TEST(Cli, BadCommandLinesExitTwo) {
   }
   EXPECT_FALSE(std::filesystem::exists(dir / "out/summary.json"));
 }
+
+// The documented ranges are the stable ones: a contact stiffness of 2 gave a stable step of 0 (the
+// run hung at t = 0), a safety of 5e-324 a step that did not advance the time.
+TEST(Scene, RangesAreTheStableOnes) {
+  ScratchDir dir("scene-stable");
+  std::string e = errorOf(dir, "[contact]\nstiffness = 2\n");
+  EXPECT_NE(e.find("contact.stiffness = 2"), std::string::npos) << e;
+  EXPECT_NE(e.find("0.6"), std::string::npos) << e;
+  e = errorOf(dir, "[run]\nsafety = 5e-324\n");
+  EXPECT_NE(e.find("run.safety"), std::string::npos) << e;
+  EXPECT_NE(e.find("0.001"), std::string::npos) << e;
+  EXPECT_EQ(errorOf(dir, "[contact]\nstiffness = 0.6\n[run]\nsafety = 0.001\n"), "");
+}
