@@ -32,6 +32,23 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// Keys the scene sets that the chosen representation does not use: said on stderr, not refused
+// (a scene may be switched between representations).
+void warnIdleKeys(const Scene &scene, const std::string &path) {
+  const toml::table root = parseToml(path);
+  const bool disks = scene.run.grains && scene.run.representation != Representation::fe;
+  std::vector<std::string> idle;
+  if (!disks && root.contains("dem"))
+    idle.push_back("[dem]");
+  if (const toml::table *run = root["run"].as_table())
+    for (const char *key : {"band_half_width", "band_depth"})
+      if (scene.run.representation != Representation::hybrid && run->contains(key))
+        idle.push_back(std::string("run.") + key);
+  for (const std::string &what : idle)
+    std::cerr << "mesopen run: warning: " << path << ": " << what << " does nothing with run.representation = \""
+              << nameOf(scene.run.representation, representation_names) << "\"\n";
+}
+
 // The scene, checked for what a run needs. Throws InputError.
 Scene prepareRun(const RunOptions &options) {
   Scene scene = readScene(options.scene);
@@ -54,6 +71,7 @@ Scene prepareRun(const RunOptions &options) {
   if (!scene.projectile.enabled)
     throw InputError(options.scene +
                      ": projectile.enabled = false; `mesopen run` needs the projectile");
+  warnIdleKeys(scene, options.scene);
   return scene;
 }
 

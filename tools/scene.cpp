@@ -541,7 +541,12 @@ void readMaterials(Scene &scene, const toml::node &node) {
 std::string tomlText(const toml::node &n) {
   std::ostringstream s;
   n.visit([&](const auto &v) { s << v; });
-  return s.str();
+  // a message names the value, it does not echo a megabyte of it
+  constexpr std::size_t longest = 80;
+  std::string text = s.str();
+  if (text.size() > longest)
+    text = text.substr(0, longest) + "... (" + std::to_string(text.size()) + " characters)";
+  return text;
 }
 
 toml::table parseToml(const std::string &path) {

@@ -149,7 +149,8 @@ Scene readScene(const std::string &path);
 Scene readScene(const toml::table &root, const std::string &path);
 // A TOML file's tables. Throws InputError naming the line of a syntax error.
 toml::table parseToml(const std::string &path);
-// A TOML value as a scene file writes it (strings quoted), for messages.
+// A TOML value as a scene file writes it (strings quoted), for messages: at most 80 characters
+// of it, and its length when longer.
 std::string tomlText(const toml::node &n);
 
 // The reference of every key (Markdown): table, key, type, default, allowed, meaning.

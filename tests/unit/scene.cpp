@@ -210,3 +210,21 @@ TEST(Scene, RangesAreTheStableOnes) {
   EXPECT_NE(e.find("0.001"), std::string::npos) << e;
   EXPECT_EQ(errorOf(dir, "[contact]\nstiffness = 0.6\n[run]\nsafety = 0.001\n"), "");
 }
+
+// A value far too long is named, not echoed whole; keys a representation does not use are warned
+// of (a fe run with a [dem] table and a band).
+TEST(Cli, LongValuesAreCutAndIdleKeysWarned) {
+  ScratchDir dir("cli-long");
+  const std::string e = errorOf(dir, "[target]\nplacement = \"" + std::string(1 << 20, 'x') + "\"\n");
+  EXPECT_LT(e.size(), 600u) << e.substr(0, 200);
+  EXPECT_NE(e.find("(1048578 characters)"), std::string::npos) << e.substr(0, 300);
+  mesopen::test::writeFile(dir / "fe.toml",
+                           "[target]\nwidth = 0.6e-3\nheight = 0.3e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
+                           "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 1e-9\nband_half_width = 1e-4\n"
+                           "frame_interval = 0\n[dem]\nstiffness = 1e10\n");
+  const auto r = mesopen::test::runMesopen("run " + (dir / "fe.toml") + " -o " + (dir / "out") + " --quiet");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("warning: " + (dir / "fe.toml") + ": [dem] does nothing with run.representation = \"fe\""),
+            std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("run.band_half_width does nothing"), std::string::npos) << r.output;
+}
