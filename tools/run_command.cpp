@@ -157,7 +157,8 @@ Meshes runMeshes(const Meshes *grains, const PlacedProjectile &p) {
   return all;
 }
 
-// The grain nodes on the box's left, right and bottom edges (within 1e-3 mesh sizes), held at rest.
+// The grain nodes on the box's left, right and bottom edges (within 1e-3 mesh sizes), held at rest;
+// with smooth walls held normal to their edge only (the corners at rest).
 std::vector<fem::VelocityConstraint> boxEdges(const fem::Model &model, const TargetSpec &box,
                                               bool smooth) {
   const double tol = 1e-3 * box.mesh_size;
