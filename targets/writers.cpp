@@ -118,7 +118,7 @@ void writeLiggghtsData(const std::string &path, const Target &target, const Disk
 
   std::string text =
       "LIGGGHTS data file by mesopen: atom_style granular, dimension 2, SI units; one disk per "
-      "grain at its centroid, of its mass, touching but not overlapping its neighbours\n\n";
+      "grain, of its mass, touching but not overlapping its neighbours or the walls\n\n";
   // type 2 is left for the walls' material (liggghts-inputs/dem.in)
   text += std::to_string(n) + " atoms\n2 atom types\n\n";
   text += "0 ";
@@ -224,7 +224,7 @@ void writeVtu(const std::string &path, vtkUnstructuredGrid *grid) {
 void writeYadeSpheres(const std::string &path, const Disks &disks) {
   std::string text =
       "# mesopen target as YADE spheres (yade.ymport.text reads x y z r; lines with # are skipped)\n"
-      "# one per grain at its centroid, z = 0; radii of the LIGGGHTS disks: no two overlap, none\n"
+      "# one per grain, z = 0: the LIGGGHTS disks (target.data), of which no two overlap and none\n"
       "# crosses the walls x = 0, x = width, y = 0\n"
       "# density: the grain's mass per metre over pi r^2 (a disk 1 m thick keeps the grain's mass)\n"
       "# x y z r [m] density [kg/m^3]\n";
