@@ -163,7 +163,7 @@ int analyzeCommand(const AnalyzeOptions &options) {
     for (const auto &dir : options.dirs)
       series.push_back(readRun(dir));
     std::vector<std::string> stale(std::begin(plot_files), std::end(plot_files));
-    prepareOutputDirectory(out_dir, {});
+    prepareOutputDirectory(out_dir, "", {});
     for (const auto &f : stale)
       fs::remove(fs::path(out_dir) / f);
   } catch (const InputError &e) {

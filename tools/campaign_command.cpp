@@ -219,7 +219,7 @@ int campaignCommand(const CampaignOptions &options) {
       std::cerr << "mesopen campaign: " << dir << " is in use by another mesopen campaign\n";
       return 1;
     }
-    prepareOutputDirectory(dir, {"summary.json", "table.md", "table.csv", "runs.csv",
+    prepareOutputDirectory(dir, "campaign", {"summary.json", "table.md", "table.csv", "runs.csv",
                                  "campaign-rotational-momentum.png", "campaign-trends.png",
                                  "campaign-trend-curves.png"});
     for (const CampaignRun &r : c.runs) {

@@ -292,7 +292,7 @@ int modalCommand(const ModalOptions &options) {
       throw InputError(options.input + ": no such file; allowed: a scene (.toml), target.h5 or "
                                        "run.h5");
     problem = ext == ".h5" ? fileProblem(options.input) : sceneProblem(options.input);
-    prepareOutputDirectory(options.out_dir, {"modes.json", "modes.vtu", "summary.json"});
+    prepareOutputDirectory(options.out_dir, "modal", {"modes.json", "modes.vtu", "summary.json"});
   } catch (const InputError &e) {
     std::cerr << "mesopen modal: " << e.what() << '\n';
     return 2;

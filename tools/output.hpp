@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <initializer_list>
 #include <string>
 #include <system_error>
@@ -24,18 +25,39 @@ inline void writeJson(const std::string &path, const nlohmann::json &j) {
   writeText(path, j.dump(2) + "\n");
 }
 
-// Creates `dir` and removes the files an earlier run left there (`stale`, relative to `dir`), so
-// that no old figures sit beside new data. Throws InputError when the directory cannot be made.
-inline void prepareOutputDirectory(const std::string &dir,
+// Creates `dir` and removes the files an earlier run left there (`stale`, relative to `dir`; a
+// name ending in `*` removes every file it begins), so that no old figures sit beside new data.
+// A directory whose summary.json another command wrote is refused (`command`: the one writing
+// now; empty: no check), so that one command's output never overwrites another's. Throws
+// InputError when the directory cannot be made or is refused.
+inline void prepareOutputDirectory(const std::string &dir, const std::string &command,
                                    std::initializer_list<std::string> stale) {
   namespace fs = std::filesystem;
   std::error_code ec;
+  const fs::path summary = fs::path(dir) / "summary.json";
+  if (!command.empty() && fs::is_regular_file(summary, ec)) {
+    std::ifstream in(summary);
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    if (!j.is_discarded() && j.is_object() && j.contains("command") && j["command"].is_string() &&
+        j["command"] != command)
+      throw InputError(dir + ": holds the output of `mesopen " + j["command"].get<std::string>() +
+                       "` (its summary.json); allowed: a new directory, or one `mesopen " +
+                       command + "` wrote");
+  }
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir))
     throw InputError(dir + ": cannot create the output directory" +
                      (ec ? " (" + ec.message() + ")" : std::string(" (a file has that name)")));
-  for (const auto &file : stale)
-    fs::remove(fs::path(dir) / file, ec);
+  for (const std::string &file : stale) {
+    if (!file.ends_with('*')) {
+      fs::remove(fs::path(dir) / file, ec);
+      continue;
+    }
+    const std::string prefix = file.substr(0, file.size() - 1);
+    for (const auto &entry : fs::directory_iterator(dir, ec))
+      if (entry.path().filename().string().starts_with(prefix))
+        fs::remove(entry.path(), ec);
+  }
 }
 
 } // namespace mesopen

@@ -77,15 +77,16 @@ Scene prepareRun(const RunOptions &options) {
 
 // The output directory cleared of an earlier run's files (frames included).
 void clearOutput(const Scene &scene, const std::string &dir) {
-  prepareOutputDirectory(dir, {"summary.json", "run.h5", "run.h5.tmp", "vtk/run.pvd", "dem.data",
-                               "liggghts.log"});
+  prepareOutputDirectory(dir, "run", {"summary.json", "run.h5", "run.h5.tmp", "vtk/run.pvd",
+                                      "dem.data", "liggghts.log", "instability.json",
+                                      "instability-*"});
   std::error_code ec;
   for (const auto &f : fs::directory_iterator(dir + "/vtk", ec))
     if (f.path().filename().string().starts_with("frame_") ||
         f.path().filename().string().starts_with("disks_"))
       fs::remove(f.path(), ec);
   if (scene.run.vtk && scene.run.frame_interval > 0)
-    prepareOutputDirectory(dir + "/vtk", {});
+    prepareOutputDirectory(dir + "/vtk", "", {});
 }
 
 // Which grains are meshed: every one (fe), none (dem), or those whose centroids lie within the
@@ -118,10 +119,11 @@ std::vector<char> meshedGrains(const Scene &scene, const Target &target, const P
   return meshed;
 }
 
-// The meshes of the grains marked in `meshed`, in grain order: the target's own when every grain is
-// (it was generated meshed), else those grains meshed now (the generator made polygons only).
+// The meshes of the grains marked in `meshed`, in grain order: the target's own when it was
+// generated meshed (fe), else those grains meshed now (the generator made polygons only; a hybrid
+// band may cover every grain).
 Meshes grainMeshes(const Scene &scene, const Target &target, const std::vector<char> &meshed) {
-  if (std::find(meshed.begin(), meshed.end(), 0) == meshed.end())
+  if (target.mesh.bodies() == meshed.size())
     return target.mesh;
   Polygons chosen;
   for (std::size_t g = 0; g < meshed.size(); ++g)

@@ -110,7 +110,7 @@ int targetCommand(const TargetOptions &options) {
       scene.target.seed = *options.seed;
     if (options.no_mesh)
       scene.target.mesh = MeshKind::none;
-    prepareOutputDirectory(options.out_dir, {"target.json", "summary.json", "grain-sizes.png"});
+    prepareOutputDirectory(options.out_dir, "target", {"target.json", "summary.json", "grain-sizes.png"});
   } catch (const InputError &e) {
     std::cerr << "mesopen target: " << e.what() << '\n';
     return 2;

@@ -115,3 +115,17 @@ TEST(LiggghtsRun, TooLongDemStepIsBadInput) {
   EXPECT_EQ(r.output.find("0.000000"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "out/run.h5"));
 }
+
+// A hybrid band that covers every grain meshes them all (it dropped them: the run had the
+// projectile alone, its kinetic energy constant): the run is then fully meshed, without disks.
+TEST(LiggghtsRun, BandOverEveryGrainMeshesThemAll) {
+  ScratchDir dir("run-band-all");
+  const auto r = test::runScene(dir, test::tinyScene("representation = \"hybrid\"\nband_half_width = 10\n"
+                                                     "frame_interval = 0\nvelocity = 500\n"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(dir / "out/summary.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  EXPECT_GT(s["model"]["bodies"].get<int>(), 10);
+  EXPECT_FALSE(s.contains("dem"));
+  EXPECT_GT(s["model"]["fixed_nodes"].get<int>(), 0);
+}

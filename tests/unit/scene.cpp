@@ -228,3 +228,24 @@ TEST(Cli, LongValuesAreCutAndIdleKeysWarned) {
             std::string::npos) << r.output;
   EXPECT_NE(r.output.find("run.band_half_width does nothing"), std::string::npos) << r.output;
 }
+
+// A rerun leaves nothing of the run before beside its files (the earlier analysis), and one
+// command's output directory is refused to another (target or modal into a run's directory
+// overwrote its summary.json).
+TEST(Cli, NoStaleResultsNoOverwrittenSummaries) {
+  ScratchDir dir("cli-stale");
+  mesopen::test::writeFile(dir / "s.toml", mesopen::test::tinyScene("frame_interval = 0\n"));
+  ASSERT_EQ(mesopen::test::runMesopen("run " + (dir / "s.toml") + " -o " + (dir / "out") + " --quiet").code, 0);
+  mesopen::test::writeFile(dir / "out/instability.json", "{}");
+  mesopen::test::writeFile(dir / "out/instability-tilt.png", "");
+  ASSERT_EQ(mesopen::test::runMesopen("run " + (dir / "s.toml") + " -o " + (dir / "out") + " --quiet").code, 0);
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/instability.json"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/instability-tilt.png"));
+  const std::string summary = mesopen::test::readFile(dir / "out/summary.json");
+  for (const std::string command : {"target", "modal"}) {
+    const auto r = mesopen::test::runMesopen(command + " " + (dir / "s.toml") + " -o " + (dir / "out"));
+    EXPECT_EQ(r.code, 2) << command << ": " << r.output;
+    EXPECT_NE(r.output.find("holds the output of `mesopen run`"), std::string::npos) << r.output;
+  }
+  EXPECT_EQ(mesopen::test::readFile(dir / "out/summary.json"), summary);
+}
