@@ -3,6 +3,8 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <limits>
 #include <stdexcept>
 #include <type_traits>
 
@@ -254,6 +256,25 @@ std::vector<std::uint64_t> H5File::shape(const std::string &name) const {
   std::vector<hsize_t> dims(rank);
   check(H5Sget_simple_extent_dims(space, dims.data(), nullptr), path_, "get shape of", name);
   return {dims.begin(), dims.end()};
+}
+
+std::uint64_t H5File::elements(const std::string &name, std::size_t element_bytes) const {
+  std::uint64_t n = 1;
+  bool overflow = false;
+  for (std::uint64_t d : shape(name)) {
+    if (d != 0 && n > std::numeric_limits<std::uint64_t>::max() / d)
+      overflow = true;
+    n *= d;
+  }
+  std::error_code ec;
+  const std::uintmax_t file_bytes = std::filesystem::file_size(path_, ec);
+  const double declared = static_cast<double>(n) * static_cast<double>(element_bytes);
+  if (overflow || (!ec && declared > 64.0 * static_cast<double>(file_bytes) + 1e6))
+    throw std::runtime_error("HDF5 file '" + path_ + "': dataset '" + name + "' declares " +
+                             (overflow ? std::string("more than 2^64") : std::to_string(n)) +
+                             " elements, more than a file of " + std::to_string(file_bytes) +
+                             " bytes can hold");
+  return n;
 }
 
 void H5File::readRaw(const std::string &name, void *data, Type type, std::uint64_t count) const {

@@ -74,11 +74,13 @@ public:
 
   // Dimensions of a dataset.
   std::vector<std::uint64_t> shape(const std::string &name) const;
+  // The number of elements of a dataset, checked to be one the file can hold: at most 64 times its
+  // size in bytes of `element_bytes` each (room for compression), so that a damaged or hostile
+  // file declaring 2^40 elements is refused instead of allocated. Throws std::runtime_error.
+  std::uint64_t elements(const std::string &name, std::size_t element_bytes) const;
   // All elements of a dataset (any rank, row-major), converted to T.
   template <H5Number T> std::vector<T> read(const std::string &name) const {
-    std::uint64_t n = 1;
-    for (std::uint64_t d : shape(name))
-      n *= d;
+    const std::uint64_t n = elements(name, sizeof(T));
     std::vector<T> out(n);
     readRaw(name, out.data(), typeOf<T>(), n);
     return out;

@@ -108,6 +108,8 @@ Spectrum dominantPeriod(const std::vector<double> &x, const std::vector<double> 
     return s;
   s.x_begin = xs.front(), s.x_end = xs.back();
   const double record = s.x_end - s.x_begin, dx = record / (grid - 1);
+  if (!(dx > 0.0) || !std::isfinite(1.0 / dx))
+    return s; // a record too short for its spacing to be a number
   // Linear interpolation onto the uniform grid.
   std::vector<double> u(grid);
   std::size_t j = 0;
@@ -122,9 +124,11 @@ Spectrum dominantPeriod(const std::vector<double> &x, const std::vector<double> 
   for (std::size_t k = 0; k < grid; ++k) // Hann window
     u[k] *= 0.5 - 0.5 * std::cos(2.0 * M_PI * k / (grid - 1));
   // Power on frequencies from 2 cycles per record to a quarter of the Nyquist frequency, 8 points
-  // per 1 / record (zero padding by 8).
-  const double f_lo = 2.0 / record, f_hi = 0.125 / dx, df = 0.125 / record;
-  for (double f = f_lo; f <= f_hi; f += df) {
+  // per 1 / record (zero padding by 8): f = (16 + k) df, k < grid - 16, counted, not summed, so
+  // that the loop ends whatever the record's scale.
+  const double df = 0.125 / record;
+  for (std::size_t k_f = 0; k_f < grid - 16; ++k_f) {
+    const double f = static_cast<double>(16 + k_f) * df;
     double re = 0.0, im = 0.0;
     const double step = 2.0 * M_PI * f * dx;
     const double cs = std::cos(step), sn = std::sin(step);
