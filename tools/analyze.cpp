@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 namespace mesopen {
@@ -11,10 +12,17 @@ namespace mesopen {
 RunSeries readRunSeries(const std::string &path) {
   const H5File h5 = H5File::open(path);
   RunSeries s;
+  // A series: one dimension, and some finite value in it.
   auto column = [&](const std::string &name) {
     if (!h5.exists(name))
       throw std::runtime_error(path + ": no " + name + " (not a run.h5 of mesopen run?)");
-    return h5.read<double>(name);
+    if (h5.shape(name).size() != 1)
+      throw std::runtime_error(path + ": " + name + " has " + std::to_string(h5.shape(name).size()) +
+                               " dimensions; allowed: 1 (a series)");
+    std::vector<double> v = h5.read<double>(name);
+    if (!v.empty() && std::none_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); }))
+      throw std::runtime_error(path + ": " + name + " holds no finite value");
+    return v;
   };
   s.time = column("/series/time");
   s.depth = column("/series/projectile/depth");
@@ -44,6 +52,10 @@ RunSeries readRunSeries(const std::string &path) {
       throw std::runtime_error(path + ": no projectile (body 0) in /mesh");
     s.length = hi - lo;
   }
+  if (!(s.length > 0.0) || !std::isfinite(s.length))
+    throw std::runtime_error(path + ": the projectile's length is " +
+                             (std::ostringstream() << s.length).str() +
+                             " m; allowed: a positive length [m]");
   if (h5.hasAttribute("/series/projectile", "mass"))
     s.mass = h5.readAttribute<double>("/series/projectile", "mass");
   if (h5.hasAttribute("/", "velocity"))

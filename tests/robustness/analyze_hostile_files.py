@@ -4,9 +4,12 @@ hostile run.h5 files ends cleanly, with exit 2 and a message, within seconds.
 A tiny run's run.h5 is made with `mesopen run`, then copied and altered with h5py:
   - /series/time declaring 2^40 elements (a few KB on disk): it was allocated and aborted the
     process with bad_alloc; now refused (exit 2, "declares ... elements");
-  - /series/time declaring 2^31 x 2^31 elements: aborted with length_error; now refused alike;
+  - /series/time declaring 2^31 x 2^31 elements: aborted with length_error; now refused (a
+    series has one dimension);
   - /series/time spanning 1e-320 s (denormal steps): the spectrum's frequency loop never ended;
-    now analyze completes (exit 0) in well under the 60 s allowed here.
+    now analyze completes (exit 0) in well under the 60 s allowed here;
+  - a series all NaN, a 2-D /series/time, a zero projectile length: accepted quietly before (and
+    measures made of them); now refused (exit 2) with what is wrong.
 Each case must end by an exit code, not a signal, and within its time limit.
 
     analyze_hostile_files.py MESOPEN SCRATCH_DIR
@@ -72,10 +75,24 @@ def main():
         del h5["series/time"]
         h5["series/time"] = np.arange(n, dtype="f8") * 5e-324
 
+    def all_nan(h5):
+        h5["series/projectile/tilt"][...] = np.nan
+
+    def two_d_time(h5):
+        t = h5["series/time"][:]
+        del h5["series/time"]
+        h5["series/time"] = np.stack([t, t])
+
+    def zero_length(h5):
+        h5.attrs["projectile_length"] = 0.0
+
     failures = []
     for name, change, want, text in [
+            ("all-nan", all_nan, 2, "holds no finite value"),
+            ("2d-time", two_d_time, 2, "dimensions; allowed: 1"),
+            ("zero-length", zero_length, 2, "projectile's length is 0"),
             ("huge-1d", huge((2 ** 40,)), 2, "declares"),
-            ("huge-2d", huge((2 ** 31, 2 ** 31)), 2, "declares"),
+            ("huge-2d", huge((2 ** 31, 2 ** 31)), 2, "dimensions; allowed: 1"),
             ("denormal-time", tiny_times, 0, "")]:
         d = altered(name, change)
         code, output = analyze(mesopen, d, 60)
