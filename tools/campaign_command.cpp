@@ -4,6 +4,7 @@
 // Then the measures of every run (instability.json), the tables (runs.csv: one row per replicate;
 // table.csv and table.md: per run, mean and 95 % interval, like thesis Table 5.1; the trends' tests
 // in table.md), summary.json, and the plots (tools/plots/campaign.py).
+#include "analyze.hpp"
 #include "campaign.hpp"
 #include "commands.hpp"
 #include "output.hpp"
@@ -41,6 +42,16 @@ struct Job {
   std::size_t steps = 0;
   nlohmann::json measures; // analyzeRun's figures
 };
+
+// Whether a run's run.h5 opens and its series read (a file cut short does not: its run is made
+// again).
+bool readsWhole(const std::string &path) {
+  try {
+    return fs::is_regular_file(path) && readRunSeries(path).time.size() >= 2;
+  } catch (const std::exception &) {
+    return false;
+  }
+}
 
 // The tables of a scene file written before (empty if it is missing or not TOML).
 toml::table readSceneText(const std::string &path) {
@@ -240,7 +251,7 @@ int campaignCommand(const CampaignOptions &options) {
         const nlohmann::json done = readJson(j.dir + "/summary.json");
         const bool same_scene = readSceneText(j.dir + "/scene.toml") == scene;
         j.reused = same_scene && done.is_object() && done.value("status", "") == "completed" &&
-                   fs::is_regular_file(j.dir + "/run.h5");
+                   readsWhole(j.dir + "/run.h5");
         j.status = "not run";
         j.selected = selected;
         // Not to run now (--only) but run before with this scene: as it ended then.

@@ -185,6 +185,13 @@ TEST(Campaign, RunsEachReplicateOnce) {
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("0 to run now, 4 done before"), std::string::npos) << r.output;
 
+  // A finished replicate whose run.h5 was cut short is made again, not kept as failed.
+  const std::string cut = dir / "out/runs/fast/r2/run.h5";
+  std::filesystem::resize_file(cut, std::filesystem::file_size(cut) / 2);
+  r = mesopen::test::runMesopen(cmd);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("1 to run now, 3 done before"), std::string::npos) << r.output;
+
   write("1400.0");
   r = mesopen::test::runMesopen(cmd);
   ASSERT_EQ(r.code, 0) << r.output;
