@@ -36,11 +36,12 @@ Nearest nearestOnPolygon(const Polygons &polygons, std::size_t g, double px, dou
 
 // Jacobi sweeps that push overlapping disks apart (each of a pair by 0.8 of the overlap along the
 // line of centres: over-relaxed, since a disk's neighbours push it back; the baseline's 6,198
-// disks need 186 sweeps so, 634 at 0.5), out of the walls (x = 0, x = width, y = 0 and, while relaxing, the box's top
-// y = height, so that the target keeps its box and bulk density) and out of the obstacles (meshed
-// grains, other FE bodies: the whole overlap), all from the positions before the sweep, so that
-// the result does not depend on the order. Until the largest overlap is below 1e-6 of the mean
-// radius, or `sweeps` sweeps. Meshed grains are found through `grain_grid` (their centroids).
+// disks need 186 sweeps so, 634 at 0.5), out of the walls (x = 0, x = width, y = 0 and, while
+// relaxing, the box's top y = height, so that the target keeps its box and bulk density) and out of
+// the obstacles (meshed grains, other FE bodies: the whole overlap), all from the positions before
+// the sweep, so that the result does not depend on the order. Until the largest overlap is below
+// 1e-6 of the mean radius, or `sweeps` sweeps. Meshed grains are found through `grain_grid` (their
+// centroids).
 void relaxApart(std::vector<double> &x, std::vector<double> &y, const std::vector<double> &r,
                 const std::vector<char> &is_disk, double width, double height,
                 const Polygons &grains, const CellGrid &grain_grid, double grain_reach,
@@ -81,7 +82,8 @@ void relaxApart(std::vector<double> &x, std::vector<double> &y, const std::vecto
           return;
         worst = std::max(worst, overlap);
         // coincident centres: apart along x, the lower index to the left
-        const double ux = d > 0.0 ? ex / d : (i < o.index ? -1.0 : 1.0), uy = d > 0.0 ? ey / d : 0.0;
+        const double ux = d > 0.0 ? ex / d : (i < o.index ? -1.0 : 1.0),
+                     uy = d > 0.0 ? ey / d : 0.0;
         dx[i] += push * overlap * ux, dy[i] += push * overlap * uy;
       });
       const double walls[4] = {r[i] - x[i], x[i] + r[i] - width, r[i] - y[i], y[i] + r[i] - height};
@@ -107,8 +109,8 @@ void relaxApart(std::vector<double> &x, std::vector<double> &y, const std::vecto
             pushOut(grains, o.index);
         });
       for (std::size_t b = 0; b < bodies.size(); ++b)
-        if (x[i] + r[i] > box[4 * b] && x[i] - r[i] < box[4 * b + 1] && y[i] + r[i] > box[4 * b + 2] &&
-            y[i] - r[i] < box[4 * b + 3])
+        if (x[i] + r[i] > box[4 * b] && x[i] - r[i] < box[4 * b + 1] &&
+            y[i] + r[i] > box[4 * b + 2] && y[i] - r[i] < box[4 * b + 3])
           pushOut(bodies, b);
     }
     if (worst < 1e-6 * r_mean)
@@ -140,8 +142,8 @@ Disks grainDisks(const Polygons &grains, double density, const DiskBounds &bound
   grid.fill(f.centroid_x.data(), f.centroid_y.data(), equal.data(), 0, static_cast<std::uint32_t>(n));
   std::vector<double> x = f.centroid_x, y = f.centroid_y;
   if (bounds.size == DiskSize::equal_area && bounds.width > 0.0 && bounds.height > 0.0) {
-    relaxApart(x, y, equal, is_disk, bounds.width, bounds.height, grains, grid, reach, bounds.bodies,
-               bounds.sweeps);
+    relaxApart(x, y, equal, is_disk, bounds.width, bounds.height, grains, grid, reach,
+               bounds.bodies, bounds.sweeps);
   }
   // What relaxing left (or, without it, every overlap) is taken off the radii.
   CellGrid placed(std::max(width, 1e-12), std::max(height, 1e-12), reach);
@@ -151,7 +153,8 @@ Disks grainDisks(const Polygons &grains, double density, const DiskBounds &bound
       continue;
     placed.forNear(x[g], y[g], reach, [&](const CellGrid::Item &o) {
       if (o.index != g && is_disk[o.index])
-        radius[g] = std::min(radius[g], std::hypot(o.x - x[g], o.y - y[g]) * equal[g] / (equal[g] + o.r));
+        radius[g] =
+            std::min(radius[g], std::hypot(o.x - x[g], o.y - y[g]) * equal[g] / (equal[g] + o.r));
     });
     grid.forNear(x[g], y[g], reach, [&](const CellGrid::Item &o) {
       if (!is_disk[o.index]) {
@@ -171,7 +174,8 @@ Disks grainDisks(const Polygons &grains, double density, const DiskBounds &bound
     if (!is_disk[g])
       continue;
     if (!(radius[g] > 0.0))
-      throw std::runtime_error("grain " + std::to_string(g) + " has no room for a disk (its centre "
+      throw std::runtime_error("grain " + std::to_string(g) +
+                               " has no room for a disk (its centre "
                                "lies on or inside an FE body or a wall)");
     disks.grain.push_back(static_cast<std::uint32_t>(g));
     disks.x.push_back(x[g]), disks.y.push_back(y[g]);

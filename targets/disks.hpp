@@ -35,12 +35,12 @@ inline constexpr Named<DiskSize> disk_size_names[] = {{"inscribed", DiskSize::in
 
 // What the disks keep out of besides each other.
 struct DiskBounds {
-  double width = 0.0;        // the box's walls x = 0, x = width and y = 0; 0: no walls
-  double height = 0.0;       // the box's top, which equal_area disks are relaxed below
+  double width = 0.0;  // the box's walls x = 0, x = width and y = 0; 0: no walls
+  double height = 0.0; // the box's top, which equal_area disks are relaxed below
   DiskSize size = DiskSize::inscribed;
-  int sweeps = 2000;         // equal_area: relaxation sweeps at most
-  std::vector<char> meshed;  // per grain, 1: meshed (an FE body, not a disk); empty: none
-  Polygons bodies;           // other FE bodies' outlines, e.g. the placed projectile
+  int sweeps = 2000;        // equal_area: relaxation sweeps at most
+  std::vector<char> meshed; // per grain, 1: meshed (an FE body, not a disk); empty: none
+  Polygons bodies;          // other FE bodies' outlines, e.g. the placed projectile
 };
 
 // The disks of the grains not marked in `bounds.meshed`, in grain order.
@@ -49,6 +49,7 @@ Disks grainDisks(const Polygons &grains, double density, const DiskBounds &bound
 // The disks of a target inside its box's walls, of the given size: of the grains not marked in
 // `meshed` (every grain if empty), clear of the projectile when one is given.
 Disks targetDisks(const Target &target, DiskSize size = DiskSize::inscribed,
-                  const std::vector<char> &meshed = {}, const PlacedProjectile *projectile = nullptr);
+                  const std::vector<char> &meshed = {},
+                  const PlacedProjectile *projectile = nullptr);
 
 } // namespace mesopen

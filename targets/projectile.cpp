@@ -198,7 +198,7 @@ TriangleMesh projectileMesh(const ProjectileShape &shape, const ProjectileSpec &
 // A plate W wide and `length` thick in the body frame: its face on y = 0 from x = -W/2 to W/2,
 // counter-clockwise, edges no longer than `edge`; and its quality mesh.
 static TriangleMesh plateMesh(const ProjectileSpec &spec, double width, double edge,
-                       std::vector<double> &x, std::vector<double> &y) {
+                              std::vector<double> &x, std::vector<double> &y) {
   const int nw = edgePieces(width, edge), nt = edgePieces(spec.length, edge);
   x.clear(), y.clear();
   for (int k = 0; k < nw; ++k) // face

@@ -223,10 +223,12 @@ void writeVtu(const std::string &path, vtkUnstructuredGrid *grid) {
 
 void writeYadeSpheres(const std::string &path, const Disks &disks) {
   std::string text =
-      "# mesopen target as YADE spheres (yade.ymport.text reads x y z r; lines with # are skipped)\n"
+      "# mesopen target as YADE spheres (yade.ymport.text reads x y z r; lines with # are "
+      "skipped)\n"
       "# one per grain, z = 0: the LIGGGHTS disks (target.data), of which no two overlap and none\n"
       "# crosses the walls x = 0, x = width, y = 0\n"
-      "# density: the grain's mass per metre over pi r^2 (a disk 1 m thick keeps the grain's mass)\n"
+      "# density: the grain's mass per metre over pi r^2 (a disk 1 m thick keeps the grain's "
+      "mass)\n"
       "# x y z r [m] density [kg/m^3]\n";
   for (std::size_t i = 0; i < disks.size(); ++i) {
     appendNumber(text, disks.x[i]);

@@ -17,7 +17,8 @@ RunSeries readRunSeries(const std::string &path) {
     if (!h5.exists(name))
       throw std::runtime_error(path + ": no " + name + " (not a run.h5 of mesopen run?)");
     if (h5.shape(name).size() != 1)
-      throw std::runtime_error(path + ": " + name + " has " + std::to_string(h5.shape(name).size()) +
+      throw std::runtime_error(path + ": " + name + " has " +
+                               std::to_string(h5.shape(name).size()) +
                                " dimensions; allowed: 1 (a series)");
     std::vector<double> v = h5.read<double>(name);
     if (!v.empty() && std::none_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); }))

@@ -230,9 +230,10 @@ int campaignCommand(const CampaignOptions &options) {
       std::cerr << "mesopen campaign: " << dir << " is in use by another mesopen campaign\n";
       return 1;
     }
-    prepareOutputDirectory(dir, "campaign", {"summary.json", "table.md", "table.csv", "runs.csv",
-                                 "campaign-rotational-momentum.png", "campaign-trends.png",
-                                 "campaign-trend-curves.png"});
+    prepareOutputDirectory(dir, "campaign",
+                           {"summary.json", "table.md", "table.csv", "runs.csv",
+                            "campaign-rotational-momentum.png", "campaign-trends.png",
+                            "campaign-trend-curves.png"});
     for (const CampaignRun &r : c.runs) {
       const bool selected = options.only.empty() || std::find(options.only.begin(), options.only.end(),
                                                               r.name) != options.only.end();

@@ -11,7 +11,8 @@ namespace {
 // An output directory's name: not empty.
 const CLI::Validator output_directory(
     [](const std::string &dir) {
-      return dir.empty() ? std::string("an empty name; allowed: a directory's path") : std::string();
+      return dir.empty() ? std::string("an empty name; allowed: a directory's path")
+                         : std::string();
     },
     "DIR");
 
@@ -63,8 +64,9 @@ int main(int argc, char **argv) {
       "analyze", "measures of instability from runs' run.h5: instability.json in each, plots of "
                  "every run overlaid");
   analyze_cmd->add_option("dirs", analyze.dirs, "run directories (each with run.h5)")->required();
-  analyze_cmd->add_option("-o,--output", analyze.out_dir,
-                          "directory for the plots (default: the first run's)")
+  analyze_cmd
+      ->add_option("-o,--output", analyze.out_dir,
+                   "directory for the plots (default: the first run's)")
       ->check(output_directory);
   analyze_cmd->add_flag("--no-plot", analyze.no_plot, "no PNG plots");
 

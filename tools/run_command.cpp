@@ -45,7 +45,8 @@ void warnIdleKeys(const Scene &scene, const std::string &path) {
       if (scene.run.representation != Representation::hybrid && run->contains(key))
         idle.push_back(std::string("run.") + key);
   for (const std::string &what : idle)
-    std::cerr << "mesopen run: warning: " << path << ": " << what << " does nothing with run.representation = \""
+    std::cerr << "mesopen run: warning: " << path << ": " << what
+              << " does nothing with run.representation = \""
               << nameOf(scene.run.representation, representation_names) << "\"\n";
 }
 
@@ -77,9 +78,9 @@ Scene prepareRun(const RunOptions &options) {
 
 // The output directory cleared of an earlier run's files (frames included).
 void clearOutput(const Scene &scene, const std::string &dir) {
-  prepareOutputDirectory(dir, "run", {"summary.json", "run.h5", "run.h5.tmp", "vtk/run.pvd",
-                                      "dem.data", "liggghts.log", "instability.json",
-                                      "instability-*"});
+  prepareOutputDirectory(dir, "run",
+                         {"summary.json", "run.h5", "run.h5.tmp", "vtk/run.pvd", "dem.data",
+                          "liggghts.log", "instability.json", "instability-*"});
   std::error_code ec;
   for (const auto &f : fs::directory_iterator(dir + "/vtk", ec))
     if (f.path().filename().string().starts_with("frame_") ||
@@ -517,7 +518,8 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
   std::unique_ptr<coupling::FeDemCoupling> coupled;
   if (target && std::find(meshed.begin(), meshed.end(), 0) != meshed.end()) {
     if (writer)
-      writeLiggghtsData(dir + "/dem.data", *target, targetDisks(*target, scene.dem.disk_size, meshed, &projectile));
+      writeLiggghtsData(dir + "/dem.data", *target,
+                        targetDisks(*target, scene.dem.disk_size, meshed, &projectile));
     world.barrier();
     dem = std::make_unique<coupling::LiggghtsDem>(shareDirectory() + "/liggghts-inputs/dem.in",
                                                   demVariables(scene, dir + "/dem.data"),

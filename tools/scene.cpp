@@ -198,9 +198,9 @@ const std::vector<Key> &keys() {
              "requested porosity (A_T - A_G) / A_T (thesis Eq. 4.5)"),
         real("target", "void_ratio", t, &T::void_ratio, "", 0.1, false, 0.5,
              "void-site diameter over the mean grain diameter (thesis: 1/4)"),
-        choice("target", "placement", t, &T::placement,
-               placement_names,
-               "initial sites: one grain per sub-box (regular) or all random (clustered), thesis 4.2.5"),
+        choice("target", "placement", t, &T::placement, placement_names,
+               "initial sites: one grain per sub-box (regular) or all random (clustered), thesis "
+               "4.2.5"),
         integer("target", "seed", t, &T::seed, 0, 9.0e15, "random seed"),
         real("target", "step_scale", t, &T::step_scale, "", 0, true, 3,
              "largest placement move per iteration over the mean diameter (thesis Fig. 4.6)"),
@@ -209,15 +209,15 @@ const std::vector<Key> &keys() {
         integer("target", "max_iterations", t, &T::max_iterations, 0, 100000,
                 "placement iterations at most; 0: 50 for regular, 500 for clustered placement"),
         real("target", "void_scale", t, &T::void_scale, "", 0.05, false, 5,
-             "void-site count over the area rule V = (A - sum of grain disk areas) / void disk area"),
+             "void-site count over the area rule V = (A - sum of grain disk areas) / void disk "
+             "area"),
         boolean("target", "calibrate_porosity", t, &T::calibrate_porosity,
                 "scale the void cells so that the porosity matches the request"),
-        choice("target", "tessellation", t, &T::tessellation,
-               tessellation_names,
-               "power (Laguerre) cells weighted by r^2, or Voronoi with the thesis's radius matching "
-               "(Eq. 4.4)"),
-        choice("target", "mesh", t, &T::mesh,
-               mesh_names,
+        choice(
+            "target", "tessellation", t, &T::tessellation, tessellation_names,
+            "power (Laguerre) cells weighted by r^2, or Voronoi with the thesis's radius matching "
+            "(Eq. 4.4)"),
+        choice("target", "mesh", t, &T::mesh, mesh_names,
                "grain meshes: quality triangles at mesh_size, fan (centroid to vertices), or none"),
         real("target", "mesh_size", t, &T::mesh_size, "m", 0, true, 1,
              "triangle edge length; polygon vertices closer than this are merged"),
@@ -226,10 +226,12 @@ const std::vector<Key> &keys() {
         real("target", "density", t, &T::density, "kg/m^3", 0, true, 1e5,
              "grain density, for target.data (quartz: 2648.5, Table 3.3)"),
         boolean("projectile", "enabled", p, &P::enabled, "make and place the projectile"),
-        choice("projectile", "shape", p, &P::shape, projectile_kind_names,
-               "an ogive penetrator (the thesis's), or a flat plate as wide as the box and `length` "
-               "thick: a piston for planar compaction (docs/hugoniot.md)"),
-        real("projectile", "length", p, &P::length, "m", 0, true, 1, "length L of the sharp ogive body"),
+        choice(
+            "projectile", "shape", p, &P::shape, projectile_kind_names,
+            "an ogive penetrator (the thesis's), or a flat plate as wide as the box and `length` "
+            "thick: a piston for planar compaction (docs/hugoniot.md)"),
+        real("projectile", "length", p, &P::length, "m", 0, true, 1,
+             "length L of the sharp ogive body"),
         real("projectile", "length_over_diameter", p, &P::length_over_diameter, "", 1, false, 50,
              "l/d (thesis: 3.85)"),
         real("projectile", "crh", p, &P::crh, "", 0.5, false, 50,
@@ -249,8 +251,10 @@ const std::vector<Key> &keys() {
              "hybrid: grains whose centres lie within this distance of the projectile's axis are "
              "meshed; 0: one and a half projectile diameters"),
         real("run", "band_depth", r, &R::band_depth, "m", 0, false, 10,
-             "hybrid: the meshed grains' centres lie no deeper than this below the projectile's tip at "
-             "the start; 0: run.end_depth's depth plus band_half_width (no limit without end_depth)"),
+             "hybrid: the meshed grains' centres lie no deeper than this below the projectile's "
+             "tip at "
+             "the start; 0: run.end_depth's depth plus band_half_width (no limit without "
+             "end_depth)"),
         real("run", "end_time", r, &R::end_time, "s", 0, true, 1, "simulated time"),
         real("run", "velocity", r, &R::velocity, "m/s", 0, false, 1e4,
              "projectile's initial speed, downward (thesis: 500-1500)"),
@@ -270,16 +274,19 @@ const std::vector<Key> &keys() {
              "artificial viscosity, linear coefficient C_L (thesis Table 3.1: 0.5)"),
         real("run", "viscosity_quadratic", r, &R::viscosity_quadratic, "", 0, false, 100,
              "artificial viscosity, quadratic coefficient C_Q (thesis Table 3.1: 4.0)"),
-        boolean("run", "anti_locking", r, &R::anti_locking,
-                "averaged nodal volume in bodies with plastic flow (against volumetric locking); off "
-                "by default: under a penetrator it lets crushed elements collapse (docs/solver.md)"),
+        boolean(
+            "run", "anti_locking", r, &R::anti_locking,
+            "averaged nodal volume in bodies with plastic flow (against volumetric locking); off "
+            "by default: under a penetrator it lets crushed elements collapse (docs/solver.md)"),
         real("run", "erode_step_ratio", r, &R::erode_step_ratio, "", 0, false, 1,
              "an element whose stable step falls below this fraction of the shortest element step "
              "at the start is eroded (a collapsed element; docs/solver.md); 0: never"),
-        real("run", "mass_scaling_step_ratio", r, &R::mass_scaling_step_ratio, "", 0, false, 1,
-             "selective mass scaling: an element whose stable step falls below this fraction of the "
-             "shortest element step at the start gets mass on its nodes (momentum kept) to bring its "
-             "step back to it (docs/solver.md); 0: never"),
+        real(
+            "run", "mass_scaling_step_ratio", r, &R::mass_scaling_step_ratio, "", 0, false, 1,
+            "selective mass scaling: an element whose stable step falls below this fraction of the "
+            "shortest element step at the start gets mass on its nodes (momentum kept) to bring "
+            "its "
+            "step back to it (docs/solver.md); 0: never"),
         integer("run", "series_interval", r, &R::series_interval, 1, 1e9,
                 "steps between samples of the series in run.h5"),
         real("run", "end_depth", r, &R::end_depth, "", 0, false, 100,
@@ -299,9 +306,11 @@ const std::vector<Key> &keys() {
         real("contact", "stiffness", c, &C::stiffness, "", 0, true, 0.6,
              "penalty kappa: normal stiffness kappa m_eff / dt^2 per node (stable up to 0.6)"),
         real("contact", "damping", c, &C::damping, "", 0, false, 2,
-             "damping of the contact spring, a fraction of its critical damping (stable up to about 0.1)"),
+             "damping of the contact spring, a fraction of its critical damping (stable up to "
+             "about 0.1)"),
         real("dem", "stiffness", d, &D::stiffness, "N/m^2", 0, true, 1e16,
-             "normal stiffness k_n of the disks' contacts, per metre of thickness (docs/coupling.md)"),
+             "normal stiffness k_n of the disks' contacts, per metre of thickness "
+             "(docs/coupling.md)"),
         real("dem", "tangential_stiffness", d, &D::tangential_stiffness, "N/m^2", 0, true, 1e16,
              "tangential stiffness k_t"),
         real("dem", "damping", d, &D::damping, "N s/m^2", 0, false, 1e6,
@@ -309,10 +318,11 @@ const std::vector<Key> &keys() {
         real("dem", "tangential_damping", d, &D::tangential_damping, "N s/m^2", 0, false, 1e6,
              "tangential damping g_t (absolute)"),
         demPreset(),
-        choice("dem", "disk_size", d, &D::disk_size, disk_size_names,
-               "inscribed: at the grain's centroid, its equal-area radius or less where it would "
-               "overlap (covers less than the grains); equal_area: the equal-area radius, the disks "
-               "pushed apart until none overlaps (covers what the grains cover; docs/coupling.md)"),
+        choice(
+            "dem", "disk_size", d, &D::disk_size, disk_size_names,
+            "inscribed: at the grain's centroid, its equal-area radius or less where it would "
+            "overlap (covers less than the grains); equal_area: the equal-area radius, the disks "
+            "pushed apart until none overlaps (covers what the grains cover; docs/coupling.md)"),
         choice("dem", "normal_law", d, &D::normal_law, normal_law_names,
                "the disks' normal law: hooke, f_n = k_n d - g_n v_n; hertz, the same times "
                "sqrt(r_eff d) / hertz_length (stiffer as the disks are pressed together)"),
@@ -392,8 +402,9 @@ void checkTogether(const Scene &s) {
     const double h = s.projectile.mesh_size > 0 ? s.projectile.mesh_size : t.mesh_size;
     const double triangles = s.projectile.length * d / (0.43 * h * h);
     if (triangles > 5.0e7)
-      bad("projectile.length = " + show(s.projectile.length) + (plate ? " (a plate as wide as the box)" : "") +
-          " at a mesh size of " + show(h) + " m gives about " + show(triangles) +
+      bad("projectile.length = " + show(s.projectile.length) +
+          (plate ? " (a plate as wide as the box)" : "") + " at a mesh size of " + show(h) +
+          " m gives about " + show(triangles) +
           " triangles; allowed: at most 5e7 (a larger projectile.mesh_size)");
   }
   const ModalSpec &m = s.modal;
@@ -411,7 +422,8 @@ void checkTogether(const Scene &s) {
           " triangles for the beam; allowed: at most 5e6");
   }
   if (s.run.constant_velocity && s.run.spin != 0.0)
-    bad("run.spin = " + show(s.run.spin) + " with run.constant_velocity = true (a velocity held "
+    bad("run.spin = " + show(s.run.spin) +
+        " with run.constant_velocity = true (a velocity held "
         "without rotation); allowed: 0");
   if (s.projectile.enabled && s.projectile.shape == ProjectileKind::ogive) {
     try {

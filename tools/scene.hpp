@@ -88,8 +88,8 @@ struct DemSpec {
   double tangential_damping = coupling::quartz_grains.gt;   // g_t [N s/m per m]
   DiskSize disk_size = DiskSize::inscribed; // the disks' radii and places (targets/disks.hpp)
   NormalLaw normal_law = NormalLaw::hooke;  // the disks' normal contact law
-  double hertz_length = 8e-6; // hertz: sqrt(r_eff d) where the law has stiffness k_n [m]
-  double rolling_friction = 0.0; // LIGGGHTS epsd2 rolling resistance between disks; 0: none
+  double hertz_length = 8e-6;         // hertz: sqrt(r_eff d) where the law has stiffness k_n [m]
+  double rolling_friction = 0.0;      // LIGGGHTS epsd2 rolling resistance between disks; 0: none
   double skin = 0.0;                  // neighbour skin [m]; 0: half the mean diameter
   double step = 0.0; // the disks' step, a time window of many FE steps [s]; 0: their stable step
   // The preset's values for every key it names (the others are left as they are).

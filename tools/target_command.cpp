@@ -110,7 +110,8 @@ int targetCommand(const TargetOptions &options) {
       scene.target.seed = *options.seed;
     if (options.no_mesh)
       scene.target.mesh = MeshKind::none;
-    prepareOutputDirectory(options.out_dir, "target", {"target.json", "summary.json", "grain-sizes.png"});
+    prepareOutputDirectory(options.out_dir, "target",
+                           {"target.json", "summary.json", "grain-sizes.png"});
   } catch (const InputError &e) {
     std::cerr << "mesopen target: " << e.what() << '\n';
     return 2;
@@ -146,7 +147,8 @@ int targetCommand(const TargetOptions &options) {
     writes.push_back(std::async(std::launch::async, [&] { writeTargetVtu(dir + "/target.vtu", target, pp); }));
     // The disks of both DEM files, inside the walls; the projectile is not in them.
     const Disks disks = targetDisks(target, scene.dem.disk_size);
-    writes.push_back(std::async(std::launch::async, [&] { writeLiggghtsData(dir + "/target.data", target, disks); }));
+    writes.push_back(std::async(std::launch::async,
+                                [&] { writeLiggghtsData(dir + "/target.data", target, disks); }));
     writeYadeSpheres(dir + "/target.spheres", disks);
     for (auto &w : writes)
       w.get(); // passes on the first failure

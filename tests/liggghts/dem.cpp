@@ -37,8 +37,9 @@ std::string oneDisk(double x, double y, double r, double vx = 0.0, double vy = 0
 }
 
 std::vector<std::pair<std::string, std::string>> variables(const std::string &data) {
-  return {{"data", data}, {"kn", "1e5"}, {"kt", "1e5"},   {"gn", "0"},   {"gt", "0"},
-          {"mu", "0.3"}, {"mu_wall", "0.3"}, {"hertz", "0"}, {"rolling", "0"}, {"h", "1"}, {"mref", "1"},  {"xlo", "-1e-3"}, {"xhi", "1e-3"}, {"ylo", "-1e-3"}, {"skin", "1e-6"},
+  return {{"data", data},   {"kn", "1e5"},      {"kt", "1e5"},   {"gn", "0"},      {"gt", "0"},
+          {"mu", "0.3"},    {"mu_wall", "0.3"}, {"hertz", "0"},  {"rolling", "0"}, {"h", "1"},
+          {"mref", "1"},    {"xlo", "-1e-3"},   {"xhi", "1e-3"}, {"ylo", "-1e-3"}, {"skin", "1e-6"},
           {"gravity", "0"}, {"dt", "1e-9"}};
 }
 

@@ -76,8 +76,8 @@ TEST(LiggghtsRun, HybridBandEndsAtItsDepth) {
 // 1e-6 m/s: round-off of touching contacts gives about 1e-11 m/s; a disk started across a wall by
 // a few per cent of its radius leaves at metres per second (120 m/s measured).
 TEST(LiggghtsRun, TargetAtRestStaysAtRest) {
-  for (const std::string representation :
-       {"dem", "hybrid", "dem\"\n[dem]\npreset = \"quartz-bulk", "hybrid\"\n[dem]\npreset = \"quartz-bulk"}) {
+  for (const std::string representation : {"dem", "hybrid", "dem\"\n[dem]\npreset = \"quartz-bulk",
+                                           "hybrid\"\n[dem]\npreset = \"quartz-bulk"}) {
     ScratchDir dir("run-rest-" + std::to_string(representation.size()));
     const auto r = test::runScene(
         dir, "[target]\nwidth = 0.8e-3\nheight = 0.5e-3\ndiameter = [42e-6, 78e-6]\n"
@@ -108,10 +108,12 @@ TEST(LiggghtsRun, TargetAtRestStaysAtRest) {
 // readable (they were printed as 0.000000 s), no run.h5.
 TEST(LiggghtsRun, TooLongDemStepIsBadInput) {
   ScratchDir dir("run-dem-step");
-  const auto r = test::runScene(dir, test::tinyScene("representation = \"dem\"\n[dem]\nstep = 1e-6\n"));
+  const auto r =
+      test::runScene(dir, test::tinyScene("representation = \"dem\"\n[dem]\nstep = 1e-6\n"));
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("dem.step = 1e-06 s is longer than the disks' stable step, "),
-            std::string::npos) << r.output;
+            std::string::npos)
+      << r.output;
   EXPECT_EQ(r.output.find("0.000000"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "out/run.h5"));
 }
@@ -120,8 +122,9 @@ TEST(LiggghtsRun, TooLongDemStepIsBadInput) {
 // projectile alone, its kinetic energy constant): the run is then fully meshed, without disks.
 TEST(LiggghtsRun, BandOverEveryGrainMeshesThemAll) {
   ScratchDir dir("run-band-all");
-  const auto r = test::runScene(dir, test::tinyScene("representation = \"hybrid\"\nband_half_width = 10\n"
-                                                     "frame_interval = 0\nvelocity = 500\n"));
+  const auto r =
+      test::runScene(dir, test::tinyScene("representation = \"hybrid\"\nband_half_width = 10\n"
+                                          "frame_interval = 0\nvelocity = 500\n"));
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(dir / "out/summary.json");
   const nlohmann::json s = nlohmann::json::parse(in);

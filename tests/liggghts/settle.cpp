@@ -30,9 +30,23 @@ TEST(Liggghts, DemTargetSettlesInItsBox) {
   writeLiggghtsData(data, target, targetDisks(target));
   const double g = 1e6, kn = 1e10;
   coupling::LiggghtsDem dem(MESOPEN_SOURCE_DIR "/liggghts-inputs/dem.in",
-                            {{"data", data}, {"kn", "1e10"}, {"kt", "1e10"}, {"gn", "80"},
-                             {"gt", "80"}, {"mu", "0.3"}, {"mu_wall", "0.3"}, {"hertz", "0"}, {"rolling", "0"}, {"h", "1"}, {"mref", "1"}, {"xlo", "0"}, {"xhi", "0.6e-3"},
-                             {"ylo", "0"}, {"skin", "6e-6"}, {"gravity", "1e6"}, {"dt", "1e-9"}},
+                            {{"data", data},
+                             {"kn", "1e10"},
+                             {"kt", "1e10"},
+                             {"gn", "80"},
+                             {"gt", "80"},
+                             {"mu", "0.3"},
+                             {"mu_wall", "0.3"},
+                             {"hertz", "0"},
+                             {"rolling", "0"},
+                             {"h", "1"},
+                             {"mref", "1"},
+                             {"xlo", "0"},
+                             {"xhi", "0.6e-3"},
+                             {"ylo", "0"},
+                             {"skin", "6e-6"},
+                             {"gravity", "1e6"},
+                             {"dt", "1e-9"}},
                             "none", MPI_COMM_WORLD);
   const coupling::Particles &p = dem.particles();
   ASSERT_EQ(p.size(), target.grains.size());

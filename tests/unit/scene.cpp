@@ -133,8 +133,9 @@ TEST(Cli, TooLargeTargetsAreRefusedBeforeTheyStart) {
 // a plate too large to mesh.
 TEST(Scene, PlateDrivenBetweenSmoothWalls) {
   ScratchDir dir("scene-plate");
-  mesopen::test::writeFile(dir / "s.toml", "[projectile]\nshape = \"plate\"\nlength = 1e-4\n"
-                                           "[run]\nconstant_velocity = true\nsmooth_walls = true\n");
+  mesopen::test::writeFile(dir / "s.toml",
+                           "[projectile]\nshape = \"plate\"\nlength = 1e-4\n"
+                           "[run]\nconstant_velocity = true\nsmooth_walls = true\n");
   const Scene s = readScene(dir / "s.toml");
   EXPECT_EQ(s.projectile.shape, ProjectileKind::plate);
   EXPECT_TRUE(s.run.constant_velocity);
@@ -157,13 +158,15 @@ TEST(Scene, PlateDrivenBetweenSmoothWalls) {
 // dem.preset sets its keys first, whatever the order in the file; keys given beside it win.
 TEST(Scene, DemPresetFirstThenTheTablesKeys) {
   ScratchDir dir("scene-dem-preset");
-  mesopen::test::writeFile(dir / "s.toml", "[dem]\nhertz_length = 5e-6\npreset = \"quartz-bulk\"\n");
+  mesopen::test::writeFile(dir / "s.toml",
+                           "[dem]\nhertz_length = 5e-6\npreset = \"quartz-bulk\"\n");
   const Scene s = readScene(dir / "s.toml");
   EXPECT_EQ(s.dem.preset, DemPreset::quartz_bulk);
   EXPECT_EQ(s.dem.disk_size, DiskSize::equal_area);
   EXPECT_EQ(s.dem.normal_law, NormalLaw::hertz);
   EXPECT_DOUBLE_EQ(s.dem.hertz_length, 5e-6);
-  mesopen::test::writeFile(dir / "p.toml", "[dem]\npreset = \"quartz-pair\"\ndisk_size = \"equal_area\"\n");
+  mesopen::test::writeFile(dir / "p.toml",
+                           "[dem]\npreset = \"quartz-pair\"\ndisk_size = \"equal_area\"\n");
   const Scene p = readScene(dir / "p.toml");
   EXPECT_EQ(p.dem.normal_law, NormalLaw::hooke);
   EXPECT_EQ(p.dem.disk_size, DiskSize::equal_area);
@@ -177,13 +180,16 @@ TEST(Scene, DemPresetFirstThenTheTablesKeys) {
 // as unsigned and wrapped: -1 became 18446744073709551615).
 TEST(Cli, BadCommandLinesExitTwo) {
   ScratchDir dir("cli-bad");
-  mesopen::test::writeFile(dir / "s.toml", "[target]\nwidth = 1e-3\nheight = 1e-3\nmesh = \"none\"\n"
-                                           "[projectile]\nenabled = false\n");
+  mesopen::test::writeFile(dir / "s.toml",
+                           "[target]\nwidth = 1e-3\nheight = 1e-3\nmesh = \"none\"\n"
+                           "[projectile]\nenabled = false\n");
   for (const char *command : {"target", "run"}) {
-    auto r = mesopen::test::runMesopen(std::string(command) + " " + dir.path.string() + " -o " + (dir / "out"));
+    auto r = mesopen::test::runMesopen(std::string(command) + " " + dir.path.string() + " -o " +
+                                       (dir / "out"));
     EXPECT_EQ(r.code, 2) << command << ": " << r.output;
     EXPECT_NE(r.output.find("not a file"), std::string::npos) << r.output;
-    r = mesopen::test::runMesopen(std::string(command) + " " + (dir / "missing.toml") + " -o " + (dir / "out"));
+    r = mesopen::test::runMesopen(std::string(command) + " " + (dir / "missing.toml") + " -o " +
+                                  (dir / "out"));
     EXPECT_EQ(r.code, 2) << r.output;
     EXPECT_NE(r.output.find("no such file"), std::string::npos) << r.output;
     r = mesopen::test::runMesopen(std::string(command) + " " + (dir / "s.toml") + " -o ''");
@@ -215,17 +221,22 @@ TEST(Scene, RangesAreTheStableOnes) {
 // of (a fe run with a [dem] table and a band).
 TEST(Cli, LongValuesAreCutAndIdleKeysWarned) {
   ScratchDir dir("cli-long");
-  const std::string e = errorOf(dir, "[target]\nplacement = \"" + std::string(1 << 20, 'x') + "\"\n");
+  const std::string e =
+      errorOf(dir, "[target]\nplacement = \"" + std::string(1 << 20, 'x') + "\"\n");
   EXPECT_LT(e.size(), 600u) << e.substr(0, 200);
   EXPECT_NE(e.find("(1048578 characters)"), std::string::npos) << e.substr(0, 300);
-  mesopen::test::writeFile(dir / "fe.toml",
-                           "[target]\nwidth = 0.6e-3\nheight = 0.3e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
-                           "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 1e-9\nband_half_width = 1e-4\n"
-                           "frame_interval = 0\n[dem]\nstiffness = 1e10\n");
-  const auto r = mesopen::test::runMesopen("run " + (dir / "fe.toml") + " -o " + (dir / "out") + " --quiet");
+  mesopen::test::writeFile(
+      dir / "fe.toml",
+      "[target]\nwidth = 0.6e-3\nheight = 0.3e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
+      "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 1e-9\nband_half_width = 1e-4\n"
+      "frame_interval = 0\n[dem]\nstiffness = 1e10\n");
+  const auto r =
+      mesopen::test::runMesopen("run " + (dir / "fe.toml") + " -o " + (dir / "out") + " --quiet");
   EXPECT_EQ(r.code, 0) << r.output;
-  EXPECT_NE(r.output.find("warning: " + (dir / "fe.toml") + ": [dem] does nothing with run.representation = \"fe\""),
-            std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("warning: " + (dir / "fe.toml") +
+                          ": [dem] does nothing with run.representation = \"fe\""),
+            std::string::npos)
+      << r.output;
   EXPECT_NE(r.output.find("run.band_half_width does nothing"), std::string::npos) << r.output;
 }
 
@@ -235,15 +246,22 @@ TEST(Cli, LongValuesAreCutAndIdleKeysWarned) {
 TEST(Cli, NoStaleResultsNoOverwrittenSummaries) {
   ScratchDir dir("cli-stale");
   mesopen::test::writeFile(dir / "s.toml", mesopen::test::tinyScene("frame_interval = 0\n"));
-  ASSERT_EQ(mesopen::test::runMesopen("run " + (dir / "s.toml") + " -o " + (dir / "out") + " --quiet").code, 0);
+  ASSERT_EQ(
+      mesopen::test::runMesopen("run " + (dir / "s.toml") + " -o " + (dir / "out") + " --quiet")
+          .code,
+      0);
   mesopen::test::writeFile(dir / "out/instability.json", "{}");
   mesopen::test::writeFile(dir / "out/instability-tilt.png", "");
-  ASSERT_EQ(mesopen::test::runMesopen("run " + (dir / "s.toml") + " -o " + (dir / "out") + " --quiet").code, 0);
+  ASSERT_EQ(
+      mesopen::test::runMesopen("run " + (dir / "s.toml") + " -o " + (dir / "out") + " --quiet")
+          .code,
+      0);
   EXPECT_FALSE(std::filesystem::exists(dir / "out/instability.json"));
   EXPECT_FALSE(std::filesystem::exists(dir / "out/instability-tilt.png"));
   const std::string summary = mesopen::test::readFile(dir / "out/summary.json");
   for (const std::string command : {"target", "modal"}) {
-    const auto r = mesopen::test::runMesopen(command + " " + (dir / "s.toml") + " -o " + (dir / "out"));
+    const auto r =
+        mesopen::test::runMesopen(command + " " + (dir / "s.toml") + " -o " + (dir / "out"));
     EXPECT_EQ(r.code, 2) << command << ": " << r.output;
     EXPECT_NE(r.output.find("holds the output of `mesopen run`"), std::string::npos) << r.output;
   }

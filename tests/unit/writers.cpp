@@ -413,7 +413,7 @@ TEST(GrainDisks, EqualAreaDisksRelaxedApart) {
     EXPECT_GE(d.x[i] - d.radius[i], -tol);
     EXPECT_LE(d.x[i] + d.radius[i], width + tol);
     EXPECT_GE(d.y[i] - d.radius[i], -tol);
-    EXPECT_LE(d.y[i] + d.radius[i], 75e-6 + tol); // under the plate
+    EXPECT_LE(d.y[i] + d.radius[i], 75e-6 + tol);         // under the plate
     EXPECT_LE(d.x[i] + d.radius[i], 20e-6 + 5 * s + tol); // left of the meshed square
     for (std::size_t j = 0; j < i; ++j)
       EXPECT_GE(std::hypot(d.x[i] - d.x[j], d.y[i] - d.y[j]), d.radius[i] + d.radius[j] - tol);

@@ -70,9 +70,11 @@ int main(int argc, char **argv) {
     char text[32];
     std::snprintf(text, sizeof text, "%.17g", dt);
     return std::vector<std::pair<std::string, std::string>>{
-        {"data", data},   {"kn", "3.39e10"}, {"kt", "1.13e10"},    {"gn", "29.7"},
-        {"gt", "9.9"},    {"mu", "0.3"}, {"mu_wall", "0.3"}, {"hertz", "0"}, {"rolling", "0"}, {"h", "1"}, {"mref", "1"},     {"xlo", "0"},         {"xhi", "7.076e-3"},
-        {"ylo", "0"},     {"skin", "30e-6"}, {"gravity", "0"},     {"dt", text}};
+        {"data", data},      {"kn", "3.39e10"}, {"kt", "1.13e10"},  {"gn", "29.7"},
+        {"gt", "9.9"},       {"mu", "0.3"},     {"mu_wall", "0.3"}, {"hertz", "0"},
+        {"rolling", "0"},    {"h", "1"},        {"mref", "1"},      {"xlo", "0"},
+        {"xhi", "7.076e-3"}, {"ylo", "0"},      {"skin", "30e-6"},  {"gravity", "0"},
+        {"dt", text}};
   };
   std::vector<double> alone, own, coupled, fe;
   std::size_t contacts = 0;
