@@ -7,6 +7,7 @@
 // typed, documented parameter list; a scene names it by `type` or by a `preset`.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <map>
 #include <memory>
@@ -25,6 +26,9 @@ struct StrainBatch {
   const double *volume_change;      // V(n+1) - V(n) of the element [m^2]
   const double *volume_mid;         // V at mid-step [m^2]
   const double *volume0;            // initial V [m^2]
+  // The deformation gradient F = dx/dX at n+1 and at n (xx, xy, yx, yy), for the materials that
+  // ask for it (Material::usesDeformationGradient; null otherwise).
+  std::array<const double *, 4> f{}, f_old{};
 };
 
 // Element state the material updates in place (pointers to the first element of the batch).
@@ -52,6 +56,8 @@ public:
   virtual double density() const = 0;       // rho0 [kg/m^3]
   virtual bool plastic() const = 0;         // true when a strength model (plastic flow) is on
   virtual void update(const StrainBatch &in, StressState &state, MaterialOutput &out) const = 0;
+  // True for a deviator in total form, from F (StrainBatch::f): the materials without strength.
+  virtual bool usesDeformationGradient() const { return false; }
   // The equivalent plastic strain at which an element fails and is removed (erosion; an element
   // of such a material also fails when crushed to a fifth of its area); 0: never (the parameter
   // `erosion_strain` of the types that have it).

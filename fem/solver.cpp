@@ -221,7 +221,16 @@ void Solver::step() {
   ++steps_;
   if (steps_ == 1)
     first_dt_ = dt;
-  dt_ = std::min({next_dt_, s_.max_dt, s_.max_dt_growth * dt});
+  // The step falls at once to what the elements allow; it rises only every dt_rise_interval steps,
+  // to the shortest step allowed over them: a step that followed the elements' fastest oscillation
+  // up and down would pump energy into it (a leapfrog of varying step is not symplectic).
+  shortest_allowed_ = std::min(shortest_allowed_, next_dt_);
+  if (next_dt_ < dt)
+    dt_ = std::min(next_dt_, s_.max_dt);
+  else if (steps_ % s_.dt_rise_interval == 0)
+    dt_ = std::min({shortest_allowed_, s_.max_dt, s_.max_dt_growth * dt});
+  if (steps_ % s_.dt_rise_interval == 0)
+    shortest_allowed_ = std::numeric_limits<double>::infinity();
   if (next_dt_ < s_.min_dt_ratio * first_dt_) {
     std::ostringstream msg;
     msg << "the stable step fell to " << next_dt_ << " s, below " << s_.min_dt_ratio
@@ -674,7 +683,32 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   }
 
   // Stress update by the body's material.
-  const StrainBatch in{n, dt, dxx, dyy, dxy, spin, jac, dvol, vmid, el.area0.data() + e0};
+  // Materials without strength take their deviator from the deformation gradient F = dx/dX, at
+  // n + 1 and at n (x(n) = x(n+1) - dt v(n+1/2)), on the constant-strain triangle's initial shape.
+  alignas(64) double f_new[4][max_chunk], f_old[4][max_chunk];
+  const bool total_form = chunk.material->usesDeformationGradient();
+  if (total_form) {
+    const double *X = m_.nodes.x0.data(), *Y = m_.nodes.y0.data();
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t a = conn[3 * i], b = conn[3 * i + 1], c = conn[3 * i + 2];
+      const double inv = 1.0 / ((X[b] - X[a]) * (Y[c] - Y[a]) - (X[c] - X[a]) * (Y[b] - Y[a]));
+      const double gxk[3] = {(Y[b] - Y[c]) * inv, (Y[c] - Y[a]) * inv, (Y[a] - Y[b]) * inv};
+      const double gyk[3] = {(X[c] - X[b]) * inv, (X[a] - X[c]) * inv, (X[b] - X[a]) * inv};
+      for (int m = 0; m < 4; ++m)
+        f_new[m][i] = f_old[m][i] = 0.0;
+      for (int k = 0; k < 3; ++k) {
+        const double xo = x[k][i] - dt * vx[k][i], yo = y[k][i] - dt * vy[k][i];
+        f_new[0][i] += x[k][i] * gxk[k], f_new[1][i] += x[k][i] * gyk[k];
+        f_new[2][i] += y[k][i] * gxk[k], f_new[3][i] += y[k][i] * gyk[k];
+        f_old[0][i] += xo * gxk[k], f_old[1][i] += xo * gyk[k];
+        f_old[2][i] += yo * gxk[k], f_old[3][i] += yo * gyk[k];
+      }
+    }
+  }
+  StrainBatch in{n, dt, dxx, dyy, dxy, spin, jac, dvol, vmid, el.area0.data() + e0};
+  if (total_form)
+    in.f = {f_new[0], f_new[1], f_new[2], f_new[3]},
+    in.f_old = {f_old[0], f_old[1], f_old[2], f_old[3]};
   StressState state{el.sxx.data() + e0,     el.syy.data() + e0,    el.sxy.data() + e0,
                     el.pressure.data() + e0, el.energy.data() + e0, el.plastic_strain.data() + e0};
   alignas(64) double shear_share[max_chunk];

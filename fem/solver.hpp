@@ -42,6 +42,7 @@ struct SolverSettings {
   // penalty tied to the step (contact, k ~ m / dt^2) otherwise changes its stiffness tenfold
   // between steps when a crushed element makes the stable step oscillate, and puts energy in.
   double max_dt_growth = 1.1;
+  std::size_t dt_rise_interval = 50; // the step rises at most once in so many steps (Solver::step)
   // A stable step below this fraction of the first ends the run (RunFailure naming the thinnest
   // element): an element drawn into a sliver would otherwise stall it (0: never).
   double min_dt_ratio = 1e-3;
@@ -208,6 +209,7 @@ private:
   std::size_t active_elements_ = 0, eroded_elements_ = 0, collapsed_elements_ = 0;
   double time_ = 0.0, dt_ = 0.0, next_dt_ = 0.0;
   double step_scale_ = 1.0; // sqrt(1 - kappa_n / 4) for the providers' stiffness kappa_n
+  double shortest_allowed_ = std::numeric_limits<double>::infinity(); // since the last rise
   double first_dt_ = 0.0;   // the first step (after the providers' scaling)
   double erode_below_ = 0.0; // erode_dt_ratio times the shortest element step at the start
   double scale_below_ = 0.0; // mass_scaling_dt_ratio times it

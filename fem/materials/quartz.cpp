@@ -4,8 +4,11 @@
 // Strength: overstress (viscoplastic) relaxation toward the equilibrium surface (Eq. 3.12):
 //   S = S* [1 - (1 - |Se| / |S*|) min(dt / T_R, 1)]   when |S*| > |Se|,
 //   |Se| = sqrt(2/3) Y(p),  Y(p) = min(B + M p, Y1)   (bilinear; MODELS.md reads Y1 as the cap).
-// With dt >= T_R the update is a radial return. `strength = false`: elastic grains, no yield code.
+// With dt >= T_R the update is a radial return. `strength = false`: elastic grains, whose deviator
+// is the neo-Hookean one of hyperelastic.hpp with G(J) = G(P-bar(mu)) and the pressure it adds,
+// p_G = -G'(J) / 2 (tr b* - 3): a closed path returns the work it took, however G changes on it.
 #include "../material.hpp"
+#include "hyperelastic.hpp"
 #include "hypoelastic.hpp"
 #include "mie_gruneisen.hpp"
 
@@ -26,16 +29,56 @@ public:
         strength_(p.at("strength") != 0.0) {}
   double density() const override { return rho0_; }
   bool plastic() const override { return strength_; }
+  bool usesDeformationGradient() const override { return !strength_; }
 
   void update(const StrainBatch &in, StressState &s, MaterialOutput &out) const override {
     if (strength_)
-      run<true>(in, s, out);
+      strengthUpdate(in, s, out);
     else
-      run<false>(in, s, out);
+      elasticUpdate(in, s, out);
   }
 
 private:
-  template <bool Strength> void run(const StrainBatch &in, StressState &s, MaterialOutput &out) const {
+  // G(J) and dG/dJ: G = G0 + G1 P + G2 P^2, P = max(P-bar(mu), 0), mu = 1/J - 1.
+  struct Shear {
+    double G, dG_dJ;
+  };
+  Shear shear(double J) const {
+    const double mu = 1.0 / J - 1.0, P = std::max(eos_.cold(mu), 0.0);
+    const double dP_dmu = P > 0.0 ? (3.0 * eos_.K2 * mu + 2.0 * eos_.K1) * mu + eos_.K : 0.0;
+    return {G0_ + (G2_ * P + G1_) * P, -(G1_ + 2.0 * G2_ * P) * dP_dmu / (J * J)};
+  }
+
+  // Without strength: the stored deviatoric energy W = G(J) / 2 (tr b* - 3) per initial volume;
+  // the element's pressure is the equation of state's (of the energy less W) plus p_G, its energy
+  // takes W's change.
+  void elasticUpdate(const StrainBatch &in, StressState &s, MaterialOutput &out) const {
+    const double p_min = -eos_.cutoff;
+    for (std::size_t i = 0; i < in.n; ++i) {
+      const DeformationGradient F{in.f[0][i], in.f[1][i], in.f[2][i], in.f[3][i]};
+      const DeformationGradient F_old{in.f_old[0][i], in.f_old[1][i], in.f_old[2][i],
+                                      in.f_old[3][i]};
+      const Shear now = shear(F.det()), before = shear(F_old.det());
+      const double tr = isochoricTrace(F) - 3.0, tr_old = isochoricTrace(F_old) - 3.0;
+      const double p_shear = -0.5 * now.dG_dJ * tr, p_shear_old = -0.5 * before.dG_dJ * tr_old;
+      neoHookeanDeviator(F, now.G, s.sxx[i], s.syy[i], s.sxy[i]);
+      const double w_dev = in.volume0[i] * 0.5 * (now.G * tr - before.G * tr_old);
+      const double mu = 1.0 / in.jacobian[i] - 1.0;
+      // The stored shear energy is not heat: the thermal term Gamma rho0 e sees E - A0 W.
+      const double b = eos_.gamma / in.volume0[i];
+      const double a = eos_.energyFree(mu, eos_.cold(mu)) - b * in.volume0[i] * 0.5 * now.G * tr;
+      double p_eos = s.pressure[i] - p_shear_old;
+      energyEquation(a, b, p_min, in.volume_change[i], w_dev, s.energy[i], p_eos);
+      s.pressure[i] = p_eos + p_shear;
+      const double bulk = eos_.tangentBulk(mu, p_eos, a + b * s.energy[i], p_min);
+      const double G = neoHookeanShearModulus(F, now.G), longitudinal = bulk + 4.0 / 3.0 * G;
+      out.sound_speed[i] = std::sqrt(longitudinal * in.jacobian[i] / rho0_);
+      out.shear_share[i] = longitudinal > 0.0 ? G / longitudinal : 0.75;
+    }
+    out.plastic_work = 0.0;
+  }
+
+  void strengthUpdate(const StrainBatch &in, StressState &s, MaterialOutput &out) const {
     const double dt = in.dt, sqrt23 = std::sqrt(2.0 / 3.0), p_min = -eos_.cutoff;
     const double relax = std::min(dt / T_, 1.0);
     // Local array pointers: contiguous vector loads and stores (no per-lane gathers).
@@ -54,18 +97,16 @@ private:
       rotateDeviator(sxx, syy, sxy, spin[i] * dt);
       const double power_old = stressPower(sxx, syy, sxy, dxx[i], dyy[i], dxy[i]);
       addDeviatoricIncrement(sxx, syy, sxy, 2.0 * G * dt, dxx[i], dyy[i], dxy[i]);
-      if constexpr (Strength) {
-        // Yield at the new volume with the old energy (the energy follows the new stress).
-        const double p_yield = std::max(a + b * energy[i], p_min);
-        const double Se = sqrt23 * std::min(B_ + M_ * p_yield, Y1_);
-        const double norm = deviatorNorm(sxx, syy, sxy);
-        if (norm > Se) {
-          const double scale = 1.0 - (1.0 - Se / norm) * relax;
-          sxx *= scale, syy *= scale, sxy *= scale;
-          const double dev_plastic = (1.0 - scale) * norm / (2.0 * G); // |S* - S| / 2G
-          eps[i] += sqrt23 * dev_plastic;
-          plastic_work += vmid[i] * scale * norm * dev_plastic;
-        }
+      // Yield at the new volume with the old energy (the energy follows the new stress).
+      const double p_yield = std::max(a + b * energy[i], p_min);
+      const double Se = sqrt23 * std::min(B_ + M_ * p_yield, Y1_);
+      const double norm = deviatorNorm(sxx, syy, sxy);
+      if (norm > Se) {
+        const double scale = 1.0 - (1.0 - Se / norm) * relax;
+        sxx *= scale, syy *= scale, sxy *= scale;
+        const double dev_plastic = (1.0 - scale) * norm / (2.0 * G); // |S* - S| / 2G
+        eps[i] += sqrt23 * dev_plastic;
+        plastic_work += vmid[i] * scale * norm * dev_plastic;
       }
       const double power_new = stressPower(sxx, syy, sxy, dxx[i], dyy[i], dxy[i]);
       sxx_[i] = sxx, syy_[i] = syy, sxy_[i] = sxy;

@@ -1,0 +1,46 @@
+// The elastic deviator of materials without strength, in total form: a compressible neo-Hookean
+// solid (e.g. Bonet & Wood, Nonlinear Continuum Mechanics for FE Analysis, 2008, section 6.4.3),
+// in plane strain (F_zz = 1), with the stored energy per initial volume
+//   W = G(J) / 2 (tr b* - 3),   b* = J^(-2/3) F F^T,   J = det F,
+// and the Cauchy stress it derives, sigma = (1/J) dW/dF F^T:
+//   S = G(J) / J dev(b*),   and with a shear modulus that follows the volume, the mean stress
+//   G'(J) / 2 (tr b* - 3), a pressure p_G = -G'(J) / 2 (tr b* - 3).
+// For small strains S = 2 G dev(eps), Hooke's law. A stress that derives from a stored energy makes
+// the element's nodal forces the gradient of A0 W: the leapfrog then keeps the energy bounded,
+// while the rate form dS = 2 G dev(D) dt, integrated along the path, creates energy when the
+// elements ring near their stable step or when G changes along a closed path (tests/verification/
+// energy.cpp). Materials with strength keep the rate form, where yield bounds the deviator.
+#pragma once
+
+#include <cmath>
+
+namespace mesopen::fem {
+
+struct DeformationGradient {
+  double xx, xy, yx, yy; // F = dx/dX (F_zz = 1)
+  double det() const { return xx * yy - xy * yx; }
+};
+
+// tr b* = J^(-2/3) (F_xx^2 + F_xy^2 + F_yx^2 + F_yy^2 + 1).
+inline double isochoricTrace(const DeformationGradient &F) {
+  return (F.xx * F.xx + F.xy * F.xy + F.yx * F.yx + F.yy * F.yy + 1.0) *
+         std::pow(F.det(), -2.0 / 3.0);
+}
+
+// S = G / J dev(b*) (S_zz = -S_xx - S_yy).
+inline void neoHookeanDeviator(const DeformationGradient &F, double G, double &sxx, double &syy,
+                               double &sxy) {
+  const double J = F.det(), f = G * std::pow(J, -5.0 / 3.0);
+  const double bxx = F.xx * F.xx + F.xy * F.xy, byy = F.yx * F.yx + F.yy * F.yy;
+  const double third = (bxx + byy + 1.0) / 3.0;
+  sxx = f * (bxx - third);
+  syy = f * (byy - third);
+  sxy = f * (F.xx * F.yx + F.xy * F.yy);
+}
+
+// The incremental shear modulus about the state: G tr(b*) / (3 J) (G / J under pure volume change).
+inline double neoHookeanShearModulus(const DeformationGradient &F, double G) {
+  return G * isochoricTrace(F) / (3.0 * F.det());
+}
+
+} // namespace mesopen::fem
