@@ -72,6 +72,25 @@ Scene prepareRun(const RunOptions &options) {
   if (!scene.projectile.enabled)
     throw InputError(options.scene +
                      ": projectile.enabled = false; `mesopen run` needs the projectile");
+  // LIGGGHTS bins its neighbours by half the cut-off (largest disk diameter + skin) and exits
+  // when a bin exceeds 100 times an extent of the box: its width, height, or the 2D slab, the
+  // largest disk diameter (half the smallest grain's at least: inscribed disks are larger).
+  if (scene.run.grains && scene.run.representation != Representation::fe && scene.dem.skin > 0.0) {
+    const TargetSpec &t = scene.target;
+    const double extent = std::min({t.width, t.height, 0.5 * t.diameter_min});
+    const double largest = 0.99 * 200.0 * extent - t.diameter_max;
+    auto number = [](double v) {
+      std::ostringstream text;
+      text << v;
+      return text.str();
+    };
+    if (scene.dem.skin > largest)
+      throw InputError(
+          options.scene + ": dem.skin = " + number(scene.dem.skin) +
+          " m is too large for LIGGGHTS's neighbour bins in this box; allowed: 0 < skin <= " +
+          number(std::max(largest, 0.0)) + " m (half of diameter + skin within 100 times " +
+          "the box's width, height or half the smallest grain diameter)");
+  }
   warnIdleKeys(scene, options.scene);
   return scene;
 }

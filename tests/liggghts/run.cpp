@@ -118,6 +118,21 @@ TEST(LiggghtsRun, TooLongDemStepIsBadInput) {
   EXPECT_FALSE(std::filesystem::exists(dir / "out/run.h5"));
 }
 
+// A skin too large for LIGGGHTS's neighbour bins in the box (it exited the process: exit 1, no
+// message, no summary) is bad input, said before LIGGGHTS starts; the largest skin allowed runs.
+TEST(LiggghtsRun, TooLargeSkinIsBadInput) {
+  ScratchDir dir("run-dem-skin");
+  auto r = test::runScene(dir, test::tinyScene("representation = \"dem\"\n[dem]\nskin = 0.1\n"));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("dem.skin = 0.1 m is too large for LIGGGHTS's neighbour bins in this "
+                          "box; allowed: 0 < skin <= 0.00588 m"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/run.h5"));
+  r = test::runScene(dir, test::tinyScene("representation = \"dem\"\n[dem]\nskin = 0.00588\n"));
+  EXPECT_EQ(r.code, 0) << r.output;
+}
+
 // A hybrid band that covers every grain meshes them all (it dropped them: the run had the
 // projectile alone, its kinetic energy constant): the run is then fully meshed, without disks.
 TEST(LiggghtsRun, BandOverEveryGrainMeshesThemAll) {
