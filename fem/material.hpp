@@ -1,6 +1,8 @@
 // Materials: each updates the stress of a batch of elements from their rate of deformation
 // (thesis section 3.3). The split is sigma = -p I + S; the deviator S follows an objective
-// (Jaumann) rate, the pressure an equation of state, and the internal energy the energy equation
+// (Jaumann) rate, or for purely elastic materials derives from a stored energy and F
+// (materials/hyperelastic.hpp), the pressure an equation of state, and the internal energy the
+// energy equation
 //   dE = V S:D dt - p dV   (plane strain per metre, V an area)
 // integrated with the mean of the old and new stress (the pressure implicitly where it depends on
 // E). A material is one file in fem/materials/ and one line in the registry (registry.cpp), with a

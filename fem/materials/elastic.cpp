@@ -25,20 +25,21 @@ public:
       const DeformationGradient F{in.f[0][i], in.f[1][i], in.f[2][i], in.f[3][i]};
       const DeformationGradient F_old{in.f_old[0][i], in.f_old[1][i], in.f_old[2][i],
                                       in.f_old[3][i]};
-      neoHookeanDeviator(F, G_, s.sxx[i], s.syy[i], s.sxy[i]);
-      s.energy[i] += in.volume0[i] * (storedEnergy(F) - storedEnergy(F_old));
-      s.pressure[i] = -K_ * std::log(F.det());
-      const double shear = neoHookeanShearModulus(F, G_);
-      out.sound_speed[i] = std::sqrt((K_ + 4.0 / 3.0 * shear) * F.det() / rho0_); // rho = rho0 / J
+      const Isochoric now(F), before(F_old);
+      neoHookeanDeviator(F, now, G_, s.sxx[i], s.syy[i], s.sxy[i]);
+      s.energy[i] += in.volume0[i] * (storedEnergy(now) - storedEnergy(before));
+      s.pressure[i] = -K_ * std::log(now.J);
+      const double shear = now.shearModulus(G_);
+      out.sound_speed[i] = std::sqrt((K_ + 4.0 / 3.0 * shear) * now.J / rho0_); // rho = rho0 / J
       out.shear_share[i] = shear / (K_ + 4.0 / 3.0 * shear);
     }
   }
 
 private:
   // W + U per initial volume.
-  double storedEnergy(const DeformationGradient &F) const {
-    const double J = F.det();
-    return 0.5 * G_ * (isochoricTrace(F) - 3.0) + K_ * (J * std::log(J) - J + 1.0);
+  double storedEnergy(const Isochoric &iso) const {
+    const double J = iso.J;
+    return 0.5 * G_ * (iso.trace - 3.0) + K_ * (J * std::log(J) - J + 1.0);
   }
 
   double rho0_, K_, G_;

@@ -58,10 +58,11 @@ private:
       const DeformationGradient F{in.f[0][i], in.f[1][i], in.f[2][i], in.f[3][i]};
       const DeformationGradient F_old{in.f_old[0][i], in.f_old[1][i], in.f_old[2][i],
                                       in.f_old[3][i]};
-      const Shear now = shear(F.det()), before = shear(F_old.det());
-      const double tr = isochoricTrace(F) - 3.0, tr_old = isochoricTrace(F_old) - 3.0;
+      const Isochoric iso(F), iso_old(F_old);
+      const Shear now = shear(iso.J), before = shear(iso_old.J);
+      const double tr = iso.trace - 3.0, tr_old = iso_old.trace - 3.0;
       const double p_shear = -0.5 * now.dG_dJ * tr, p_shear_old = -0.5 * before.dG_dJ * tr_old;
-      neoHookeanDeviator(F, now.G, s.sxx[i], s.syy[i], s.sxy[i]);
+      neoHookeanDeviator(F, iso, now.G, s.sxx[i], s.syy[i], s.sxy[i]);
       const double w_dev = in.volume0[i] * 0.5 * (now.G * tr - before.G * tr_old);
       const double mu = 1.0 / in.jacobian[i] - 1.0;
       // The stored shear energy is not heat: the thermal term Gamma rho0 e sees E - A0 W.
@@ -71,7 +72,7 @@ private:
       energyEquation(a, b, p_min, in.volume_change[i], w_dev, s.energy[i], p_eos);
       s.pressure[i] = p_eos + p_shear;
       const double bulk = eos_.tangentBulk(mu, p_eos, a + b * s.energy[i], p_min);
-      const double G = neoHookeanShearModulus(F, now.G), longitudinal = bulk + 4.0 / 3.0 * G;
+      const double G = iso.shearModulus(now.G), longitudinal = bulk + 4.0 / 3.0 * G;
       out.sound_speed[i] = std::sqrt(longitudinal * in.jacobian[i] / rho0_);
       out.shear_share[i] = longitudinal > 0.0 ? G / longitudinal : 0.75;
     }

@@ -3,10 +3,9 @@
 // return (Simo & Hughes 1998, Box 3.2): with the trial deviator S*,
 //   f = |S*| - sqrt(2/3) Y,  dgamma = f / (2G + 2M/3),  S = S* (1 - 2G dgamma / |S*|),
 //   eps_p += sqrt(2/3) dgamma.
-// `plastic = false` turns the strength off: the elastic projectile of the thesis; the deviator is
-// then the neo-Hookean one of hyperelastic.hpp with the same G, energy-consistent.
+// `plastic = false` turns the strength off: the elastic projectile of the thesis; no yield code
+// runs.
 #include "../material.hpp"
-#include "hyperelastic.hpp"
 #include "hypoelastic.hpp"
 #include "mie_gruneisen.hpp"
 
@@ -24,39 +23,17 @@ public:
         Y0_(p.at("yield_stress")), M_(p.at("hardening_modulus")), plastic_(p.at("plastic") != 0.0) {}
   double density() const override { return rho0_; }
   bool plastic() const override { return plastic_; }
-  bool usesDeformationGradient() const override { return !plastic_; }
 
   void update(const StrainBatch &in, StressState &s, MaterialOutput &out) const override {
     if (plastic_)
-      plasticUpdate(in, s, out);
+      run<true>(in, s, out);
     else
-      elasticUpdate(in, s, out);
+      run<false>(in, s, out);
   }
 
 private:
-  // Without strength: the deviator from F, its stored energy's change booked exactly.
-  void elasticUpdate(const StrainBatch &in, StressState &s, MaterialOutput &out) const {
-    for (std::size_t i = 0; i < in.n; ++i) {
-      const DeformationGradient F{in.f[0][i], in.f[1][i], in.f[2][i], in.f[3][i]};
-      const DeformationGradient F_old{in.f_old[0][i], in.f_old[1][i], in.f_old[2][i],
-                                      in.f_old[3][i]};
-      neoHookeanDeviator(F, G_, s.sxx[i], s.syy[i], s.sxy[i]);
-      const double w_dev = in.volume0[i] * 0.5 * G_ * (isochoricTrace(F) - isochoricTrace(F_old));
-      const double mu = 1.0 / in.jacobian[i] - 1.0;
-      // The stored shear energy is not heat: the thermal term Gamma rho0 e sees E - A0 W.
-      const double b = eos_.gamma / in.volume0[i];
-      const double a = eos_.energyFree(mu, eos_.cold(mu)) -
-                       b * in.volume0[i] * 0.5 * G_ * (isochoricTrace(F) - 3.0);
-      energyEquation(a, b, -eos_.cutoff, in.volume_change[i], w_dev, s.energy[i], s.pressure[i]);
-      const double bulk = eos_.bulkModulus(mu, s.pressure[i]);
-      const double shear = neoHookeanShearModulus(F, G_);
-      out.sound_speed[i] = std::sqrt((bulk + 4.0 / 3.0 * shear) * in.jacobian[i] / rho0_);
-      out.shear_share[i] = shear / (bulk + 4.0 / 3.0 * shear);
-    }
-    out.plastic_work = 0.0;
-  }
-
-  void plasticUpdate(const StrainBatch &in, StressState &s, MaterialOutput &out) const {
+  template <bool Plastic>
+  void run(const StrainBatch &in, StressState &s, MaterialOutput &out) const {
     const double dt = in.dt, two_g_dt = 2.0 * G_ * dt, sqrt23 = std::sqrt(2.0 / 3.0);
     const double p_min = -eos_.cutoff;
     // Local array pointers: contiguous vector loads and stores (no per-lane gathers).
@@ -73,14 +50,16 @@ private:
       rotateDeviator(sxx, syy, sxy, spin[i] * dt);
       const double power_old = stressPower(sxx, syy, sxy, dxx[i], dyy[i], dxy[i]);
       addDeviatoricIncrement(sxx, syy, sxy, two_g_dt, dxx[i], dyy[i], dxy[i]);
-      const double norm = deviatorNorm(sxx, syy, sxy);
-      const double f = norm - sqrt23 * (Y0_ + M_ * eps[i]);
-      if (f > 0.0) {
-        const double dgamma = f / (2.0 * G_ + 2.0 / 3.0 * M_);
-        const double scale = 1.0 - 2.0 * G_ * dgamma / norm;
-        sxx *= scale, syy *= scale, sxy *= scale;
-        eps[i] += sqrt23 * dgamma;
-        plastic_work += vmid[i] * dgamma * scale * norm; // V S : (S* - S) / 2G
+      if constexpr (Plastic) {
+        const double norm = deviatorNorm(sxx, syy, sxy);
+        const double f = norm - sqrt23 * (Y0_ + M_ * eps[i]);
+        if (f > 0.0) {
+          const double dgamma = f / (2.0 * G_ + 2.0 / 3.0 * M_);
+          const double scale = 1.0 - 2.0 * G_ * dgamma / norm;
+          sxx *= scale, syy *= scale, sxy *= scale;
+          eps[i] += sqrt23 * dgamma;
+          plastic_work += vmid[i] * dgamma * scale * norm; // V S : (S* - S) / 2G
+        }
       }
       const double power_new = stressPower(sxx, syy, sxy, dxx[i], dyy[i], dxy[i]);
       sxx_[i] = sxx, syy_[i] = syy, sxy_[i] = sxy;

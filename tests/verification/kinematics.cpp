@@ -25,11 +25,11 @@ double maxAbs(const std::vector<double> &v) {
 // homogeneous deformation, which constant-strain triangles represent exactly: every element must
 // carry the same stress and the interior nodes must keep the linear field, to round-off.
 // Both forms of the deviator: the rate form ("steel", far below yield) and the total form from F
-// ("steel-elastic"). Tolerance 1e-9 relative for the stresses (200 steps of round-off on numbers
+// ("elastic"). Tolerance 1e-9 relative for the stresses (200 steps of round-off on numbers
 // of order one), 1e-8 for the nodes (F is taken from positions of 1e-3 m over reference gradients
 // of 1e4 1/m: 1.1e-9 measured).
 TEST(PatchTest, HomogeneousDeformationIsExact) {
-  for (const char *material : {"steel", "steel-elastic"}) {
+  for (const char *material : {"steel", "elastic"}) {
     SCOPED_TRACE(material);
     TestMesh mesh;
     mesh.addRectangle(0, 0, 1e-3, 1e-3, 8, 8, 0.3, 7);
@@ -73,7 +73,7 @@ TEST(PatchTest, HomogeneousDeformationIsExact) {
 
 // Rigid rotation driven exactly, step by step (x(n+1) = R(theta(n+1)) X): the strain rate on the
 // mid-step configuration is zero, so an unstressed body stays unstressed (the total form of
-// "steel-elastic": F = R, b = I), and a stressed body's stress turns with it (the objective rate
+// "elastic": F = R, b = I), and a stressed body's stress turns with it (the objective rate
 // of "steel", far below yield). After a quarter turn S_xx and S_yy have swapped.
 // Tolerances: 1e-6 of the stress scale for the turned stress (the rotation angle per step is
 // first-order accurate: error ~ N theta^3 / 3 ~ 1e-7 rad here); round-off for the unstressed body.
@@ -82,7 +82,7 @@ TEST(RigidRotation, StaysStressFreeAndStressTurns) {
   mesh.addRectangle(-0.5e-3, -0.3e-3, 1e-3, 0.6e-3, 10, 6, 0.25, 3);
   mesh.addRectangle(-0.5e-3, 1e-3, 1e-3, 0.6e-3, 10, 6, 0.25, 4); // a second, pre-stressed body
   std::vector<std::unique_ptr<fem::Material>> materials;
-  materials.push_back(fem::makeMaterial("steel-elastic"));
+  materials.push_back(fem::makeMaterial("elastic"));
   materials.push_back(fem::makeMaterial("steel"));
   fem::Model model = mesh.model(std::move(materials), {0, 1});
   const double s0 = 1e8;
