@@ -1,6 +1,7 @@
-// Frictional contact between bodies and with the rigid walls of the box (thesis section 3;
-// MODELS.md "Contact"). Every step, at x(n+1):
-//   - broad phase: the bodies' bounding boxes in a uniform grid give the pairs of bodies whose boxes
+// Frictional contact between bodies and with the rigid walls of the box (thesis section 3).
+// Every step, at x(n+1):
+//   - broad phase: the bodies' bounding boxes in a uniform grid give the pairs of bodies whose
+//   boxes
 //     overlap (at least one of them moving);
 //   - narrow phase, node to segment both ways: a boundary node of one body inside the other is
 //     pushed out through the closest boundary segment (depth d, outward normal n), and the reaction
@@ -38,10 +39,10 @@
 // boundary nodes and segments near the overlap of the two boxes, taken with a margin of its own
 // and refreshed when the two bodies may have moved by a quarter of that (a bound on the
 // displacement of every boundary node, summed step by step), not when the pairs are searched anew
-// (the projectile's pace sets that: run 6, 47 % fewer lists taken): a step looks at a handful of nodes
-// and segments per pair, in one stream of memory per run of pairs, and finds exactly what a search of
-// the whole boundaries would. Of those nodes, one found outside the other body by a gap g stays
-// outside while the two bodies move by less than g together: such clear nodes are looked at
+// (the projectile's pace sets that: run 6, 47 % fewer lists taken): a step looks at a handful of
+// nodes and segments per pair, in one stream of memory per run of pairs, and finds exactly what a
+// search of the whole boundaries would. Of those nodes, one found outside the other body by a gap g
+// stays outside while the two bodies move by less than g together: such clear nodes are looked at
 // again only then, the others (hot: in contact, touching) every step; a side of a pair with no hot
 // node and no clear node due is skipped.
 #pragma once
@@ -79,16 +80,16 @@ struct ContactSettings {
 };
 
 struct ContactStatistics {
-  std::size_t pairs = 0, contacts = 0;   // this step: body pairs searched, nodes in contact
-  double depth = 0.0;                    // this step: deepest penetration / element size
-  double max_depth = 0.0;                // the same, over the run
-  std::size_t deep = 0;                  // over the run: node-steps deeper than half an element
-  std::size_t refreshed = 0;             // over the run: pair lists (re)built
-  std::size_t searches = 0;              // over the run: searches for pairs of bodies
-  std::size_t sides = 0, skipped = 0;    // over the run: sides of overlapping pairs, skipped as clear
-  std::size_t partial = 0;               // over the run: sides whose hot nodes alone were looked at
-  std::size_t sudden = 0;                // over the run: contacts found deeper than a step's approach
-  double seconds = 0.0;                  // wall time spent in contact, over the run
+  std::size_t pairs = 0, contacts = 0; // this step: body pairs searched, nodes in contact
+  double depth = 0.0;                  // this step: deepest penetration / element size
+  double max_depth = 0.0;              // the same, over the run
+  std::size_t deep = 0;                // over the run: node-steps deeper than half an element
+  std::size_t refreshed = 0;           // over the run: pair lists (re)built
+  std::size_t searches = 0;            // over the run: searches for pairs of bodies
+  std::size_t sides = 0, skipped = 0;  // over the run: sides of overlapping pairs, skipped as clear
+  std::size_t partial = 0;             // over the run: sides whose hot nodes alone were looked at
+  std::size_t sudden = 0;              // over the run: contacts found deeper than a step's approach
+  double seconds = 0.0;                // wall time spent in contact, over the run
 };
 
 class Contact final : public ForceProvider {
@@ -217,15 +218,15 @@ private:
   // squared distance goes there.
   Closest closest(const Near &near, double px, double py, double *distances) const;
   Box nearSegments(std::size_t body, const std::uint32_t *ends, const std::uint32_t *ends_end,
-                    const Box &region, Scratch &scratch) const;
+                   const Box &region, Scratch &scratch) const;
   void refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &scratch) const;
   double penetration(std::size_t B, double px, double py, Scratch &scratch) const;
   std::uint32_t listNear(std::size_t A, std::size_t B, const Box &region, double margin,
                          Scratch &scratch) const;
   void touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
-             const std::uint32_t *nodes_end, const std::uint32_t *ends, const std::uint32_t *ends_end,
-             double travel, double &until, std::uint32_t *hot, std::uint32_t &n_hot, Hits &hits,
-             Scratch &scratch) const;
+             const std::uint32_t *nodes_end, const std::uint32_t *ends,
+             const std::uint32_t *ends_end, double travel, double &until, std::uint32_t *hot,
+             std::uint32_t &n_hot, Hits &hits, Scratch &scratch) const;
   enum class At { segment, vertex, unknown }; // see atVertex
   static bool atInside(const Near &near, const Closest &c);
   At atVertex(const Near &near, Closest &c, double px, double py, double &depth, double &nx,
@@ -239,33 +240,36 @@ private:
   double damping_[2] = {}; // the damping coefficient c of hit, between bodies and at a wall
   std::size_t n_materials_;
   std::vector<std::uint16_t> material_; // per body: its material (Model::materials index)
-  std::vector<std::size_t> node_begin_, segment_begin_; // per body, into nodes_ and segment_ends_ / 2
-  std::vector<std::uint32_t> nodes_;                    // boundary nodes, body by body
+  std::vector<std::size_t> node_begin_,
+      segment_begin_;                // per body, into nodes_ and segment_ends_ / 2
+  std::vector<std::uint32_t> nodes_; // boundary nodes, body by body
   // A boundary node's position this step, the two coordinates side by side: the narrow phase reads
   // them at scattered nodes.
   struct alignas(16) Point {
     double x, y;
   };
-  std::vector<Point> points_;                           // per boundary node (as nodes_)
-  std::vector<std::uint32_t> segment_ends_; // boundary edges (ccw), their nodes as indices into nodes_
-  std::vector<std::uint8_t> pinched_;       // per boundary node: not the start of exactly one edge
-  std::vector<double> size_;                            // per body: longest boundary edge [m]
-  std::vector<Box> boxes_;                              // per body, this step
+  std::vector<Point> points_; // per boundary node (as nodes_)
+  std::vector<std::uint32_t>
+      segment_ends_;                  // boundary edges (ccw), their nodes as indices into nodes_
+  std::vector<std::uint8_t> pinched_; // per boundary node: not the start of exactly one edge
+  std::vector<double> size_;          // per body: longest boundary edge [m]
+  std::vector<Box> boxes_;            // per body, this step
   std::vector<double> travel_; // per body: sum over steps of its boundary nodes' largest move
-  std::vector<double> travel_searched_;    // per body: travel_ at the last search for pairs
-  std::vector<char> listed_;               // per body: its pairs are in pairs_ (it moved then)
-  std::vector<std::uint32_t> woken_;       // bodies moving since this step
-  std::vector<std::uint32_t> moving_;                   // bodies not at rest, this step
+  std::vector<double> travel_searched_; // per body: travel_ at the last search for pairs
+  std::vector<char> listed_;            // per body: its pairs are in pairs_ (it moved then)
+  std::vector<std::uint32_t> woken_;    // bodies moving since this step
+  std::vector<std::uint32_t> moving_;   // bodies not at rest, this step
   double cell_ = 0.0;
   Grid rest_grid_, moving_grid_;
   double search_margin_ = 0.0;
   std::vector<Pair> pairs_;
-  // The pairs in runs (a few per thread, taken in turn by free threads): run r holds pairs_ [run_pairs_[r],
-  // run_pairs_[r + 1]) (the last also those added since the search), their lists, their hits.
+  // The pairs in runs (a few per thread, taken in turn by free threads): run r holds pairs_
+  // [run_pairs_[r], run_pairs_[r + 1]) (the last also those added since the search), their lists,
+  // their hits.
   std::vector<std::size_t> run_pairs_;
   std::vector<std::vector<std::uint32_t>> arenas_;
   std::vector<Hits> run_hits_;
-  std::vector<Scratch> scratch_; // per thread
+  std::vector<Scratch> scratch_;                         // per thread
   std::vector<std::uint8_t> block_;                      // per body: its block of bodies
   std::vector<std::vector<std::uint32_t>> block_loaded_; // per block of bodies: nodes it loaded
   std::vector<std::vector<std::uint32_t>> block_pushed_; // per block of bodies: nodes pushed_ holds

@@ -21,13 +21,13 @@ namespace mesopen::fem {
 // What the kinematics give a material for each element of a batch (all arrays of length n).
 struct StrainBatch {
   std::size_t n = 0;
-  double dt = 0.0;                  // step [s]
-  const double *dxx, *dyy, *dxy;    // rate of deformation D at mid-step [1/s] (D_zz = 0)
-  const double *spin;               // w = (dvy/dx - dvx/dy) / 2 at mid-step [1/s]
-  const double *jacobian;           // J = V / V0 at the end of the step (or its nodal average)
-  const double *volume_change;      // V(n+1) - V(n) of the element [m^2]
-  const double *volume_mid;         // V at mid-step [m^2]
-  const double *volume0;            // initial V [m^2]
+  double dt = 0.0;               // step [s]
+  const double *dxx, *dyy, *dxy; // rate of deformation D at mid-step [1/s] (D_zz = 0)
+  const double *spin;            // w = (dvy/dx - dvx/dy) / 2 at mid-step [1/s]
+  const double *jacobian;        // J = V / V0 at the end of the step (or its nodal average)
+  const double *volume_change;   // V(n+1) - V(n) of the element [m^2]
+  const double *volume_mid;      // V at mid-step [m^2]
+  const double *volume0;         // initial V [m^2]
   // The deformation gradient F = dx/dX at n+1 and at n (xx, xy, yx, yy), for the materials that
   // ask for it (Material::usesDeformationGradient; null otherwise).
   std::array<const double *, 4> f{}, f_old{};
@@ -35,16 +35,16 @@ struct StrainBatch {
 
 // Element state the material updates in place (pointers to the first element of the batch).
 struct StressState {
-  double *sxx, *syy, *sxy;          // deviatoric stress [Pa]
-  double *pressure;                 // p, compression positive [Pa]
-  double *energy;                   // internal energy per element [J/m]
-  double *plastic_strain;           // equivalent plastic strain
+  double *sxx, *syy, *sxy; // deviatoric stress [Pa]
+  double *pressure;        // p, compression positive [Pa]
+  double *energy;          // internal energy per element [J/m]
+  double *plastic_strain;  // equivalent plastic strain
 };
 
 struct MaterialOutput {
-  double *sound_speed;              // current sound speed sqrt((K_s + 4G/3) / rho) [m/s]
-  double *shear_share;              // G / (K_s + 4G/3), in [0, 3/4] (for the stable step)
-  double plastic_work = 0.0;        // plastic work of this batch over the step [J/m]
+  double *sound_speed;       // current sound speed sqrt((K_s + 4G/3) / rho) [m/s]
+  double *shear_share;       // G / (K_s + 4G/3), in [0, 3/4] (for the stable step)
+  double plastic_work = 0.0; // plastic work of this batch over the step [J/m]
 };
 
 class Material;
@@ -55,8 +55,8 @@ class Material {
 public:
   virtual ~Material() = default;
   const std::string &type() const { return type_; } // the registry's name for it
-  virtual double density() const = 0;       // rho0 [kg/m^3]
-  virtual bool plastic() const = 0;         // true when a strength model (plastic flow) is on
+  virtual double density() const = 0;               // rho0 [kg/m^3]
+  virtual bool plastic() const = 0; // true when a strength model (plastic flow) is on
   virtual void update(const StrainBatch &in, StressState &state, MaterialOutput &out) const = 0;
   // True for a deviator in total form, from F (StrainBatch::f): the materials without strength.
   virtual bool usesDeformationGradient() const { return false; }
@@ -82,14 +82,14 @@ using Parameters = std::map<std::string, double>;
 
 struct MaterialType {
   std::string name, doc;
-  std::vector<ParameterInfo> parameters;            // defaults: the thesis's values
+  std::vector<ParameterInfo> parameters;                 // defaults: the thesis's values
   std::unique_ptr<Material> (*make)(const Parameters &); // complete, checked parameters
 };
 
 // A named parameter set of a type (thesis Tables 3.2, 3.3 and their elastic variants).
 struct MaterialPreset {
   std::string name, type, doc;
-  Parameters values;                                // overrides of the type's defaults
+  Parameters values; // overrides of the type's defaults
 };
 
 const std::vector<MaterialType> &materialTypes();

@@ -2,8 +2,8 @@
 //   K phi = omega^2 M phi,
 // K the constant-strain-triangle stiffness (plane strain or plane stress, 1 m thick), M the lumped
 // mass (a third of each element's mass at each of its nodes, as in the explicit solver). omega is
-// an angular frequency [rad/s]; f = omega / 2 pi [Hz] (MODELS.md, "Modal analysis": the thesis
-// prints omega under the label Hz).
+// an angular frequency [rad/s]; f = omega / 2 pi [Hz] (the thesis prints omega under the label
+// Hz).
 //
 // The solver: with the diagonal M, the problem is the standard symmetric one
 //   A y = lambda y,  A = M^-1/2 K M^-1/2,  y = M^1/2 phi,  lambda = omega^2,

@@ -1,6 +1,6 @@
 // The finite-element model: nodes and 3-node triangles in struct-of-arrays form, grouped in
 // bodies (the projectile, every meshed grain). 2D plane strain, 1 m thick: areas are volumes per
-// metre, masses kg/m, forces N/m, energies J/m (MODELS.md, "plane-strain convention").
+// metre, masses kg/m, forces N/m, energies J/m (plane strain).
 #pragma once
 
 #include "material.hpp"
@@ -13,12 +13,12 @@
 namespace mesopen::fem {
 
 struct Nodes {
-  std::vector<double> x, y;       // current position [m]
-  std::vector<double> x0, y0;     // initial position [m]
-  std::vector<double> vx, vy;     // velocity [m/s]
-  std::vector<double> fx, fy;     // total force of this step: internal + external [N/m]
-  std::vector<double> mass;       // lumped mass [kg/m]
-  std::vector<double> area0;      // a third of the initial area of each element at the node [m^2]
+  std::vector<double> x, y;   // current position [m]
+  std::vector<double> x0, y0; // initial position [m]
+  std::vector<double> vx, vy; // velocity [m/s]
+  std::vector<double> fx, fy; // total force of this step: internal + external [N/m]
+  std::vector<double> mass;   // lumped mass [kg/m]
+  std::vector<double> area0;  // a third of the initial area of each element at the node [m^2]
   std::vector<std::uint32_t> body;
   // 1: every element of the node has eroded; it goes on as a free mass, out of contact (see
   // erodeElements).
@@ -59,21 +59,21 @@ struct Nodes {
 // Element state: deviatoric stress S (S_zz = -S_xx - S_yy), pressure p (compression positive),
 // internal energy E = m e per element [J/m], equivalent plastic strain.
 struct Elements {
-  std::vector<std::uint32_t> node;   // 3 per element, counter-clockwise
-  std::vector<double> area0;         // initial area [m^2] (the mass is rho0 A0)
-  std::vector<double> area;          // current area [m^2]
+  std::vector<std::uint32_t> node; // 3 per element, counter-clockwise
+  std::vector<double> area0;       // initial area [m^2] (the mass is rho0 A0)
+  std::vector<double> area;        // current area [m^2]
   std::vector<double> sxx, syy, sxy, pressure, energy, plastic_strain;
-  std::vector<double> viscosity;     // artificial viscous pressure q of the last step [Pa]
+  std::vector<double> viscosity; // artificial viscous pressure q of the last step [Pa]
   std::vector<std::uint32_t> body;
-  std::vector<std::uint8_t> eroded;  // 1: removed from the model (see erodeElements)
+  std::vector<std::uint8_t> eroded; // 1: removed from the model (see erodeElements)
   std::size_t size() const { return area0.size(); }
 };
 
 struct Body {
   std::string name;
   std::size_t node_begin = 0, node_end = 0, element_begin = 0, element_end = 0;
-  int material = 0;           // index into Model::materials
-  std::size_t eroded = 0;     // its elements removed by erosion
+  int material = 0;                    // index into Model::materials
+  std::size_t eroded = 0;              // its elements removed by erosion
   std::vector<std::uint32_t> boundary; // boundary edges (node pairs, counter-clockwise)
 };
 
@@ -113,9 +113,10 @@ Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> ma
 
 // Erosion: the elements removed from the model, as when a material fails (EPIC's eroding
 // elements, Johnson & Stryk 1987). Their nodes keep their mass and momentum; a node left without
-// elements goes on as a free mass (Nodes::detached) that nothing else touches. The bodies' boundaries are found anew (the
-// edges of one remaining element), and the nodal reference areas lose the elements' thirds.
-// Returns the internal energy the elements held [J/m], which leaves with them.
+// elements goes on as a free mass (Nodes::detached) that nothing else touches. The bodies'
+// boundaries are found anew (the edges of one remaining element), and the nodal reference areas
+// lose the elements' thirds. Returns the internal energy the elements held [J/m], which leaves with
+// them.
 double erodeElements(Model &model, const std::vector<std::uint32_t> &elements);
 
 // Initial velocity of a body: translation (vx, vy) plus rotation `spin` [rad/s] about its centre

@@ -13,10 +13,10 @@ namespace mesopen::fem {
 
 namespace {
 double sq(double x) { return x * x; }
-constexpr std::size_t max_chunk = 256;   // elements per material batch (scratch on the stack)
-constexpr std::size_t node_block = 4096; // nodes per block of the node loops
+constexpr std::size_t max_chunk = 256;    // elements per material batch (scratch on the stack)
+constexpr std::size_t node_block = 4096;  // nodes per block of the node loops
 constexpr std::size_t unit_target = 4096; // elements per work unit of the element pass
-constexpr double refine_margin = 1.05; // refine the steps below this times the last shortest
+constexpr double refine_margin = 1.05;    // refine the steps below this times the last shortest
 
 // Whether an element of a material that erodes (erosion strain `erosion`, infinite when it does
 // not) has failed: at its erosion strain, or crushed to a fifth of its area (a grain corner driven
@@ -53,9 +53,11 @@ void appendInPieces(std::vector<R> &ranges, std::size_t first, R piece, std::siz
 // is slow, and the trigonometric form is taken.
 double largestCubicRoot(double c) {
   const double s = std::sqrt(std::max(0.5 * (1.0 + c), 0.0));
-  double y = 1.00000087 +
-             s * (1.15465022 + s * (-0.22151017 + s * (0.102632071 + s * (-0.0523143943 +
-                                                   s * (0.0206477273 + s * -0.00410657997)))));
+  double y =
+      1.00000087 +
+      s * (1.15465022 +
+           s * (-0.22151017 +
+                s * (0.102632071 + s * (-0.0523143943 + s * (0.0206477273 + s * -0.00410657997)))));
   for (int k = 0; k < 3; ++k) {
     const double step = (y * (y * y - 3.0) - 2.0 * c) / (3.0 * (y * y - 1.0));
     y -= step;
@@ -101,9 +103,9 @@ double criticalStepGain(const double gx[3], const double gy[3], double area, dou
   double P = 0.0, Q = 0.0, R = 0.0;
   for (int k = 0; k < 3; ++k)
     P += sq(gx[k] * inv), Q += sq(gy[k] * inv), R += gx[k] * gy[k] * inv * inv;
-  const double largest = g >= 0.0 && g <= 0.75
-                             ? shapeStiffness(P, Q, R, g)
-                             : std::max(shapeStiffness(P, Q, R, 0.0), shapeStiffness(P, Q, R, 0.75));
+  const double largest =
+      g >= 0.0 && g <= 0.75 ? shapeStiffness(P, Q, R, g)
+                            : std::max(shapeStiffness(P, Q, R, 0.0), shapeStiffness(P, Q, R, 0.75));
   return (2.0 / ls) / std::sqrt(3.0 * largest);
 }
 
@@ -143,13 +145,15 @@ void gatherNodeStates(const NodeState *state, std::size_t base, const std::uint3
 void elementMean(const double *value, std::size_t base, const std::uint32_t *conn, std::size_t n,
                  double *mean) {
   auto sum = [&](std::size_t i) {
-    return value[conn[3 * i] - base] + value[conn[3 * i + 1] - base] + value[conn[3 * i + 2] - base];
+    return value[conn[3 * i] - base] + value[conn[3 * i + 1] - base] +
+           value[conn[3 * i + 2] - base];
   };
   std::size_t i = 0;
 #ifdef __AVX__
   for (; i + 4 <= n; i += 4)
-    _mm256_store_pd(mean + i, _mm256_mul_pd(_mm256_setr_pd(sum(i), sum(i + 1), sum(i + 2), sum(i + 3)),
-                                            _mm256_set1_pd(1.0 / 3.0)));
+    _mm256_store_pd(mean + i,
+                    _mm256_mul_pd(_mm256_setr_pd(sum(i), sum(i + 1), sum(i + 2), sum(i + 3)),
+                                  _mm256_set1_pd(1.0 / 3.0)));
 #endif
   for (; i < n; ++i)
     mean[i] = sum(i) * (1.0 / 3.0);
@@ -207,16 +211,16 @@ void Solver::addForceProvider(ForceProvider *provider) {
 void Solver::step() {
   const double dt = dt_;
   kick_work_ = provider_work_ = friction_work_ = 0.0;
-  kickAndDrift(dt);         // v(n+1/2) = v(n) + dt/2 f(n) / m, the imposed velocities;
-                            // x(n+1) = x(n) + dt v(n+1/2)
+  kickAndDrift(dt); // v(n+1/2) = v(n) + dt/2 f(n) / m, the imposed velocities;
+                    // x(n+1) = x(n) + dt v(n+1/2)
   m_.nodes.clearExternal();
   for (auto *provider : providers_) // external forces at x(n+1): contact, coupling
     provider->addForces(m_, time_ + dt, dt);
-  updateActivity();         // bodies the providers woke take part
-  forces(dt, true);         // stresses at n+1, f(n+1), the next stable step, and unit by unit
-                            // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
+  updateActivity(); // bodies the providers woke take part
+  forces(dt, true); // stresses at n+1, f(n+1), the next stable step, and unit by unit
+                    // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
   applyConstraints(0.5 * dt, true); // the imposed velocities at n+1
-  scaleMasses(0.5 * dt);    // mass for the elements whose step fell below scale_below_
+  scaleMasses(0.5 * dt);            // mass for the elements whose step fell below scale_below_
   time_ += dt;
   ++steps_;
   if (steps_ == 1)
@@ -239,7 +243,7 @@ void Solver::step() {
     throw RunFailure(msg.str());
   }
   accountEnergy();
-  erode();                  // elements that failed in this step leave the model
+  erode(); // elements that failed in this step leave the model
 }
 
 // Work ranges over the bodies that move: element chunks of one material, node blocks.
@@ -287,8 +291,9 @@ void Solver::updateActivity() {
         while (end < body.element_end && !m_.elements.eroded[end])
           ++end;
       }
-      appendInPieces(chunks_, unit.chunk_begin, Chunk{{e, end}, material, averaged}, s_.chunk,
-                     [&](const Chunk &c) { return c.material == material && c.averaged_volume == averaged; });
+      appendInPieces(
+          chunks_, unit.chunk_begin, Chunk{{e, end}, material, averaged}, s_.chunk,
+          [&](const Chunk &c) { return c.material == material && c.averaged_volume == averaged; });
       unit_elements += end - e;
       e = end;
     }
@@ -390,7 +395,8 @@ void Solver::kickAndDrift(double dt) {
 // constraint: corrected.
 void Solver::applyConstraints(double half_dt, bool second_half) {
   Nodes &nd = m_.nodes;
-  // After the first half the node has drifted with v: by 2 half_dt (target - v) more with the target.
+  // After the first half the node has drifted with v: by 2 half_dt (target - v) more with the
+  // target.
   auto impose = [&](std::uint32_t a, double &v, double &position, double target, double f,
                     double f_ext, double f_friction, double gravity) {
     const double before = v - half_dt * f * inv_mass_[a];
@@ -400,8 +406,8 @@ void Solver::applyConstraints(double half_dt, bool second_half) {
     friction_work_ += f_friction * shift;
     kick_work_ += nd.mass[a] * gravity * shift;
     if (second_half)
-      energy_.kinetic += 0.5 * nd.mass[a] *
-                  (target * target - sq(target - before) - v * v + sq(v - before));
+      energy_.kinetic +=
+          0.5 * nd.mass[a] * (target * target - sq(target - before) - v * v + sq(v - before));
     else
       position += 2.0 * half_dt * (target - v);
     v = target;
@@ -411,9 +417,11 @@ void Solver::applyConstraints(double half_dt, bool second_half) {
       if (m_.at_rest[nd.body[a]])
         continue;
       if (c.constrain_x)
-        impose(a, nd.vx[a], nd.x[a], c.vx, nd.fx[a], nd.external[a].fx, nd.external[a].friction_x, s_.gravity_x);
+        impose(a, nd.vx[a], nd.x[a], c.vx, nd.fx[a], nd.external[a].fx, nd.external[a].friction_x,
+               s_.gravity_x);
       if (c.constrain_y)
-        impose(a, nd.vy[a], nd.y[a], c.vy, nd.fy[a], nd.external[a].fy, nd.external[a].friction_y, s_.gravity_y);
+        impose(a, nd.vy[a], nd.y[a], c.vy, nd.fy[a], nd.external[a].fy, nd.external[a].friction_y,
+               s_.gravity_y);
     }
 }
 
@@ -442,7 +450,8 @@ void Solver::forces(double dt, bool kick) {
       for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
         for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
           state[a - base] = {nd.x[a], nd.y[a], nd.vx[a], nd.vy[a]};
-          force[a - base] = gravity ? NodeForce{nd.mass[a] * gx, nd.mass[a] * gy} : NodeForce{0.0, 0.0};
+          force[a - base] =
+              gravity ? NodeForce{nd.mass[a] * gx, nd.mass[a] * gy} : NodeForce{0.0, 0.0};
         }
       const UnitNodes nodes{state.data(), force.data(), jacobian.data(), base};
       if (unit.averaged_volume)
@@ -473,7 +482,8 @@ void Solver::forces(double dt, bool kick) {
       for (const KickSums &k : kick_sums_)
         own.gravity += k.gravity, own.kinetic += k.kinetic, own.provider += k.provider,
             own.friction += k.friction;
-      const std::vector<double> all = sumOver({own.gravity, own.kinetic, own.provider, own.friction});
+      const std::vector<double> all =
+          sumOver({own.gravity, own.kinetic, own.provider, own.friction});
       kick_sums_.assign(1, KickSums{all[0], all[1], all[2], all[3]});
     }
     addKickSums(kick_sums_, 0.5 * dt);
@@ -484,7 +494,8 @@ void Solver::forces(double dt, bool kick) {
     inverted = static_cast<double>(sums_[i].inverted);
     dt_min = std::min(dt_min, sums_[i].dt_min);
   }
-  double inverted_area = inverted >= 0.0 ? m_.elements.area[static_cast<std::size_t>(inverted)] : 0.0;
+  double inverted_area =
+      inverted >= 0.0 ? m_.elements.area[static_cast<std::size_t>(inverted)] : 0.0;
   if (s_.sharing) { // the shortest step of all, the first inverted element of any
     const std::vector<double> all = s_.sharing->allGather({dt_min, inverted, inverted_area});
     inverted = -1.0;
@@ -524,8 +535,8 @@ std::vector<double> Solver::sumOver(std::vector<double> mine) const {
 // erosion need of them.
 std::array<std::vector<double> *, 8> Solver::elementState() const {
   Elements &el = m_.elements;
-  return {&el.area, &el.sxx, &el.syy, &el.sxy, &el.pressure, &el.energy, &el.plastic_strain,
-          &el.viscosity};
+  return {&el.area,           &el.sxx,      &el.syy, &el.sxy, &el.pressure, &el.energy,
+          &el.plastic_strain, &el.viscosity};
 }
 
 // `fields` over each active body's range [begin, end) (its nodes or its elements), copied from
@@ -575,7 +586,8 @@ std::string Solver::thinnestElement() const {
       const std::uint32_t *v = &el.node[3 * e];
       double edge = 0.0;
       for (int k = 0; k < 3; ++k)
-        edge = std::max(edge, std::hypot(nd.x[v[(k + 1) % 3]] - nd.x[v[k]], nd.y[v[(k + 1) % 3]] - nd.y[v[k]]));
+        edge = std::max(
+            edge, std::hypot(nd.x[v[(k + 1) % 3]] - nd.x[v[k]], nd.y[v[(k + 1) % 3]] - nd.y[v[k]]));
       if (2.0 * el.area[e] / edge < altitude)
         thinnest = e, altitude = 2.0 * el.area[e] / edge, longest = edge;
     }
@@ -583,8 +595,9 @@ std::string Solver::thinnestElement() const {
   std::ostringstream msg;
   msg << "element " << thinnest << " of body " << body.name << " (material "
       << m_.materials[body.material]->type() << "), altitude " << altitude << " m, longest edge "
-      << longest << " m, area " << el.area[thinnest] / el.area0[thinnest] << " of the initial, plastic strain "
-      << el.plastic_strain[thinnest] << ", pressure " << el.pressure[thinnest] << " Pa";
+      << longest << " m, area " << el.area[thinnest] / el.area0[thinnest]
+      << " of the initial, plastic strain " << el.plastic_strain[thinnest] << ", pressure "
+      << el.pressure[thinnest] << " Pa";
   return msg.str();
 }
 
@@ -604,9 +617,11 @@ void Solver::nodalVolumes(const Unit &unit, const UnitNodes &nodes) {
     if (!chunks_[i].averaged_volume)
       continue;
     for (std::size_t e = chunks_[i].begin; e < chunks_[i].end; ++e) {
-      const std::size_t a = conn[3 * e] - base, b = conn[3 * e + 1] - base, c = conn[3 * e + 2] - base;
+      const std::size_t a = conn[3 * e] - base, b = conn[3 * e + 1] - base,
+                        c = conn[3 * e + 2] - base;
       const NodeState &sa = state[a], &sb = state[b], &sc = state[c];
-      const double third = (1.0 / 6.0) * ((sb.x - sa.x) * (sc.y - sa.y) - (sc.x - sa.x) * (sb.y - sa.y));
+      const double third =
+          (1.0 / 6.0) * ((sb.x - sa.x) * (sc.y - sa.y) - (sc.x - sa.x) * (sb.y - sa.y));
       jacobian[a] += third, jacobian[b] += third, jacobian[c] += third;
     }
   }
@@ -618,7 +633,8 @@ void Solver::nodalVolumes(const Unit &unit, const UnitNodes &nodes) {
 // Kinematics, material update, artificial viscosity and nodal forces of one batch of elements.
 void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums) {
   alignas(64) double dxx[max_chunk], dyy[max_chunk], dxy[max_chunk], spin[max_chunk];
-  alignas(64) double jac[max_chunk], dvol[max_chunk], vmid[max_chunk], len[max_chunk], cs[max_chunk];
+  alignas(64) double jac[max_chunk], dvol[max_chunk], vmid[max_chunk], len[max_chunk],
+      cs[max_chunk];
   alignas(64) double gx[3][max_chunk], gy[3][max_chunk]; // 2A dN_k/dx, 2A dN_k/dy at n+1
   Elements &el = m_.elements;
   const std::size_t n = chunk.end - chunk.begin, e0 = chunk.begin;
@@ -709,14 +725,15 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   if (total_form)
     in.f = {f_new[0], f_new[1], f_new[2], f_new[3]},
     in.f_old = {f_old[0], f_old[1], f_old[2], f_old[3]};
-  StressState state{el.sxx.data() + e0,     el.syy.data() + e0,    el.sxy.data() + e0,
+  StressState state{el.sxx.data() + e0,      el.syy.data() + e0,    el.sxy.data() + e0,
                     el.pressure.data() + e0, el.energy.data() + e0, el.plastic_strain.data() + e0};
   alignas(64) double shear_share[max_chunk];
   MaterialOutput out{cs, shear_share};
   chunk.material->update(in, state, out);
   // Elements that failed (hasFailed, or a step below erode_below_) leave the model after this step
   // (erode): their step does not count.
-  const double erosion = chunk.material->erosionStrain() > 0.0 ? chunk.material->erosionStrain() : HUGE_VAL;
+  const double erosion =
+      chunk.material->erosionStrain() > 0.0 ? chunk.material->erosionStrain() : HUGE_VAL;
   const double *plastic_strain = state.plastic_strain;
   long failing = 0;
 
@@ -773,7 +790,8 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
     dt_min = HUGE_VAL;
     for (std::size_t i = 0; i < n; ++i) {
       if (step[i] < refine_below) {
-        const double g_x[3] = {gx[0][i], gx[1][i], gx[2][i]}, g_y[3] = {gy[0][i], gy[1][i], gy[2][i]};
+        const double g_x[3] = {gx[0][i], gx[1][i], gx[2][i]},
+                     g_y[3] = {gy[0][i], gy[1][i], gy[2][i]};
         step[i] *= criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i], shear_share[i]);
       }
       dt_min = std::min(dt_min, step[i]);
@@ -868,7 +886,7 @@ void Solver::erode() {
   energy_.eroded += energy;
   eroded_elements_ += failed.size();
   energy_.internal -= energy; // this step's pass summed theirs
-  at_rest_seen_.clear(); // the chunks are laid out anew
+  at_rest_seen_.clear();      // the chunks are laid out anew
   std::vector<std::uint32_t> bodies;
   for (std::uint32_t e : failed)
     bodies.push_back(el.body[e]);
@@ -957,9 +975,10 @@ void Solver::accountEnergy() {
   energy_.friction -= friction_work_;
   energy_.contact -= provider_work_ - friction_work_;
   energy_.external += kick_work_;
-  const double total = energy_.kinetic + internal + energy_.friction + energy_.contact + energy_.eroded +
-                       energy_.mass_scaling;
-  const double scale = std::max({std::abs(total), std::abs(energy_.initial), std::abs(energy_.external)});
+  const double total = energy_.kinetic + internal + energy_.friction + energy_.contact +
+                       energy_.eroded + energy_.mass_scaling;
+  const double scale =
+      std::max({std::abs(total), std::abs(energy_.initial), std::abs(energy_.external)});
   energy_.balance_error = scale > 0.0 ? (total - energy_.initial - energy_.external) / scale : 0.0;
 }
 

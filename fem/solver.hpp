@@ -38,7 +38,7 @@ struct SolverSettings {
   double viscosity_quadratic = 4.0; // C_Q (thesis Table 3.1)
   bool anti_locking = true;         // averaged nodal volume in bodies with plastic flow
   double max_dt = std::numeric_limits<double>::infinity();
-  // The step may grow by at most this factor from one step to the next (it falls at once). A
+  // The step may grow by at most this factor at a rise (it falls at once; dt_rise_interval). A
   // penalty tied to the step (contact, k ~ m / dt^2) otherwise changes its stiffness tenfold
   // between steps when a crushed element makes the stable step oscillate, and puts energy in.
   double max_dt_growth = 1.1;
@@ -57,8 +57,8 @@ struct SolverSettings {
   // (the kinetic energy this takes is booked, Energy::mass_scaling). 0: never.
   double mass_scaling_dt_ratio = 0.0;
   double gravity_x = 0.0, gravity_y = 0.0; // body force per unit mass [m/s^2]
-  std::size_t chunk = 256;          // elements per material batch
-  const Sharing *sharing = nullptr; // the element work shared by processes (null: one)
+  std::size_t chunk = 256;                 // elements per material batch
+  const Sharing *sharing = nullptr;        // the element work shared by processes (null: one)
 };
 
 // Energies per metre of depth [J/m]. Internal includes the plastic and viscous work done.
@@ -77,7 +77,8 @@ struct Energy {
 };
 
 // Something that adds external nodal forces at x(n+1) before the second half-kick (contact,
-// coupling) by Nodes::addExternal, with their frictional part. It must wake every body it loads. `dt` is the step being taken.
+// coupling) by Nodes::addExternal, with their frictional part. It must wake every body it loads.
+// `dt` is the step being taken.
 class ForceProvider {
 public:
   virtual ~ForceProvider() = default;
@@ -107,7 +108,7 @@ public:
 
   double time() const { return time_; }
   std::size_t steps() const { return steps_; }
-  double dt() const { return dt_; }              // the step the next step() takes
+  double dt() const { return dt_; } // the step the next step() takes
   const Energy &energy() const { return energy_; }
   void addForceProvider(ForceProvider *provider);
   // Elements updated in the last step (bodies at rest and eroded elements are skipped).
@@ -204,18 +205,19 @@ private:
   std::vector<std::size_t> thread_units_, thread_blocks_;
   std::vector<KickSums> kick_sums_; // per node block (first half-kick) or unit (second)
   std::vector<double> inv_mass_;
-  std::vector<std::uint8_t> at_rest_seen_; // Model::at_rest when the work ranges were laid out
+  std::vector<std::uint8_t> at_rest_seen_;   // Model::at_rest when the work ranges were laid out
   std::vector<std::uint32_t> active_bodies_; // every process's, in order
   std::size_t active_elements_ = 0, eroded_elements_ = 0, collapsed_elements_ = 0;
   double time_ = 0.0, dt_ = 0.0, next_dt_ = 0.0;
   double step_scale_ = 1.0; // sqrt(1 - kappa_n / 4) for the providers' stiffness kappa_n
   double shortest_allowed_ = std::numeric_limits<double>::infinity(); // since the last rise
-  double first_dt_ = 0.0;   // the first step (after the providers' scaling)
+  double first_dt_ = 0.0;    // the first step (after the providers' scaling)
   double erode_below_ = 0.0; // erode_dt_ratio times the shortest element step at the start
   double scale_below_ = 0.0; // mass_scaling_dt_ratio times it
   std::unordered_map<std::uint32_t, double> added_mass_; // by element, what mass scaling added
-  std::vector<std::uint8_t> constrained_; // by node: 1 x imposed, 2 y imposed
-  std::vector<std::uint8_t> failed_; // per element: failed in this step's pass, 2 for a collapsed step
+  std::vector<std::uint8_t> constrained_;                // by node: 1 x imposed, 2 y imposed
+  std::vector<std::uint8_t>
+      failed_; // per element: failed in this step's pass, 2 for a collapsed step
   // The shortest element step of the last element pass, before the safety factor and the
   // providers' scaling (elementPass refines the steps near it)
   double shortest_step_ = std::numeric_limits<double>::infinity();

@@ -40,7 +40,7 @@ double segmentY(double x0, double y0, double x1, double y1, double x) {
 
 } // namespace
 
-// Eq. 3.2 (MODELS.md): y(s) = sqrt(rho^2 - (s - L_n)^2) + d/2 - rho on the nose, d/2 on the
+// Eq. 3.2: y(s) = sqrt(rho^2 - (s - L_n)^2) + d/2 - rho on the nose, d/2 on the
 // shank, 0 outside the body.
 double ProjectileShape::halfWidth(double s) const {
   if (s < 0.0 || s > length)
@@ -160,7 +160,7 @@ void projectileOutline(const ProjectileShape &shape, double edge, std::vector<do
   }
 }
 
-// Area of the blunted profile (MODELS.md geometry): facet triangle y_f (s_f - s_t), the nose
+// Area of the blunted profile (the geometry above): facet triangle y_f (s_f - s_t), the nose
 // 2 int_{s_f}^{L_n} y ds with u = s - L_n and F(u) = (u sqrt(rho^2-u^2) + rho^2 asin(u/rho))/2
 // the antiderivative of sqrt(rho^2-u^2), and the shank rectangle d (L - L_n).
 double exactArea(const ProjectileShape &s) {

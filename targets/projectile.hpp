@@ -1,4 +1,4 @@
-// The projectile's geometry (thesis sections 3.2, 4.3; MODELS.md): a tangent ogive of
+// The projectile's geometry (thesis sections 3.2, 4.3): a tangent ogive of
 // caliber-radius-head psi = rho / d on a cylindrical shank, its sharp tip cut by two flat
 // facets at half-angle theta to the axis. Body frame: the sharp tip at the origin, the axis
 // along +y (the body extends upward; in a target the nose points down).
@@ -20,7 +20,7 @@ inline constexpr Named<ProjectileKind> projectile_kind_names[] = {{"ogive", Proj
 struct ProjectileSpec {
   bool enabled = true;
   ProjectileKind shape = ProjectileKind::ogive; // a plate is `length` thick and the box's width
-  double length = 1.7e-3;          // sharp-ogive length L, tip to base [m]
+  double length = 1.7e-3;                       // sharp-ogive length L, tip to base [m]
   double length_over_diameter = 3.85;
   double crh = 3.5;                // psi = ogive radius / diameter
   double tip_half_angle = 60.0;    // facet half-angle to the axis [deg]
@@ -30,14 +30,14 @@ struct ProjectileSpec {
 };
 
 // Derived dimensions. The half-width at distance s from the sharp tip is
-// y(s) = sqrt(rho^2 - (s - L_n)^2) + d/2 - rho for s <= L_n, d/2 on the shank (MODELS.md).
+// y(s) = sqrt(rho^2 - (s - L_n)^2) + d/2 - rho for s <= L_n, d/2 on the shank.
 struct ProjectileShape {
-  double diameter;      // d = L / (l/d)
-  double ogive_radius;  // rho = psi d
-  double nose_length;   // L_n = d sqrt(psi - 1/4)
-  double length;        // L (sharp)
-  double tip_cut;       // s_t: where the facets meet the axis (the blunted tip), from the sharp tip
-  double facet_end;     // s_f: where the facets meet the ogive
+  double diameter;     // d = L / (l/d)
+  double ogive_radius; // rho = psi d
+  double nose_length;  // L_n = d sqrt(psi - 1/4)
+  double length;       // L (sharp)
+  double tip_cut;      // s_t: where the facets meet the axis (the blunted tip), from the sharp tip
+  double facet_end;    // s_f: where the facets meet the ogive
   double halfWidth(double s) const; // y(s) of the sharp ogive and shank
 };
 

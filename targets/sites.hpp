@@ -11,12 +11,12 @@
 namespace mesopen {
 
 struct PlacementReport {
-  std::vector<double> energy;   // overlap energy before each iteration (Eq. 4.1 summed)
+  std::vector<double> energy; // overlap energy before each iteration (Eq. 4.1 summed)
   int iterations = 0;
   bool converged = false;
 };
 
-// Number of grains N = A(1 - phi) / (pi dbar^2 / 4) (thesis 4.2.1; MODELS.md).
+// Number of grains N = A(1 - phi) / (pi dbar^2 / 4) (thesis 4.2.1).
 std::size_t grainCount(const TargetSpec &spec);
 
 // Grain diameters: uniform in [d_min, d_max] by stratified quantiles in random order, so that

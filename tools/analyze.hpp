@@ -1,6 +1,6 @@
-// The projectile's measures of instability (thesis section 3.4; MODELS.md, "Measures of
-// instability") from the series of a run (run.h5, tools/run_output.hpp), and the dominant period
-// of an oscillation from its spectrum (thesis section 5.9, Table 5.3).
+// The projectile's measures of instability (thesis section 3.4) from the series of a run (run.h5,
+// tools/run_output.hpp), and the dominant period of an oscillation from its spectrum (thesis
+// section 5.9, Table 5.3).
 #pragma once
 
 #include <string>
@@ -30,8 +30,7 @@ RunSeries readRunSeries(const std::string &path);
 // Lateral impulse up to each sample, the trapezoidal rule
 //   I_n = 1/2 sum_{i<n} (F_i + F_{i+1}) (t_{i+1} - t_i),
 // whose last value is thesis Eq. 3.14 as printed, 1/2 sum_i F_i (t_{i+1} - t_{i-1}) (with
-// t_{-1} = t_0, t_{n+1} = t_n); MODELS.md reads it as the impulse and the average lateral force
-// as impulse / duration.
+// t_{-1} = t_0, t_{n+1} = t_n): the impulse, and the average lateral force is impulse / duration.
 std::vector<double> cumulativeImpulse(const std::vector<double> &time,
                                       const std::vector<double> &force);
 

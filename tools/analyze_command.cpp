@@ -6,7 +6,6 @@
 #include "commands.hpp"
 #include "output.hpp"
 
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -73,7 +72,7 @@ nlohmann::json instabilityJson(const std::string &dir, const RunSeries &s, const
   j["duration"] = duration;
   j["final_depth_over_length"] = m.scaled_depth[last];
   // Eq. 3.14 as printed is the lateral impulse; the average lateral force is impulse / duration
-  // (MODELS.md; what thesis Table 5.1 lists).
+  // (what thesis Table 5.1 lists).
   j["lateral_impulse"] = m.lateral_impulse[last];
   j["average_lateral_force"] = duration > 0 ? m.lateral_impulse[last] / duration : 0.0;
   j["max_abs_lateral_force"] = maxAbs(s.lateral_force);
@@ -198,12 +197,10 @@ int analyzeCommand(const AnalyzeOptions &options) {
       if (plotted)
         for (const char *f : plot_files)
           files.push_back(f);
-      writeJson(
-          out_dir + "/summary.json",
-          {{"command", "analyze"},
-           {"runs", runs},
-           {"files", files},
-           {"wall_seconds", secondsSince(start)}});
+      writeJson(out_dir + "/summary.json", {{"command", "analyze"},
+                                            {"runs", runs},
+                                            {"files", files},
+                                            {"wall_seconds", secondsSince(start)}});
     }
     std::cout << "mesopen analyze: instability.json in each run's directory"
               << (plotted ? ", plots (instability-*.png) in " + out_dir : std::string()) << "\n";

@@ -3,22 +3,22 @@
 #include "commands.hpp"
 #include "contact.hpp"
 #include "coupling.hpp"
+#include "generator.hpp"
 #include "liggghts_dem.hpp"
 #include "measures.hpp"
 #include "mesh.hpp"
-#include "writers.hpp"
-#include "generator.hpp"
 #include "output.hpp"
 #include "projectile.hpp"
 #include "run_output.hpp"
 #include "scene.hpp"
 #include "solver.hpp"
+#include "writers.hpp"
 
 #include <omp.h>
 
 #include <chrono>
-#include <csignal>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -67,8 +67,10 @@ Scene prepareRun(const RunOptions &options) {
   if (scene.run.grains && scene.run.representation != Representation::fe &&
       out.find_first_of(" \t\n\"'$#&") != std::string::npos)
     throw InputError(options.scene + ": run.representation = \"" +
-                     nameOf(scene.run.representation, representation_names) + "\" needs an output directory without spaces or any of \"'$#& (LIGGGHTS "
-                     "reads the disks from it); it is '" + out + "'");
+                     nameOf(scene.run.representation, representation_names) +
+                     "\" needs an output directory without spaces or any of \"'$#& (LIGGGHTS "
+                     "reads the disks from it); it is '" +
+                     out + "'");
   if (!scene.projectile.enabled)
     throw InputError(options.scene +
                      ": projectile.enabled = false; `mesopen run` needs the projectile");
@@ -113,7 +115,8 @@ void clearOutput(const Scene &scene, const std::string &dir) {
 // band around the projectile's path (hybrid): within band_half_width of its axis, from the surface
 // down to band_depth below its tip (by default the depth the run ends at, plus the half-width:
 // deeper grains carry the waves as disks do, and the projectile does not reach them).
-std::vector<char> meshedGrains(const Scene &scene, const Target &target, const PlacedProjectile &p) {
+std::vector<char> meshedGrains(const Scene &scene, const Target &target,
+                               const PlacedProjectile &p) {
   const std::size_t n = target.grains.size();
   switch (scene.run.representation) {
   case Representation::fe:
@@ -123,8 +126,8 @@ std::vector<char> meshedGrains(const Scene &scene, const Target &target, const P
   case Representation::hybrid:
     break;
   }
-  // By default one and a half projectile diameters: the narrowest band of those measured whose run 6
-  // stays within the fully meshed runs' seed-to-seed range on every measure (docs/coupling.md)
+  // By default one and a half projectile diameters: the narrowest band of those measured whose run
+  // 6 stays within the fully meshed runs' seed-to-seed range on every measure (docs/coupling.md)
   const double half =
       scene.run.band_half_width > 0.0 ? scene.run.band_half_width : 1.5 * p.shape.diameter;
   const double depth = scene.run.band_depth > 0.0 ? scene.run.band_depth
@@ -332,9 +335,9 @@ void catchStopSignals(bool on) {
 }
 
 struct LoopResult {
-  std::string failure; // empty when the run reached its end
+  std::string failure;      // empty when the run reached its end
   bool interrupted = false; // by a signal
-  std::string end;     // what ended it: end_time, end_depth or max_steps
+  std::string end;          // what ended it: end_time, end_depth or max_steps
   double element_steps = 0.0;
   double seconds = 0.0, solver_seconds = 0.0; // the whole loop; the steps alone
 };
@@ -367,8 +370,9 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
     for (bool last = ended(true); !last;) {
       if (stop_signal != 0) {
         result.interrupted = true;
-        result.failure = std::string("stopped by ") + (stop_signal == SIGINT ? "SIGINT" : "SIGTERM") +
-                         " at step " + std::to_string(solver.steps());
+        result.failure = std::string("stopped by ") +
+                         (stop_signal == SIGINT ? "SIGINT" : "SIGTERM") + " at step " +
+                         std::to_string(solver.steps());
         break;
       }
       const auto step_start = Clock::now();
@@ -450,22 +454,31 @@ nlohmann::json runSummary(const Scene &scene, const RunOptions &options, const f
   // Bodies at rest are skipped: the element-steps computed, against every element every step.
   j["element_steps"] = loop.element_steps;
   j["active_element_share"] =
-      loop.element_steps / std::max(1.0, static_cast<double>(model.elements.size()) * solver.steps());
+      loop.element_steps /
+      std::max(1.0, static_cast<double>(model.elements.size()) * solver.steps());
   j["ns_per_element_step"] = 1e9 * loop.solver_seconds / std::max(loop.element_steps, 1.0);
-  j["energy"] = {{"kinetic", e.kinetic},   {"internal", e.internal},   {"plastic", e.plastic},
-                 {"viscous", e.viscous},   {"friction", e.friction},   {"contact", e.contact},
-                 {"external", e.external}, {"eroded", e.eroded},       {"mass_scaling", e.mass_scaling},
-                 {"initial", e.initial},   {"balance_error", e.balance_error}};
+  j["energy"] = {{"kinetic", e.kinetic},
+                 {"internal", e.internal},
+                 {"plastic", e.plastic},
+                 {"viscous", e.viscous},
+                 {"friction", e.friction},
+                 {"contact", e.contact},
+                 {"external", e.external},
+                 {"eroded", e.eroded},
+                 {"mass_scaling", e.mass_scaling},
+                 {"initial", e.initial},
+                 {"balance_error", e.balance_error}};
   j["eroded_elements"] = solver.erodedElements();
   j["collapsed_elements"] = solver.collapsedElements(); // of those, eroded for a collapsed step
   if (scene.run.mass_scaling_step_ratio > 0.0) {
     double mass = 0.0;
     for (double m : model.nodes.mass)
       mass += m;
-    j["mass_scaling"] = {{"elements", solver.massScaledElements()},
-                         {"added_mass", solver.addedMass()},
-                         {"added_mass_share", solver.addedMass() / std::max(mass - solver.addedMass(), 1e-300)},
-                         {"projectile_added_mass", solver.addedMass(0)}};
+    j["mass_scaling"] = {
+        {"elements", solver.massScaledElements()},
+        {"added_mass", solver.addedMass()},
+        {"added_mass_share", solver.addedMass() / std::max(mass - solver.addedMass(), 1e-300)},
+        {"projectile_added_mass", solver.addedMass(0)}};
   }
   if (contact) {
     const fem::ContactStatistics &c = contact->statistics();
@@ -601,11 +614,10 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
     h5->attribute("/", "version", 1);
     h5->attribute("/", "status", runStatus(loop));
     h5->attribute("/", "seed", static_cast<std::uint64_t>(scene.target.seed));
-    for (auto [name, value] :
-         {std::pair{"velocity", run.velocity},
-          {"spin", run.spin},
-          {"end_time", run.end_time},
-          {"projectile_length", scene.projectile.length}})
+    for (auto [name, value] : {std::pair{"velocity", run.velocity},
+                               {"spin", run.spin},
+                               {"end_time", run.end_time},
+                               {"projectile_length", scene.projectile.length}})
       h5->attribute("/", name, value);
     h5->close();
   }

@@ -1,7 +1,7 @@
 // The deviator of the purely elastic materials ("elastic", "quartz" without strength), in total
-// form: a compressible neo-Hookean
-// solid (e.g. Bonet & Wood, Nonlinear Continuum Mechanics for FE Analysis, 2008, section 6.4.3),
-// in plane strain (F_zz = 1), with the stored energy per initial volume
+// form: a compressible neo-Hookean solid (e.g. Bonet & Wood, Nonlinear Continuum Mechanics for FE
+// Analysis, 2008, section 6.4.3), in plane strain (F_zz = 1), with the stored energy per initial
+// volume
 //   W = G(J) / 2 (tr b* - 3),   b* = J^(-2/3) F F^T,   J = det F,
 // and the Cauchy stress it derives, sigma = (1/J) dW/dF F^T:
 //   S = G(J) / J dev(b*),   and with a shear modulus that follows the volume, the mean stress

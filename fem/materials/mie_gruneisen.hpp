@@ -1,4 +1,4 @@
-// Mie-Grueneisen equation of state (thesis Eq. 3.5-3.7, MODELS.md):
+// Mie-Grueneisen equation of state (thesis Eq. 3.5-3.7):
 //   p = (K mu + K1 mu^2 + K2 mu^3)(1 - Gamma mu / 2) + Gamma rho0 e,   mu = rho / rho0 - 1,
 // with e the specific internal energy (rho0 e = E / V0 for an element of energy E and initial
 // volume V0), and the pressure cut-off p >= -K_c (K_c = 0: no tensile mean stress).

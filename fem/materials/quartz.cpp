@@ -3,7 +3,7 @@
 // (Eq. 3.10-3.11): G = G0 + G1 P + G2 P^2 with P = max(P-bar, 0) (the fit is for compression).
 // Strength: overstress (viscoplastic) relaxation toward the equilibrium surface (Eq. 3.12):
 //   S = S* [1 - (1 - |Se| / |S*|) min(dt / T_R, 1)]   when |S*| > |Se|,
-//   |Se| = sqrt(2/3) Y(p),  Y(p) = min(B + M p, Y1)   (bilinear; MODELS.md reads Y1 as the cap).
+//   |Se| = sqrt(2/3) Y(p),  Y(p) = min(B + M p, Y1)   (bilinear, Y1 its cap).
 // With dt >= T_R the update is a radial return. `strength = false`: elastic grains, whose deviator
 // is the neo-Hookean one of hyperelastic.hpp with G(J) = G(P-bar(mu)) and the pressure it adds,
 // p_G = -G'(J) / 2 (tr b* - 3): a closed path returns the work it took, however G changes on it.
@@ -22,8 +22,8 @@ namespace {
 class Quartz final : public Material {
 public:
   explicit Quartz(const Parameters &p)
-      : rho0_(p.at("density")),
-        eos_{p.at("bulk_modulus"), p.at("k1"), p.at("k2"), p.at("gruneisen"), p.at("pressure_cutoff")},
+      : rho0_(p.at("density")), eos_{p.at("bulk_modulus"), p.at("k1"), p.at("k2"),
+                                     p.at("gruneisen"), p.at("pressure_cutoff")},
         G0_(p.at("g0")), G1_(p.at("g1")), G2_(p.at("g2")), B_(p.at("cohesion")),
         M_(p.at("friction_slope")), Y1_(p.at("yield_cap")), T_(p.at("relaxation_time")),
         strength_(p.at("strength") != 0.0) {}
@@ -133,24 +133,26 @@ private:
 } // namespace
 
 MaterialType quartzMaterialType() {
-  return {"quartz",
-          "Mie-Grueneisen pressure, pressure-dependent shear modulus, overstress strength toward a "
-          "bilinear equilibrium yield surface; defaults: the quartz of thesis Table 3.3",
-          {{"density", "kg/m^3", "initial density rho0", 1.0, 1e5, 2648.5},
-           {"bulk_modulus", "Pa", "Mie-Grueneisen K", 1.0, 1e13, 43.19e9},
-           {"k1", "Pa", "Mie-Grueneisen K1 (mu^2 term)", 0.0, 1e14, 156.2e9},
-           {"k2", "Pa", "Mie-Grueneisen K2 (mu^3 term)", 0.0, 1e15, 48.6e9},
-           {"gruneisen", "", "Grueneisen Gamma", 0.0, 10.0, 0.675},
-           {"pressure_cutoff", "Pa", "K_c: the pressure stays >= -K_c", 0.0, 1e12, 0.0},
-           {"g0", "Pa", "shear modulus at zero pressure G0", 0.0, 1e13, 46.92e9},
-           {"g1", "", "dG/dP, G1", -100.0, 100.0, 1.873},
-           {"g2", "1/Pa", "G2, the P^2 term of G", -1e-6, 1e-6, 3.459e-10},
-           {"cohesion", "Pa", "B: equilibrium yield at zero pressure", 0.0, 1e12, 2.353e9},
-           {"friction_slope", "", "M: slope of the equilibrium yield in p", 0.0, 100.0, 0.667},
-           {"yield_cap", "Pa", "Y1: the equilibrium yield's upper bound", 0.0, 1e12, 4.4e9},
-           {"relaxation_time", "s", "T_R of the overstress relaxation", 1e-15, 1.0, 3.5e-9},
-           {"strength", "", "strength (overstress flow) on; false: elastic grains", 0.0, 1.0, 1.0, true}},
-          [](const Parameters &p) -> std::unique_ptr<Material> { return std::make_unique<Quartz>(p); }};
+  return {
+      "quartz",
+      "Mie-Grueneisen pressure, pressure-dependent shear modulus, overstress strength toward a "
+      "bilinear equilibrium yield surface; defaults: the quartz of thesis Table 3.3",
+      {{"density", "kg/m^3", "initial density rho0", 1.0, 1e5, 2648.5},
+       {"bulk_modulus", "Pa", "Mie-Grueneisen K", 1.0, 1e13, 43.19e9},
+       {"k1", "Pa", "Mie-Grueneisen K1 (mu^2 term)", 0.0, 1e14, 156.2e9},
+       {"k2", "Pa", "Mie-Grueneisen K2 (mu^3 term)", 0.0, 1e15, 48.6e9},
+       {"gruneisen", "", "Grueneisen Gamma", 0.0, 10.0, 0.675},
+       {"pressure_cutoff", "Pa", "K_c: the pressure stays >= -K_c", 0.0, 1e12, 0.0},
+       {"g0", "Pa", "shear modulus at zero pressure G0", 0.0, 1e13, 46.92e9},
+       {"g1", "", "dG/dP, G1", -100.0, 100.0, 1.873},
+       {"g2", "1/Pa", "G2, the P^2 term of G", -1e-6, 1e-6, 3.459e-10},
+       {"cohesion", "Pa", "B: equilibrium yield at zero pressure", 0.0, 1e12, 2.353e9},
+       {"friction_slope", "", "M: slope of the equilibrium yield in p", 0.0, 100.0, 0.667},
+       {"yield_cap", "Pa", "Y1: the equilibrium yield's upper bound", 0.0, 1e12, 4.4e9},
+       {"relaxation_time", "s", "T_R of the overstress relaxation", 1e-15, 1.0, 3.5e-9},
+       {"strength", "", "strength (overstress flow) on; false: elastic grains", 0.0, 1.0, 1.0,
+        true}},
+      [](const Parameters &p) -> std::unique_ptr<Material> { return std::make_unique<Quartz>(p); }};
 }
 
 } // namespace mesopen::fem

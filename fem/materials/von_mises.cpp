@@ -3,8 +3,7 @@
 // return (Simo & Hughes 1998, Box 3.2): with the trial deviator S*,
 //   f = |S*| - sqrt(2/3) Y,  dgamma = f / (2G + 2M/3),  S = S* (1 - 2G dgamma / |S*|),
 //   eps_p += sqrt(2/3) dgamma.
-// `plastic = false` turns the strength off: the elastic projectile of the thesis; no yield code
-// runs.
+// `plastic = false` turns the strength off: the elastic projectile of the thesis; no yield code runs.
 #include "../material.hpp"
 #include "hypoelastic.hpp"
 #include "mie_gruneisen.hpp"
@@ -32,8 +31,7 @@ public:
   }
 
 private:
-  template <bool Plastic>
-  void run(const StrainBatch &in, StressState &s, MaterialOutput &out) const {
+  template <bool Plastic> void run(const StrainBatch &in, StressState &s, MaterialOutput &out) const {
     const double dt = in.dt, two_g_dt = 2.0 * G_ * dt, sqrt23 = std::sqrt(2.0 / 3.0);
     const double p_min = -eos_.cutoff;
     // Local array pointers: contiguous vector loads and stores (no per-lane gathers).

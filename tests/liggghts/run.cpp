@@ -1,6 +1,6 @@
 // `mesopen run` with disks: a tiny hybrid scene end to end.
-#include "h5file.hpp"
 #include "run.hpp"
+#include "h5file.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -15,13 +15,15 @@ using test::ScratchDir;
 
 // The tiny scene's grains near the path meshed, the others LIGGGHTS disks: the run completes,
 // writes run.h5 (its frames with the disks), summary.json, the VTK frames of the FE bodies and of
-// the disks, dem.data and liggghts.log, and its summary counts the disks and the windows (the disks' steps, each of several FE steps); the FE
-// energy balance closes (1e-2: a few dozen steps of a stiff impact on a coarse mesh).
+// the disks, dem.data and liggghts.log, and its summary counts the disks and the windows (the
+// disks' steps, each of several FE steps); the FE energy balance closes (1e-2: a few dozen steps of
+// a stiff impact on a coarse mesh).
 TEST(LiggghtsRun, TinyHybridRunWritesItsFiles) {
   ScratchDir dir("run-hybrid");
   test::writeFile(dir / "scene.toml", test::tinyScene("representation = \"hybrid\"\n"
                                                       "frame_interval = 1e-8\n"));
-  const auto r = test::runMesopen("run " + (dir / "scene.toml") + " -o " + (dir / "out") + " --quiet");
+  const auto r =
+      test::runMesopen("run " + (dir / "scene.toml") + " -o " + (dir / "out") + " --quiet");
   ASSERT_EQ(r.code, 0) << r.output;
   for (const char *file : {"run.h5", "summary.json", "dem.data", "liggghts.log", "vtk/run.pvd",
                            "vtk/disks_000000.vtu"})

@@ -53,7 +53,8 @@ void expectValidGrains(const Polygons &grains, const TargetSpec &spec) {
     const std::size_t n = grains.corners(g);
     ASSERT_GE(n, 3u);
     EXPECT_GT(signedArea(x, y, n), 0.0) << "grain " << g << " is not counter-clockwise";
-    EXPECT_TRUE(isConvex(x, y, n, max_dent_turn + 1e-9)) << "grain " << g << " is not convex (up to the allowed dent)";
+    EXPECT_TRUE(isConvex(x, y, n, max_dent_turn + 1e-9))
+        << "grain " << g << " is not convex (up to the allowed dent)";
     for (std::size_t i = 0; i < n; ++i)
       EXPECT_TRUE(x[i] >= 0 && x[i] <= spec.width && y[i] >= 0 && y[i] <= spec.height);
   }
@@ -62,11 +63,13 @@ void expectValidGrains(const Polygons &grains, const TargetSpec &spec) {
   std::iota(order.begin(), order.end(), 0);
   std::vector<double> lo(grains.size());
   for (std::size_t g = 0; g < grains.size(); ++g)
-    lo[g] = *std::min_element(grains.x.data() + grains.offset[g], grains.x.data() + grains.offset[g + 1]);
+    lo[g] = *std::min_element(grains.x.data() + grains.offset[g],
+                              grains.x.data() + grains.offset[g + 1]);
   std::sort(order.begin(), order.end(), [&](auto a, auto b) { return lo[a] < lo[b]; });
   std::size_t pairs = 0;
   for (std::size_t i = 0; i < order.size(); ++i)
-    for (std::size_t j = i + 1; j < order.size() && lo[order[j]] < lo[order[i]] + spec.diameter_max * 2; ++j) {
+    for (std::size_t j = i + 1;
+         j < order.size() && lo[order[j]] < lo[order[i]] + spec.diameter_max * 2; ++j) {
       EXPECT_LT(overlapDepth(grains, order[i], order[j]), tol) << order[i] << " " << order[j];
       ++pairs;
     }
@@ -80,7 +83,7 @@ TEST(Sites, GrainCountFromAreas) {
   s.width = s.height = 5e-3;
   s.diameter_min = s.diameter_max = 60e-6;
   s.porosity = 0.3;
-  EXPECT_EQ(grainCount(s), 6189u); // MODELS.md: 5 x 5 mm, 60 um, 30 % gives 6189 grains
+  EXPECT_EQ(grainCount(s), 6189u); // thesis 4.2.1: 5 x 5 mm, 60 um, 30 % gives 6189 grains
 }
 
 TEST(Sites, StratifiedDiametersHaveTheExactMeanAndSpread) {
@@ -104,7 +107,8 @@ TEST(Sites, VoidCountFillsTheAreaLeftByGrains) {
   for (std::size_t i = 0; i < sites.grains; ++i)
     grain_area += M_PI * sites.r[i] * sites.r[i];
   const double void_area = M_PI * std::pow(0.25 * 60e-6 / 2, 2);
-  EXPECT_NEAR(static_cast<double>(sites.size() - sites.grains), (s.area() - grain_area) / void_area, 0.5);
+  EXPECT_NEAR(static_cast<double>(sites.size() - sites.grains), (s.area() - grain_area) / void_area,
+              0.5);
 }
 
 TEST(Sites, PlacementLowersTheOverlapEnergyAndIsThreadIndependent) {
@@ -191,7 +195,8 @@ TEST(Mesh, QualityMeshCoversTheGrainAndKeepsItsAngles) {
       for (int k = 0; k < 3; ++k) {
         const int i = (k + 1) % 3, j = (k + 2) % 3;
         const double ux = px[i] - px[k], uy = py[i] - py[k], vx = px[j] - px[k], vy = py[j] - py[k];
-        smallest = std::min(smallest, std::atan2(std::abs(cross(ux, uy, vx, vy)), ux * vx + uy * vy) * 180 / M_PI);
+        smallest = std::min(
+            smallest, std::atan2(std::abs(cross(ux, uy, vx, vy)), ux * vx + uy * vy) * 180 / M_PI);
       }
     }
     // The triangles tile the polygon: equal areas to round-off.

@@ -1,4 +1,4 @@
-// The projectile's geometry (MODELS.md "Projectile"; thesis sections 3.2, 4.3): tangent-ogive
+// The projectile's geometry (thesis sections 3.2, 4.3): tangent-ogive
 // profile, tip facets, outline polygon against the closed-form area and centroid, the mesh, and
 // the placement on a target.
 #include "projectile.hpp"
@@ -105,7 +105,7 @@ TEST(ProjectileShape, NoseLengthOfBaseline) {
   EXPECT_NEAR(s.diameter, d, 4 * eps * d);
   EXPECT_NEAR(s.ogive_radius, 3.5 * d, 4 * eps * d);
   EXPECT_NEAR(s.nose_length, d * std::sqrt(3.25), 4 * eps * d);
-  // MODELS.md quotes L_n ~ 0.796 mm, d ~ 0.4416 mm to the last printed digit.
+  // The thesis quotes L_n ~ 0.796 mm, d ~ 0.4416 mm to the last printed digit.
   EXPECT_NEAR(s.nose_length, 0.796e-3, 0.5e-6);
   EXPECT_NEAR(s.diameter, 0.4416e-3, 0.05e-6);
 }

@@ -49,8 +49,9 @@ TEST(Energy, ExternalWorkOfImposedVelocity) {
   for (std::uint32_t a = 0; a < all.size(); ++a)
     all[a] = a;
   model.constraints.push_back({"confined", all, true, false, 0.0, 0.0});
-  model.constraints.push_back(
-      {"piston", test::nodesWhere(model, [](double, double y) { return y < 1e-12; }), false, true, 0.0, 5.0});
+  model.constraints.push_back({"piston",
+                               test::nodesWhere(model, [](double, double y) { return y < 1e-12; }),
+                               false, true, 0.0, 5.0});
   fem::Solver solver(model, {.viscosity_linear = 0.0, .viscosity_quadratic = 0.0});
   double worst = 0.0;
   while (solver.time() < 0.5e-6) {
