@@ -78,6 +78,11 @@ ProjectileShape projectileShape(const ProjectileSpec &spec) {
   // is atan(y'(0)) = atan(L_n / (rho - d/2)), and not beyond a flat face (theta <= 90 deg).
   const double ogive_tip = std::atan2(s.nose_length, s.ogive_radius - 0.5 * s.diameter) / degree;
   const double theta = spec.tip_half_angle;
+  if (!(ogive_tip < 90.0)) // a hemispherical nose (crh 1/2): no range of angles left
+    throw std::invalid_argument("projectile: tip_facet_length " + num(ell) +
+                                " m: the ogive's tip (crh " + num(spec.crh) +
+                                ") is already flat, 90 deg, and no facet can blunt it; allowed: "
+                                "tip_facet_length = 0, or crh > 0.5");
   if (!(theta > ogive_tip && theta <= 90.0))
     throw std::invalid_argument("projectile: tip_half_angle " + num(theta) + " deg must lie in (" +
                                 num(ogive_tip) + ", 90], above the ogive's own tip half-angle");

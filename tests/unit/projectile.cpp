@@ -178,6 +178,16 @@ TEST(ProjectileShape, RejectsFacetsThatDoNotCut) {
   spec.tip_facet_length = 1e-3; // the facet would end past the shoulder
   EXPECT_THROW(projectileShape(spec), std::invalid_argument);
   spec = ProjectileSpec{};
+  spec.crh = 0.5; // a hemispherical nose, already flat at the tip: an empty range, said so (it
+                  // printed "(90, 90]")
+  try {
+    projectileShape(spec);
+    ADD_FAILURE() << "a facet on a hemispherical nose was accepted";
+  } catch (const std::invalid_argument &e) {
+    EXPECT_NE(std::string(e.what()).find("already flat"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find("(90, 90]"), std::string::npos) << e.what();
+  }
+  spec = ProjectileSpec{};
   spec.crh = 0.4; // no tangent ogive
   EXPECT_THROW(projectileShape(spec), std::invalid_argument);
   spec = ProjectileSpec{};
