@@ -163,8 +163,13 @@ int analyzeCommand(const AnalyzeOptions &options) {
       series.push_back(readRun(dir));
     std::vector<std::string> stale(std::begin(plot_files), std::end(plot_files));
     prepareOutputDirectory(out_dir, "", {});
-    for (const auto &f : stale)
-      fs::remove(fs::path(out_dir) / f);
+    for (const auto &f : stale) { // an earlier analysis's plots
+      std::error_code ec;
+      fs::remove(fs::path(out_dir) / f, ec);
+      if (ec)
+        throw InputError(out_dir + ": cannot remove an earlier plot, " + f + " (" + ec.message() +
+                         "); allowed: a directory mesopen analyze can write in (-o DIR)");
+    }
   } catch (const InputError &e) {
     std::cerr << "mesopen analyze: " << e.what() << '\n';
     return 2;

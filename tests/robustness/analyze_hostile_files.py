@@ -10,6 +10,9 @@ A tiny run's run.h5 is made with `mesopen run`, then copied and altered with h5p
     now analyze completes (exit 0) in well under the 60 s allowed here;
   - a series all NaN, a 2-D /series/time, a zero projectile length: accepted quietly before (and
     measures made of them); now refused (exit 2) with what is wrong.
+  - an earlier plot that cannot be removed (a directory where a plot was, standing in for a
+    directory the user cannot write, which a test run as root cannot make): the uncaught
+    filesystem_error aborted analyze; now refused (exit 2) naming the file, the plots kept.
 Each case must end by an exit code, not a signal, and within its time limit.
 
     analyze_hostile_files.py MESOPEN SCRATCH_DIR
@@ -100,6 +103,13 @@ def main():
         if code != want or (text and text not in output):
             failures.append("%s: exit %s (want %d%s): %s" % (
                 name, code, want, ", a message with '%s'" % text if text else "", output[-300:]))
+    # An earlier plot analyze cannot remove.
+    d = altered("stuck-plot", lambda h5: None)
+    os.makedirs(os.path.join(d, "instability-tilt.png", "inside"))
+    code, output = analyze(mesopen, d, 60)
+    print("stuck-plot: exit %s; %s" % (code, output.strip().splitlines()[-1] if output.strip() else ""))
+    if code != 2 or "cannot remove an earlier plot, instability-tilt.png" not in output:
+        failures.append("stuck-plot: exit %s (want 2, naming the plot): %s" % (code, output[-300:]))
     for f in failures:
         print("FAIL: " + f)
     return 1 if failures else 0
