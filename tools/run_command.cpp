@@ -12,6 +12,7 @@
 #include "run_output.hpp"
 #include "scene.hpp"
 #include "solver.hpp"
+#include "stop_signals.hpp"
 #include "writers.hpp"
 
 #include <omp.h>
@@ -320,18 +321,19 @@ private:
 };
 
 // SIGINT or SIGTERM during the time loop: the loop ends after its step and the files are written
-// as for a failure; a second signal ends the process at once.
-volatile std::sig_atomic_t stop_signal = 0;
-extern "C" void requestStop(int signal) {
-  stop_signal = signal;
-  std::signal(signal, SIG_DFL);
-}
-void catchStopSignals(bool on) {
-  if (on)
-    stop_signal = 0;
-  if (on || stop_signal == 0)
-    for (int s : {SIGINT, SIGTERM})
-      std::signal(s, on ? requestStop : SIG_DFL);
+// as for a failure; during the set-up (target, meshes, model, LIGGGHTS) the run ends at the next
+// phase with status interrupted (stopIfAsked). A second signal ends the process at once.
+// A signal received during the set-up, found between its phases.
+struct Interrupted : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+void stopIfAsked(const coupling::World &world, const std::string &phase) {
+  // every rank ends at the same phase (mpirun passes the signal to each, not at the same moment)
+  const double s = world.size > 1 ? world.max(stopSignal()) : stopSignal();
+  if (s != 0) {
+    setStopSignal(static_cast<int>(s));
+    throw Interrupted(stopSignalName() + " during the " + phase);
+  }
 }
 
 struct LoopResult {
@@ -368,10 +370,9 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
     series.sample(model, solver);
     frames.offer(model, solver, true);
     for (bool last = ended(true); !last;) {
-      if (stop_signal != 0) {
+      if (stopSignal() != 0) {
         result.interrupted = true;
-        result.failure = std::string("stopped by ") +
-                         (stop_signal == SIGINT ? "SIGINT" : "SIGTERM") + " at step " +
+        result.failure = std::string("stopped by ") + stopSignalName() + " at step " +
                          std::to_string(solver.steps());
         break;
       }
@@ -537,6 +538,7 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
     if (run.representation != Representation::fe)
       spec.mesh = MeshKind::none;
     target = std::make_unique<Target>(generateTarget(spec, report));
+    stopIfAsked(world, "target's generation");
   }
   const Polygons no_grains;
   const PlacedProjectile projectile = placeProjectile(
@@ -544,6 +546,7 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
   const std::vector<char> meshed =
       target ? meshedGrains(scene, *target, projectile) : std::vector<char>{};
   fem::Model model = buildRunModel(scene, target.get(), projectile, meshed);
+  stopIfAsked(world, "model's assembly");
   const bool walls = target != nullptr;
   // The grains not meshed are LIGGGHTS's disks, coupled to the FE bodies.
   std::unique_ptr<coupling::LiggghtsDem> dem;
@@ -592,7 +595,7 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
     solver.addForceProvider(coupled.get());
   }
 
-  catchStopSignals(true); // from the moment run.h5.tmp exists to the end of the loop
+  stopIfAsked(world, "set-up"); // signals are caught from the start of the set-up
   std::optional<H5File> h5;
   if (writer)
     h5.emplace(H5File::create(h5_path + ".tmp"));
@@ -636,7 +639,7 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
         {"seconds", coupled->seconds()}};
   }
   if (!writer)
-    return loop.failure.empty() ? 0 : loop.interrupted ? 128 + static_cast<int>(stop_signal) : 1;
+    return loop.failure.empty() ? 0 : loop.interrupted ? 128 + stopSignal() : 1;
   fs::rename(h5_path + ".tmp", h5_path);
   frames.writeCollection();
   const double wall = secondsSince(start);
@@ -654,7 +657,7 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
   if (loop.interrupted) {
     std::cerr << "mesopen run: " << loop.failure << ", t = " << solver.time()
               << " s\n  what was computed up to there is in " << dir << " (run.h5, summary.json)\n";
-    return 128 + static_cast<int>(stop_signal);
+    return 128 + stopSignal();
   }
   if (!loop.failure.empty()) {
     std::cerr << "mesopen run: failed at t = " << solver.time() << " s, step " << solver.steps()
@@ -690,8 +693,19 @@ int runCommand(const RunOptions &options) {
   world.barrier();
   if (options.threads)
     omp_set_num_threads(*options.threads);
+  catchStopSignals(true); // to the end of the time loop
   try {
     return simulate(scene, options, world, start);
+  } catch (const Interrupted &e) {
+    // during the set-up: no run.h5, a summary saying so
+    std::cerr << "mesopen run: " << e.what() << '\n';
+    if (world.rank == 0)
+      writeJson(options.out_dir + "/summary.json",
+                {{"command", "run"},
+                 {"scene", fs::absolute(options.scene).lexically_normal().string()},
+                 {"status", "interrupted"},
+                 {"failure", e.what()}});
+    return 128 + stopSignal();
   } catch (const InputError &e) {
     // found once the target or LIGGGHTS is made (dem.step against the disks' stable step): bad
     // input all the same; no run.h5 or summary.json is written

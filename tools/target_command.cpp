@@ -5,6 +5,7 @@
 #include "output.hpp"
 #include "projectile.hpp"
 #include "scene.hpp"
+#include "stop_signals.hpp"
 #include "writers.hpp"
 
 #include <nlohmann/json.hpp>
@@ -121,6 +122,19 @@ int targetCommand(const TargetOptions &options) {
 
   const bool terminal = isatty(STDERR_FILENO);
   std::string phase = "generating the target";
+  // A signal during the generation ends the command before the files, with a summary saying so;
+  // once they are being written they are finished (each under a temporary name, then renamed).
+  catchStopSignals(true);
+  auto interrupted = [&] {
+    const std::string what = stopSignalName() + " while " + phase;
+    std::cerr << "mesopen target: " << what << "\n";
+    writeJson(options.out_dir + "/summary.json",
+              {{"command", "target"},
+               {"scene", fs::absolute(options.scene).lexically_normal().string()},
+               {"status", "interrupted"},
+               {"failure", what}});
+    return 128 + stopSignal();
+  };
   try {
     // Progress on a terminal only, one line rewritten in place; nothing in logs.
     auto progress = [&](const std::string &what) {
@@ -131,6 +145,8 @@ int targetCommand(const TargetOptions &options) {
                                    : generateTarget(scene.target, report);
     if (terminal)
       std::cerr << "\r\033[K";
+    if (stopSignal() != 0)
+      return interrupted();
     const TargetMeasures m = measureTarget(target.grains, scene.target);
 
     phase = "placing the projectile";
@@ -139,6 +155,9 @@ int targetCommand(const TargetOptions &options) {
       projectile = placeProjectile(scene.projectile, scene.target.mesh_size, scene.target, target.grains);
     const PlacedProjectile *pp = scene.projectile.enabled ? &projectile : nullptr;
 
+    if (stopSignal() != 0)
+      return interrupted();
+    catchStopSignals(false);
     phase = "writing the files";
     const std::string dir = options.out_dir;
     // The four files are independent: written side by side (HDF5 is used by one thread only).

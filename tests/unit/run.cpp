@@ -187,6 +187,40 @@ TEST(Run, SignalEndsTheLoopAndKeepsTheFiles) {
   EXPECT_NE(summary["failure"].get<std::string>().find("SIGTERM"), std::string::npos);
 }
 
+// SIGTERM or SIGINT during the set-up (here the target's generation, about 4 s for this box; the
+// signal at 0.3 s): `run` and `target` end at the next phase with exit 128 + the signal and a
+// summary.json with status "interrupted" and no other file (they were killed by it, no summary).
+TEST(Run, SignalDuringTheSetUpEndsInterrupted) {
+  for (const char *command : {"run", "target"}) {
+    SCOPED_TRACE(command);
+    ScratchDir dir(std::string("run-signal-setup-") + command);
+    test::writeFile(dir / "scene.toml", "[target]\nwidth = 20e-3\nheight = 5e-3\ndiameter = 60e-6\n"
+                                        "mesh_size = 15e-6\n[projectile]\nlength = 0.3e-3\n"
+                                        "[run]\nend_time = 1e-3\nframe_interval = 0\n");
+    const std::string scene = dir / "scene.toml", out = dir / "out";
+    const int signal = command == std::string("run") ? SIGTERM : SIGINT;
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      ::execl(MESOPEN_BINARY, MESOPEN_BINARY, command, scene.c_str(), "-o", out.c_str(),
+              "--threads", "1", static_cast<char *>(nullptr));
+      ::_exit(127);
+    }
+    ::usleep(300000);
+    ::kill(pid, signal);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status);
+    EXPECT_EQ(WEXITSTATUS(status), 128 + signal);
+    const auto summary = nlohmann::json::parse(test::readFile(dir / "out/summary.json"));
+    EXPECT_EQ(summary["status"], "interrupted");
+    EXPECT_NE(summary["failure"].get<std::string>().find("generat"), std::string::npos)
+        << summary["failure"];
+    for (const char *file : {"out/run.h5", "out/run.h5.tmp", "out/target.h5"})
+      EXPECT_FALSE(std::filesystem::exists(dir / file)) << file;
+  }
+}
+
 // The projectile alone, spinning: the series must keep its momentum and H (round-off). No frames,
 // and no files of an earlier run left beside the new ones.
 TEST(Run, FreeFlightKeepsMomentum) {
