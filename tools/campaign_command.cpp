@@ -224,8 +224,9 @@ int campaignCommand(const CampaignOptions &options) {
     std::error_code made;
     fs::create_directories(dir, made);
     // One campaign at a time in a directory: a second would run the same replicates into the same
-    // files. The lock goes with the process.
-    const int lock = open((fs::path(dir) / ".campaign.lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    // files. The lock is held while the campaign or a run it started lives: the runs inherit it
+    // (no O_CLOEXEC), and end when the campaign dies (runProgram).
+    const int lock = open((fs::path(dir) / ".campaign.lock").c_str(), O_RDWR | O_CREAT, 0644);
     if (lock >= 0 && flock(lock, LOCK_EX | LOCK_NB) != 0) {
       std::cerr << "mesopen campaign: " << dir << " is in use by another mesopen campaign\n";
       return 1;

@@ -11,15 +11,15 @@
 #include <nlohmann/json.hpp>
 #include <omp.h>
 
+#include <cerrno>
+#include <csignal>
 #include <cstdlib>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <future>
 #include <iostream>
-#include <fcntl.h>
-#include <cerrno>
-#include <csignal>
-#include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -43,24 +43,26 @@ int runProgram(const std::vector<std::string> &words, const std::string &output,
   for (std::string &w : copy)
     argv.push_back(w.data());
   argv.push_back(nullptr);
-  posix_spawn_file_actions_t out;
-  posix_spawn_file_actions_init(&out);
-  posix_spawn_file_actions_addopen(&out, STDOUT_FILENO, output.c_str(),
-                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&out, STDOUT_FILENO, STDERR_FILENO);
   // In a process group of its own: a terminal's Ctrl-C reaches the caller alone, which passes it on
-  // (through `waiting`) once.
-  posix_spawnattr_t attributes;
-  posix_spawnattr_init(&attributes);
-  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
-  posix_spawnattr_setpgroup(&attributes, 0);
-  pid_t pid;
-  int status = -1;
-  const bool started = posix_spawn(&pid, argv[0], &out, &attributes, argv.data(), environ) == 0;
-  posix_spawn_file_actions_destroy(&out);
-  posix_spawnattr_destroy(&attributes);
-  if (!started)
+  // (through `waiting`) once. SIGTERM when the caller dies, however (SIGKILL included): a run then
+  // ends as on Ctrl-C, its files whole, and does not go on beside a restarted caller. Between fork
+  // and exec only async-signal-safe calls.
+  const pid_t parent = getpid();
+  const pid_t pid = fork();
+  if (pid < 0)
     return -1;
+  if (pid == 0) {
+    setpgid(0, 0);
+    prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (getppid() != parent) // the caller died before prctl took effect
+      _exit(128 + SIGTERM);
+    const int fd = open(output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd < 0 || dup2(fd, STDOUT_FILENO) < 0 || dup2(fd, STDERR_FILENO) < 0)
+      _exit(127);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  int status = -1;
   while (true) {
     const pid_t done = waitpid(pid, &status, waiting ? WNOHANG : 0);
     if (done == pid)

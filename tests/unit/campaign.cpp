@@ -8,10 +8,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include <csignal>
 #include <sstream>
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 using namespace mesopen;
@@ -212,4 +214,51 @@ TEST(Campaign, OneCampaignADirectory) {
   EXPECT_NE(r.output.find("in use by another mesopen campaign"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "out/runs"));
   close(held);
+}
+
+// A campaign killed (SIGKILL, no chance to pass anything on) takes its run with it: the run gets
+// SIGTERM and ends as on Ctrl-C, its summary saying "interrupted", and holds the directory's lock
+// until then. It went on alone in its own process group (here for 30 s), and a restarted campaign
+// could run the same replicate into the same files beside it.
+TEST(Campaign, RunEndsWithItsKilledCampaign) {
+  ScratchDir dir("campaign-killed");
+  std::string base = tiny_base;
+  base.replace(base.find("end_time = 1e-8"), 15, "end_time = 1e-5"); // about 30 s of steps
+  mesopen::test::writeFile(dir / "base.toml", base);
+  mesopen::test::writeFile(dir / "c.toml",
+                           "[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\n");
+  const std::string campaign = dir / "c.toml", out = dir / "out";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::execl(MESOPEN_BINARY, MESOPEN_BINARY, "campaign", campaign.c_str(), "-o", out.c_str(),
+            "--threads", "1", static_cast<char *>(nullptr));
+    ::_exit(127);
+  }
+  auto find = [&](const std::string &name) {
+    std::error_code ec;
+    for (const auto &f : std::filesystem::recursive_directory_iterator(out, ec))
+      if (f.path().filename() == name)
+        return f.path().string();
+    return std::string();
+  };
+  std::string running;
+  for (int i = 0; i < 600 && (running = find("run.h5.tmp")).empty(); ++i)
+    ::usleep(50000);
+  ASSERT_FALSE(running.empty()) << "the campaign's run did not start";
+  ::kill(pid, SIGKILL);
+  ::waitpid(pid, nullptr, 0);
+  const std::string summary = std::filesystem::path(running).parent_path() / "summary.json";
+  for (int i = 0; i < 200 && !std::filesystem::exists(summary); ++i)
+    ::usleep(50000);
+  ASSERT_TRUE(std::filesystem::exists(summary)) << "the run went on after its campaign died";
+  EXPECT_EQ(nlohmann::json::parse(mesopen::test::readFile(summary))["status"], "interrupted");
+  // The run gone, the lock is free.
+  const int lock = open((dir / "out/.campaign.lock").c_str(), O_RDWR);
+  ASSERT_GE(lock, 0);
+  bool free = false;
+  for (int i = 0; i < 100 && !(free = flock(lock, LOCK_EX | LOCK_NB) == 0); ++i)
+    ::usleep(50000);
+  EXPECT_TRUE(free);
+  close(lock);
 }
