@@ -14,6 +14,12 @@ static_assert(std::is_same_v<hid_t, std::int64_t>, "H5File stores hid_t as std::
 
 namespace {
 
+// HDF5 closes what is open when the process exits; a file whose close failed (a full disk) stays
+// half-closed, and that clean-up then crashed the process after it had said why it failed. Every
+// file is closed explicitly here, so the library's exit handler is not installed (H5dont_atexit
+// must come before the library's first use: at static initialization).
+const bool no_exit_handler = [] { return H5dont_atexit() >= 0; }();
+
 // Owns one HDF5 identifier and releases it with the matching close function.
 class Handle {
 public:

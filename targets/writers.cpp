@@ -10,6 +10,7 @@
 #include <vtkCellData.h>
 #include <vtkCellType.h>
 #include <vtkDoubleArray.h>
+#include <vtkErrorCode.h>
 #include <vtkIntArray.h>
 #include <vtkNew.h>
 #include <vtkPoints.h>
@@ -216,8 +217,15 @@ void writeVtu(const std::string &path, vtkUnstructuredGrid *grid) {
     writer->EncodeAppendedDataOff();
     writer->SetCompressorTypeToNone();
     writer->SetHeaderTypeToUInt64();
-    if (writer->Write() != 1)
-      throw std::runtime_error("cannot write VTU file '" + temp + "'");
+    // Write() returns 1 after a failed write too (a full disk): the error code tells, and our
+    // message says it (VTK's own, a page of pipeline state, is not shown).
+    const int shown = vtkObject::GetGlobalWarningDisplay();
+    vtkObject::SetGlobalWarningDisplay(0);
+    const int written = writer->Write();
+    vtkObject::SetGlobalWarningDisplay(shown);
+    if (written != 1 || writer->GetErrorCode() != vtkErrorCode::NoError)
+      throw std::runtime_error("cannot write VTU file '" + temp + "': " +
+                               vtkErrorCode::GetStringFromErrorCode(writer->GetErrorCode()));
   });
 }
 

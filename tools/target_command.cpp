@@ -262,6 +262,15 @@ int targetCommand(const TargetOptions &options) {
     return 0;
   } catch (const std::exception &e) {
     std::cerr << "mesopen target: failed while " << phase << ": " << e.what() << '\n';
+    try { // the files it wrote are whole (each renamed when complete); the summary says what failed
+      writeJson(options.out_dir + "/summary.json",
+                {{"command", "target"},
+                 {"scene", fs::absolute(options.scene).lexically_normal().string()},
+                 {"status", "failed"},
+                 {"failure", "while " + phase + ": " + e.what()}});
+    } catch (const std::exception &) {
+      // the directory itself cannot be written: the message above is all there is
+    }
     return 1;
   }
 }
