@@ -207,9 +207,18 @@ void Solver::addForceProvider(ForceProvider *provider) {
   }
 }
 
+// The steps that end a run at endAt's time: the last end_steps stable steps or less are made equal.
+constexpr double end_steps = 20.0;
+
 // The time loop's step: each line one stage of the central-difference scheme.
 void Solver::step() {
-  const double dt = dt_;
+  // Within end_steps stable steps of endAt's time, the rest in equal steps (past it: stable steps).
+  const double stable = dt_, remaining = end_at_ - time_;
+  const double steps_left = remaining > 0.0 && remaining < end_steps * stable
+                                ? std::ceil(remaining / stable * (1.0 - 1e-12))
+                                : 0.0;
+  const bool last = steps_left == 1.0;
+  const double dt = steps_left > 0.0 ? remaining / steps_left : stable;
   kick_work_ = provider_work_ = friction_work_ = 0.0;
   kickAndDrift(dt); // v(n+1/2) = v(n) + dt/2 f(n) / m, the imposed velocities;
                     // x(n+1) = x(n) + dt v(n+1/2)
@@ -221,18 +230,18 @@ void Solver::step() {
                     // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
   applyConstraints(0.5 * dt, true); // the imposed velocities at n+1
   scaleMasses(0.5 * dt);            // mass for the elements whose step fell below scale_below_
-  time_ += dt;
+  time_ = last ? end_at_ : time_ + dt;
   ++steps_;
   if (steps_ == 1)
-    first_dt_ = dt;
+    first_dt_ = stable;
   // The step falls at once to what the elements allow; it rises only every dt_rise_interval steps,
   // to the shortest step allowed over them: a step that followed the elements' fastest oscillation
   // up and down would pump energy into it (a leapfrog of varying step is not symplectic).
   shortest_allowed_ = std::min(shortest_allowed_, next_dt_);
-  if (next_dt_ < dt)
+  if (next_dt_ < stable)
     dt_ = std::min(next_dt_, s_.max_dt);
   else if (steps_ % s_.dt_rise_interval == 0)
-    dt_ = std::min({shortest_allowed_, s_.max_dt, s_.max_dt_growth * dt});
+    dt_ = std::min({shortest_allowed_, s_.max_dt, s_.max_dt_growth * stable});
   if (steps_ % s_.dt_rise_interval == 0)
     shortest_allowed_ = std::numeric_limits<double>::infinity();
   if (next_dt_ < s_.min_dt_ratio * first_dt_) {

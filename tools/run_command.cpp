@@ -571,6 +571,7 @@ int simulate(const Scene &scene, const RunOptions &options, const coupling::Worl
                              .erode_dt_ratio = run.erode_step_ratio,
                              .mass_scaling_dt_ratio = run.mass_scaling_step_ratio,
                              .sharing = world.size > 1 ? &sharing : nullptr});
+  solver.endAt(run.end_time);
   std::unique_ptr<fem::Contact> contact;
   if (scene.contact.enabled) {
     contact = std::make_unique<fem::Contact>(model, contactSettings(scene, walls));

@@ -187,6 +187,28 @@ TEST(Run, SignalEndsTheLoopAndKeepsTheFiles) {
   EXPECT_NE(summary["failure"].get<std::string>().find("SIGTERM"), std::string::npos);
 }
 
+// The run ends exactly at run.end_time (it overshot by up to a step: 5,600 times an end_time of
+// 1e-13 s); the steps near the end are made equal, none shorter than 0.95 of the stable step
+// (0.9 here, for a stable step that changes on the way) unless the whole run is.
+TEST(Run, EndsExactlyAtEndTime) {
+  for (const double end : {1e-13, 2.345e-8}) {
+    SCOPED_TRACE(end);
+    ScratchDir dir("run-end-time");
+    std::string text = tinyScene("frame_interval = 0\n");
+    char value[32];
+    std::snprintf(value, sizeof value, "%.17g", end);
+    text.replace(text.find("end_time = 2e-8"), 15, std::string("end_time = ") + value);
+    const auto r = runScene(dir, text);
+    ASSERT_EQ(r.code, 0) << r.output;
+    H5File h5 = H5File::open(dir / "out/run.h5");
+    const auto time = h5.read<double>("/series/time");
+    const auto stable = h5.read<double>("/series/dt");
+    EXPECT_EQ(time.back(), end);
+    for (std::size_t i = 1; i + 1 < time.size(); ++i) // every step but a whole run's one
+      EXPECT_GE(time[i] - time[i - 1], 0.9 * stable[i - 1]) << i;
+  }
+}
+
 // SIGTERM or SIGINT during the set-up (here the target's generation, about 4 s for this box; the
 // signal at 0.3 s): `run` and `target` end at the next phase with exit 128 + the signal and a
 // summary.json with status "interrupted" and no other file (they were killed by it, no summary).
