@@ -252,7 +252,29 @@ void Solver::step() {
     throw RunFailure(msg.str());
   }
   accountEnergy();
+  // A state no longer finite (a material driven where its law has no value) would run on as NaN
+  // and be reported as completed: it ends the run here, naming where it began.
+  if (!std::isfinite(energy_.kinetic) || !std::isfinite(energy_.internal))
+    throw RunFailure(notFinite());
   erode(); // elements that failed in this step leave the model
+}
+
+std::string Solver::notFinite() const {
+  const Elements &el = m_.elements;
+  std::ostringstream msg;
+  for (const Chunk &c : chunks_)
+    for (std::size_t e = c.begin; e < c.end; ++e)
+      if (!std::isfinite(el.sxx[e] + el.syy[e] + el.sxy[e] + el.pressure[e] + el.energy[e])) {
+        const Body &body = m_.bodies[el.body[e]];
+        msg << "the stress of element " << e << " of body " << body.name << " (material "
+            << m_.materials[body.material]->type() << ") is not a number (S_xx " << el.sxx[e]
+            << ", S_yy " << el.syy[e] << ", S_xy " << el.sxy[e] << ", pressure " << el.pressure[e]
+            << " Pa, energy " << el.energy[e] << " J/m) at t = " << time_ << " s, step " << steps_
+            << ": its material's parameters give a state their law cannot compute";
+        return msg.str();
+      }
+  msg << "the nodes' velocities are not numbers at t = " << time_ << " s, step " << steps_;
+  return msg.str();
 }
 
 // Work ranges over the bodies that move: element chunks of one material, node blocks.

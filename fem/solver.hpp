@@ -187,6 +187,7 @@ private:
   void erode();
   void scaleMasses(double half_dt);
   std::string thinnestElement() const;
+  std::string notFinite() const; // where a state that is not finite is (RunFailure's message)
   bool owns(std::size_t body) const {
     return !s_.sharing || static_cast<int>(body % s_.sharing->size()) == s_.sharing->rank();
   }

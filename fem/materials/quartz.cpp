@@ -1,6 +1,7 @@
 // "quartz": the thesis's quartz grains (section 3.3.2, Table 3.3).
 // Pressure: Mie-Grueneisen. Shear modulus from the cold pressure P-bar = K mu + K1 mu^2 + K2 mu^3
-// (Eq. 3.10-3.11): G = G0 + G1 P + G2 P^2 with P = max(P-bar, 0) (the fit is for compression).
+// (Eq. 3.10-3.11): G = G0 + G1 P + G2 P^2 with P = max(P-bar, 0) (the fit is for compression),
+// and G >= 0.
 // Strength: overstress (viscoplastic) relaxation toward the equilibrium surface (Eq. 3.12):
 //   S = S* [1 - (1 - |Se| / |S*|) min(dt / T_R, 1)]   when |S*| > |Se|,
 //   |Se| = sqrt(2/3) Y(p),  Y(p) = min(B + M p, Y1)   (bilinear, Y1 its cap).
@@ -46,7 +47,10 @@ private:
   Shear shear(double J) const {
     const double mu = 1.0 / J - 1.0, P = std::max(eos_.cold(mu), 0.0);
     const double dP_dmu = P > 0.0 ? (3.0 * eos_.K2 * mu + 2.0 * eos_.K1) * mu + eos_.K : 0.0;
-    return {G0_ + (G2_ * P + G1_) * P, -(G1_ + 2.0 * G2_ * P) * dP_dmu / (J * J)};
+    const double G = G0_ + (G2_ * P + G1_) * P;
+    if (G <= 0.0) // a fit falling below zero is held there
+      return {0.0, 0.0};
+    return {G, -(G1_ + 2.0 * G2_ * P) * dP_dmu / (J * J)};
   }
 
   // Without strength: the stored deviatoric energy W = G(J) / 2 (tr b* - 3) per initial volume;
@@ -93,7 +97,7 @@ private:
       const double mu = 1.0 / jac[i] - 1.0;
       const double cold = eos_.cold(mu), a = eos_.energyFree(mu, cold), b = eos_.gamma / vol0[i];
       const double P = std::max(cold, 0.0);
-      const double G = G0_ + (G2_ * P + G1_) * P;
+      const double G = std::max(G0_ + (G2_ * P + G1_) * P, 0.0); // a fit below zero held there
       double sxx = sxx_[i], syy = syy_[i], sxy = sxy_[i];
       rotateDeviator(sxx, syy, sxy, spin[i] * dt);
       const double power_old = stressPower(sxx, syy, sxy, dxx[i], dyy[i], dxy[i]);
@@ -105,7 +109,8 @@ private:
       if (norm > Se) {
         const double scale = 1.0 - (1.0 - Se / norm) * relax;
         sxx *= scale, syy *= scale, sxy *= scale;
-        const double dev_plastic = (1.0 - scale) * norm / (2.0 * G); // |S* - S| / 2G
+        // |S* - S| / 2G (without shear stiffness the deviator is the rotated old one: no strain)
+        const double dev_plastic = G > 0.0 ? (1.0 - scale) * norm / (2.0 * G) : 0.0;
         eps[i] += sqrt23 * dev_plastic;
         plastic_work += vmid[i] * scale * norm * dev_plastic;
       }

@@ -383,3 +383,23 @@ TEST(Solver, SameResultWithAnyThreadCount) {
   EXPECT_EQ(one.first, two.first);
   EXPECT_EQ(one.second, two.second);
 }
+
+// A state that is no longer finite ends the run with RunFailure naming the element (a NaN ran on
+// to the end, reported as completed, its energies null): here one element's stress is made NaN.
+TEST(Solver, StateNotFiniteEndsTheRun) {
+  TestMesh mesh;
+  mesh.addRectangle(0, 0, 1e-4, 1e-4, 4, 4, 0.2);
+  fem::Model model = mesh.model(test::oneMaterial("steel"));
+  fem::setBodyVelocity(model, 0, 10.0, 0.0);
+  fem::Solver solver(model, {});
+  solver.step();
+  model.elements.sxx[5] = std::nan("");
+  try {
+    for (int i = 0; i < 3; ++i)
+      solver.step();
+    ADD_FAILURE() << "a NaN stress ran on";
+  } catch (const fem::RunFailure &e) {
+    EXPECT_NE(std::string(e.what()).find("the stress of element 5 of body"), std::string::npos)
+        << e.what();
+  }
+}
