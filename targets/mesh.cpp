@@ -45,14 +45,23 @@ TriangleMesh fanMesh(const double *x, const double *y, std::size_t n) {
 
 TriangleMesh qualityMesh(const double *x, const double *y, std::size_t n, double edge,
                          double min_angle_deg) {
-  // Corners closer than 1e-6 of the edge length to the one before are dropped: a sliver edge
-  // would make the refinement chase it down to round-off.
+  // Corners closer than 1e-6 of the edge length (or of the polygon's extent, for an edge longer
+  // than the polygon: all its corners were dropped, and CGAL crashed on what was left) to the one
+  // before are dropped: a sliver edge would make the refinement chase it down to round-off.
+  double extent = 0.0;
+  for (std::size_t i = 1; i < n; ++i)
+    extent = std::max(extent, std::hypot(x[i] - x[0], y[i] - y[0]));
+  const double merge = 1e-6 * std::min(edge, extent);
   std::vector<std::size_t> keep;
   for (std::size_t i = 0; i < n; ++i)
-    if (keep.empty() || std::hypot(x[i] - x[keep.back()], y[i] - y[keep.back()]) > 1e-6 * edge)
+    if (keep.empty() || std::hypot(x[i] - x[keep.back()], y[i] - y[keep.back()]) > merge)
       keep.push_back(i);
-  while (keep.size() > 1 && std::hypot(x[keep.back()] - x[keep[0]], y[keep.back()] - y[keep[0]]) <= 1e-6 * edge)
+  while (keep.size() > 1 &&
+         std::hypot(x[keep.back()] - x[keep[0]], y[keep.back()] - y[keep[0]]) <= merge)
     keep.pop_back();
+  if (keep.size() < 3)
+    throw std::invalid_argument("a polygon of " + std::to_string(n) +
+                                " corners has fewer than three apart: nothing to mesh");
   CDT cdt;
   // Split each boundary edge evenly (neighbouring grains get nearly the same boundary points; the
   // refinement may split an edge further where a triangle would encroach on it).

@@ -214,3 +214,18 @@ TEST(Mesh, FanMeshHasOneTrianglePerEdge) {
   EXPECT_DOUBLE_EQ(m.x.back(), 0.5);
   EXPECT_DOUBLE_EQ(m.y.back(), 0.5);
 }
+
+// An edge longer than the polygon (a mesh size of 1000 m on a 1 mm projectile) meshes it coarsely:
+// every corner but one was dropped as closer than 1e-6 of the edge, and CGAL crashed (SIGSEGV).
+TEST(QualityMesh, EdgeLongerThanThePolygon) {
+  const double x[] = {0.0, 1e-3, 1e-3, 0.0}, y[] = {0.0, 0.0, 1e-3, 1e-3};
+  for (const double edge : {1e-2, 1.0, 1000.0}) {
+    const TriangleMesh m = qualityMesh(x, y, 4, edge, 20.7);
+    double area = 0.0;
+    for (std::size_t t = 0; t < m.tri.size(); t += 3) {
+      const std::uint32_t a = m.tri[t], b = m.tri[t + 1], c = m.tri[t + 2];
+      area += 0.5 * ((m.x[b] - m.x[a]) * (m.y[c] - m.y[a]) - (m.x[c] - m.x[a]) * (m.y[b] - m.y[a]));
+    }
+    EXPECT_NEAR(area, 1e-6, 1e-15) << edge; // the square, to round-off
+  }
+}
