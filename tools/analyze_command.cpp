@@ -132,8 +132,12 @@ bool plot(const std::string &out_dir, const std::vector<std::string> &jsons,
 // The series of the run in `dir` (its run.h5). Throws InputError.
 RunSeries readRun(const std::string &dir) {
   const std::string path = dir + "/run.h5";
-  if (!fs::is_regular_file(path))
+  std::error_code ec;
+  if (!fs::exists(path, ec))
     throw InputError(path + ": no such file; allowed: directories written by `mesopen run`");
+  if (!fs::is_regular_file(path, ec))
+    throw InputError(path + ": not a file (a directory?); allowed: directories written by "
+                            "`mesopen run`");
   try {
     return readRunSeries(path);
   } catch (const std::runtime_error &e) {
@@ -158,13 +162,16 @@ int analyzeCommand(const AnalyzeOptions &options) {
   const auto start = Clock::now();
   const std::string out_dir = options.out_dir.empty() ? options.dirs.front() : options.out_dir;
   std::vector<RunSeries> series;
+  bool run_dir = false; // out_dir holds a run.h5
   try {
     for (const auto &dir : options.dirs)
       series.push_back(readRun(dir));
     std::vector<std::string> stale(std::begin(plot_files), std::end(plot_files));
-    prepareOutputDirectory(out_dir, "", {});
+    // A run's directory keeps its summary.json; any other must be new or analyze's own.
+    std::error_code ec;
+    run_dir = fs::exists(fs::path(out_dir) / "run.h5", ec);
+    prepareOutputDirectory(out_dir, run_dir ? "" : "analyze", {});
     for (const auto &f : stale) { // an earlier analysis's plots
-      std::error_code ec;
       fs::remove(fs::path(out_dir) / f, ec);
       if (ec)
         throw InputError(out_dir + ": cannot remove an earlier plot, " + f + " (" + ec.message() +
@@ -196,7 +203,7 @@ int analyzeCommand(const AnalyzeOptions &options) {
       runs.push_back(j);
     }
     const bool plotted = !options.no_plot && plot(out_dir, jsons, labels);
-    if (!fs::exists(fs::path(out_dir) / "run.h5")) {
+    if (!run_dir) {
       // A directory of its own: its summary (a run's directory keeps the run's summary.json).
       nlohmann::json files = nlohmann::json::array({"summary.json"});
       if (plotted)

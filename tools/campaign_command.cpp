@@ -17,8 +17,6 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
-#include <fcntl.h>
-#include <sys/file.h>
 #include <unistd.h>
 
 namespace mesopen {
@@ -33,6 +31,7 @@ struct Job {
   const CampaignRun *run = nullptr;
   int replicate = 0;   // from 0
   std::string dir, scene;
+  toml::table tables; // the scene's
   std::int64_t seed = 0;
   bool reused = false; // completed before, with the same scene
   bool selected = true; // to run (see --only)
@@ -221,13 +220,32 @@ int campaignCommand(const CampaignOptions &options) {
     for (const std::string &name : options.only)
       if (std::none_of(c.runs.begin(), c.runs.end(), [&](const CampaignRun &r) { return r.name == name; }))
         throw InputError("--only " + name + ": no run of " + c.path + " has that name");
+    // Every replicate's scene, composed and checked as `mesopen run` checks it before the
+    // directory is touched: bad input stops the campaign before anything runs.
+    for (const CampaignRun &r : c.runs) {
+      const bool selected = options.only.empty() || std::find(options.only.begin(), options.only.end(),
+                                                              r.name) != options.only.end();
+      for (int k = 0; k < c.replicates; ++k) {
+        Job j;
+        j.run = &r, j.replicate = k, j.selected = selected;
+        j.dir = dir + "/runs/" + r.name + "/r" + std::to_string(k + 1);
+        j.scene = composeScene(c, r, k);
+        const std::string where = c.path + ", run \"" + r.name + "\", replicate " +
+                                  std::to_string(k + 1) + " (scene " + r.scene + ")";
+        std::istringstream in(j.scene);
+        j.tables = toml::parse(in);
+        const Scene scene = readScene(j.tables, where);
+        checkRunnable(scene, where);
+        j.seed = scene.target.seed;
+        jobs.push_back(std::move(j));
+      }
+    }
     std::error_code made;
     fs::create_directories(dir, made);
     // One campaign at a time in a directory: a second would run the same replicates into the same
-    // files. The lock is held while the campaign or a run it started lives: the runs inherit it
-    // (no O_CLOEXEC), and end when the campaign dies (runProgram).
-    const int lock = open((fs::path(dir) / ".campaign.lock").c_str(), O_RDWR | O_CREAT, 0644);
-    if (lock >= 0 && flock(lock, LOCK_EX | LOCK_NB) != 0) {
+    // files. The lock is held while the campaign or a run it started lives: the runs inherit it,
+    // and end when the campaign dies (runProgram).
+    if (!lockForProcess((fs::path(dir) / ".campaign.lock").string(), true)) {
       std::cerr << "mesopen campaign: " << dir << " is in use by another mesopen campaign\n";
       return 1;
     }
@@ -235,35 +253,20 @@ int campaignCommand(const CampaignOptions &options) {
                            {"summary.json", "table.md", "table.csv", "runs.csv",
                             "campaign-rotational-momentum.png", "campaign-trends.png",
                             "campaign-trend-curves.png"});
-    for (const CampaignRun &r : c.runs) {
-      const bool selected = options.only.empty() || std::find(options.only.begin(), options.only.end(),
-                                                              r.name) != options.only.end();
-      for (int k = 0; k < c.replicates; ++k) {
-        Job j;
-        j.run = &r, j.replicate = k;
-        j.dir = dir + "/runs/" + r.name + "/r" + std::to_string(k + 1);
-        j.scene = composeScene(c, r, k);
-        const std::string where = c.path + ", run \"" + r.name + "\", replicate " +
-                                  std::to_string(k + 1) + " (scene " + r.scene + ")";
-        std::istringstream in(j.scene);
-        const toml::table scene = toml::parse(in);
-        j.seed = readScene(scene, where).target.seed;
-        // Done before: completed, its series there, the same scene (compared as tables: the
-        // comment line and the number format do not count).
-        const nlohmann::json done = readJson(j.dir + "/summary.json");
-        const bool same_scene = readSceneText(j.dir + "/scene.toml") == scene;
-        j.reused = same_scene && done.is_object() && done.value("status", "") == "completed" &&
-                   readsWhole(j.dir + "/run.h5");
-        j.status = "not run";
-        j.selected = selected;
-        // Not to run now (--only) but run before with this scene: as it ended then.
-        if (!selected && !j.reused && same_scene && done.is_object() && done.contains("status")) {
-          j.status = done.value("status", "failed");
-          j.failure = done.value("failure", "");
-          j.wall = done.value("wall_seconds", 0.0);
-          j.steps = done.value("steps", std::size_t{0});
-        }
-        jobs.push_back(std::move(j));
+    for (Job &j : jobs) {
+      // Done before: completed, its series there, the same scene (compared as tables: the
+      // comment line and the number format do not count).
+      const nlohmann::json done = readJson(j.dir + "/summary.json");
+      const bool same_scene = readSceneText(j.dir + "/scene.toml") == j.tables;
+      j.reused = same_scene && done.is_object() && done.value("status", "") == "completed" &&
+                 readsWhole(j.dir + "/run.h5");
+      j.status = "not run";
+      // Not to run now (--only) but run before with this scene: as it ended then.
+      if (!j.selected && !j.reused && same_scene && done.is_object() && done.contains("status")) {
+        j.status = done.value("status", "failed");
+        j.failure = done.value("failure", "");
+        j.wall = done.value("wall_seconds", 0.0);
+        j.steps = done.value("steps", std::size_t{0});
       }
     }
   } catch (const InputError &e) {

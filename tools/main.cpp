@@ -103,6 +103,24 @@ int main(int argc, char **argv) {
 
   auto *keys = app.add_subcommand("keys", "print every scene key with its default and allowed range");
 
+  // A first word that names no command is said with the command names (CLI11 says only that a
+  // subcommand is required).
+  if (argc > 1) {
+    const std::string first = argv[1];
+    std::string names;
+    bool known = first == "-h" || first == "--help";
+    const CLI::App &commands = app;
+    for (const CLI::App *sub : commands.get_subcommands({})) {
+      known = known || sub->check_name(first);
+      names += names.empty() ? sub->get_name() : ", " + sub->get_name();
+    }
+    if (!known) {
+      std::cerr << "mesopen: unknown " << (first.starts_with('-') ? "option" : "command") << " '"
+                << first << "'; allowed: " << (first.starts_with('-') ? "--help, or " : "") << names
+                << "\nRun with --help for more information.\n";
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError &e) {

@@ -288,9 +288,13 @@ int modalCommand(const ModalOptions &options) {
   ModalProblem problem;
   try {
     const std::string ext = fs::path(options.input).extension().string();
-    if (!fs::is_regular_file(options.input))
+    std::error_code ec;
+    if (!fs::exists(options.input, ec))
       throw InputError(options.input + ": no such file; allowed: a scene (.toml), target.h5 or "
                                        "run.h5");
+    if (!fs::is_regular_file(options.input, ec))
+      throw InputError(options.input + ": not a file (a directory?); allowed: a scene (.toml), "
+                                       "target.h5 or run.h5");
     problem = ext == ".h5" ? fileProblem(options.input) : sceneProblem(options.input);
     prepareOutputDirectory(options.out_dir, "modal", {"modes.json", "modes.vtu", "summary.json"});
   } catch (const InputError &e) {

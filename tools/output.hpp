@@ -1,5 +1,5 @@
 // What the commands share about their output: the directory made before any work and cleared of
-// an earlier run's files, JSON written whole, wall times.
+// an earlier run's files, a lock against a second writer, JSON written whole, wall times.
 #pragma once
 
 #include "atomic_file.hpp"
@@ -8,11 +8,14 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
 #include <string>
+#include <sys/file.h>
 #include <system_error>
+#include <unistd.h>
 
 namespace mesopen {
 
@@ -58,6 +61,18 @@ inline void prepareOutputDirectory(const std::string &dir, const std::string &co
       if (entry.path().filename().string().starts_with(prefix))
         fs::remove(entry.path(), ec);
   }
+}
+
+// Takes the lock file `path` (flock, exclusive, without waiting) for as long as the process lives,
+// so that a second command cannot write into a directory in use; `inherited`: the programs it
+// starts hold it too. False when another process holds it; true when the file cannot be opened
+// (the directory's own errors are reported when it is written).
+inline bool lockForProcess(const std::string &path, bool inherited) {
+  const int fd = open(path.c_str(), O_RDWR | O_CREAT | (inherited ? 0 : O_CLOEXEC), 0644);
+  if (fd < 0 || flock(fd, LOCK_EX | LOCK_NB) == 0)
+    return true;
+  close(fd);
+  return false;
 }
 
 } // namespace mesopen

@@ -51,30 +51,17 @@ void warnIdleKeys(const Scene &scene, const std::string &path) {
               << nameOf(scene.run.representation, representation_names) << "\"\n";
 }
 
-// The scene, checked for what a run needs. Throws InputError.
-Scene prepareRun(const RunOptions &options) {
-  Scene scene = readScene(options.scene);
-  if (options.seed)
-    scene.target.seed = *options.seed;
+} // namespace
+
+void checkRunnable(const Scene &scene, const std::string &where) {
   if (scene.run.grains && scene.target.mesh == MeshKind::none)
-    throw InputError(options.scene + ": target.mesh = \"none\" leaves the grains without elements; "
-                                     "allowed: \"quality\" or \"fan\" (or run.grains = false)");
+    throw InputError(where + ": target.mesh = \"none\" leaves the grains without elements; "
+                             "allowed: \"quality\" or \"fan\" (or run.grains = false)");
   if (!scene.run.grains && scene.run.representation != Representation::fe)
-    throw InputError(options.scene + ": run.representation = \"dem\" or \"hybrid\" needs the "
-                                     "grains; allowed with run.grains = false: \"fe\"");
-  // LIGGGHTS reads the disks from the output directory through a script variable: a path it
-  // would split or expand is refused before it starts (it exits the process on a bad command).
-  const std::string out = fs::absolute(options.out_dir).string();
-  if (scene.run.grains && scene.run.representation != Representation::fe &&
-      out.find_first_of(" \t\n\"'$#&") != std::string::npos)
-    throw InputError(options.scene + ": run.representation = \"" +
-                     nameOf(scene.run.representation, representation_names) +
-                     "\" needs an output directory without spaces or any of \"'$#& (LIGGGHTS "
-                     "reads the disks from it); it is '" +
-                     out + "'");
+    throw InputError(where + ": run.representation = \"dem\" or \"hybrid\" needs the "
+                             "grains; allowed with run.grains = false: \"fe\"");
   if (!scene.projectile.enabled)
-    throw InputError(options.scene +
-                     ": projectile.enabled = false; `mesopen run` needs the projectile");
+    throw InputError(where + ": projectile.enabled = false; `mesopen run` needs the projectile");
   // LIGGGHTS bins its neighbours by half the cut-off (largest disk diameter + skin) and exits
   // when a bin exceeds 100 times an extent of the box: its width, height, or the 2D slab, the
   // largest disk diameter (half the smallest grain's at least: inscribed disks are larger).
@@ -89,17 +76,42 @@ Scene prepareRun(const RunOptions &options) {
     };
     if (scene.dem.skin > largest)
       throw InputError(
-          options.scene + ": dem.skin = " + number(scene.dem.skin) +
+          where + ": dem.skin = " + number(scene.dem.skin) +
           " m is too large for LIGGGHTS's neighbour bins in this box; allowed: 0 < skin <= " +
           number(std::max(largest, 0.0)) + " m (half of diameter + skin within 100 times " +
           "the box's width, height or half the smallest grain diameter)");
   }
+}
+
+namespace {
+
+// The scene, checked for what a run needs. Throws InputError.
+Scene prepareRun(const RunOptions &options) {
+  Scene scene = readScene(options.scene);
+  if (options.seed)
+    scene.target.seed = *options.seed;
+  checkRunnable(scene, options.scene);
+  // LIGGGHTS reads the disks from the output directory through a script variable: a path it
+  // would split or expand is refused before it starts (it exits the process on a bad command).
+  const std::string out = fs::absolute(options.out_dir).string();
+  if (scene.run.grains && scene.run.representation != Representation::fe &&
+      out.find_first_of(" \t\n\"'$#&") != std::string::npos)
+    throw InputError(options.scene + ": run.representation = \"" +
+                     nameOf(scene.run.representation, representation_names) +
+                     "\" needs an output directory without spaces or any of \"'$#& (LIGGGHTS "
+                     "reads the disks from it); it is '" +
+                     out + "'");
   warnIdleKeys(scene, options.scene);
   return scene;
 }
 
-// The output directory cleared of an earlier run's files (frames included).
-void clearOutput(const Scene &scene, const std::string &dir) {
+// The output directory taken for this run and cleared of an earlier run's files (frames
+// included). Its lock, DIR/.run.lock, is held to the end of the process: a second run into the
+// directory would remove this one's run.h5.tmp and frames. False when another run holds it.
+bool takeOutput(const Scene &scene, const std::string &dir) {
+  prepareOutputDirectory(dir, "run", {}); // made, or refused as another command's, before the lock
+  if (!lockForProcess(dir + "/.run.lock", false))
+    return false;
   prepareOutputDirectory(dir, "run",
                          {"summary.json", "run.h5", "run.h5.tmp", "vtk/run.pvd", "dem.data",
                           "liggghts.log", "instability.json", "instability-*"});
@@ -110,6 +122,7 @@ void clearOutput(const Scene &scene, const std::string &dir) {
       fs::remove(f.path(), ec);
   if (scene.run.vtk && scene.run.frame_interval > 0)
     prepareOutputDirectory(dir + "/vtk", "", {});
+  return true;
 }
 
 // Which grains are meshed: every one (fe), none (dem), or those whose centroids lie within the
@@ -685,13 +698,28 @@ int runCommand(const RunOptions &options) {
     scene = prepareRun(options);
     // Under mpirun every rank runs the scene; rank 0 writes the files.
     world = coupling::world(scene.run.grains && scene.run.representation != Representation::fe);
-    if (world.rank == 0)
-      clearOutput(scene, options.out_dir);
   } catch (const InputError &e) {
     std::cerr << "mesopen run: " << e.what() << '\n';
     return 2;
   }
-  world.barrier();
+  // Rank 0 takes the output directory; the other ranks wait for it and end as it does. A
+  // directory in use is exit 1, as for a campaign: the input is good, the run can be made later.
+  int refused = 0;
+  if (world.rank == 0) {
+    try {
+      if (!takeOutput(scene, options.out_dir)) {
+        std::cerr << "mesopen run: " << options.out_dir
+                  << " is in use by another mesopen run; allowed: another output directory, or "
+                     "this one once that run has ended\n";
+        refused = 1;
+      }
+    } catch (const InputError &e) {
+      std::cerr << "mesopen run: " << e.what() << '\n';
+      refused = 2;
+    }
+  }
+  if (const int code = static_cast<int>(world.max(refused)))
+    return code;
   if (options.threads)
     omp_set_num_threads(*options.threads);
   catchStopSignals(true); // to the end of the time loop

@@ -5,8 +5,8 @@ when stopped by SIGINT or SIGTERM) and with a first message line that names the 
 expected text: the key, the file, the option); never by a signal, never by a hang.
 
 Categories:
-  - cli: missing, repeated, unknown and malformed arguments and options (--seed, --threads,
-    --modes, --replicates, -o '');
+  - cli: missing, repeated, unknown and malformed commands, arguments and options (--seed,
+    --threads, --modes, --replicates, -o '');
   - file: missing scene, a directory, a FIFO or /dev/null as scene, empty and binary files, a BOM,
     CRLF line ends, nesting 100,000 deep;
   - syntax: bad TOML (unclosed headers and strings, keys given twice, numbers beyond a double or
@@ -21,9 +21,10 @@ Categories:
   - accepted: in-range extremes that must run (exit 0, status completed, every number finite);
   - failure: runs that fail (exit 1) and say where;
   - output: output directories that cannot be made or written, that hold another command's or
-    stale files;
+    stale files, that another run is writing;
   - analyze, modal, campaign: bad directories, damaged or foreign HDF5 files, bad campaign files,
-    a campaign with a failing run, a second campaign on a directory in use;
+    a campaign with a failing run or a run `mesopen run` refuses, a second campaign on a
+    directory in use;
   - dem: a few tiny runs with the grains as LIGGGHTS disks and their specific checks;
   - signal: SIGTERM or SIGINT sent to a running `mesopen run` (fe, dem, hybrid) or campaign, in
     the time loop: exit 143 or 130 and summary.json with status "interrupted".
@@ -230,16 +231,21 @@ def files_left(d, before, code):
 
 # ---- checks of a case's results ----------------------------------------------------------------
 
-def status(rel, want):
-    """summary.json at rel holds status `want`."""
+def summary_holds(rel, key, want):
+    """summary.json at rel holds `key` = `want`."""
     def check(d):
         try:
             with open(os.path.join(d, rel)) as f:
-                got = json.load(f).get("status")
+                got = json.load(f).get(key)
         except (OSError, ValueError) as e:
             return ["%s: %s" % (rel, e)]
-        return [] if got == want else ["%s: status %r, want %r" % (rel, got, want)]
+        return [] if got == want else ["%s: %s %r, want %r" % (rel, key, got, want)]
     return check
+
+
+def status(rel, want):
+    """summary.json at rel holds status `want`."""
+    return summary_holds(rel, "status", want)
 
 
 def completed(out="out"):
@@ -451,12 +457,15 @@ def corpus(mesopen, ref):
             ["campaign", "c.toml", "-o", "out", "--replicates", value], 2, "--replicates",
             files={"c.toml": '[campaign]\nbase = "scene.toml"\n[[run]]\nname = "a"\n', **S})
     add("cli", "analyze without directories", ["analyze"], 2, "dirs is required")
+    add("cli", "misspelt command rnu", ["rnu", "scene.toml", "-o", "out"], 2,
+        "unknown command 'rnu'; allowed: target, run, analyze, modal, campaign, keys", files=S)
+    add("cli", "--version (none)", ["--version"], 2, "unknown option '--version'; allowed: --help")
 
     # -- file ---------------------------------------------------------------------------------
     for command in ("run", "target", "modal", "campaign"):
         add("file", "%s: no such scene" % command, [command, "nothere.toml", "-o", "out"], 2,
             "nothere.toml: no such file")
-    for command in ("run", "target", "campaign"):
+    for command in ("run", "target", "modal", "campaign"):
         add("file", "%s: a directory as scene" % command, [command, "adir", "-o", "out"], 2,
             "adir: not a file", files={"adir/": None})
     add("file", "a FIFO as scene", ["run", "pipe.toml", "-o", "out"], 2, "pipe.toml: not a file",
@@ -714,6 +723,18 @@ def corpus(mesopen, ref):
         files={"out/": copy_of(ref["run"]), **S})
     add(O, "modal into a run's directory", cmd("modal"), 2, "holds the output of `mesopen run`",
         files={"out/": copy_of(ref["run"]), "scene.toml": scene(BEAM)})
+    add(O, "analyze -o a target's directory", ["analyze", "run", "-o", "out", "--no-plot"], 2,
+        "out: holds the output of `mesopen target`",
+        files={"run/": copy_of(ref["run"]), "out/": copy_of(ref["target"])},
+        checks=[summary_holds("out/summary.json", "command", "target")])
+    add(O, "analyze -o another run's directory (its summary kept)",
+        ["analyze", "run", "-o", "other", "--no-plot"], 0, "run: depth",
+        files={"run/": copy_of(ref["run"]), "other/": copy_of(ref["run"])},
+        checks=[summary_holds("other/summary.json", "command", "run")])
+    add(O, "a second run into a directory in use", cmd("run"), 1,
+        "out is in use by another mesopen run", files={"long.toml": scene(LONG), **S},
+        during=(["run", "long.toml", "-o", "out"] + QUIET["run"], "out/vtk/frame_000001.vtu"),
+        checks=[status("out/summary.json", "interrupted"), exists("out/vtk/frame_000001.vtu")])
     good_run(O, "run over a summary.json that is not JSON", {},
              files={"out/summary.json": "{not json", "scene.toml": scene()})
     good_run(O, "run over a stale run.h5.tmp and a stale frame", {},
@@ -735,6 +756,8 @@ def corpus(mesopen, ref):
     add(N, "no such directory", ["analyze", "nothere", "--no-plot"], 2, "nothere/run.h5")
     add(N, "a directory without run.h5", ["analyze", "empty", "--no-plot"], 2, "empty/run.h5",
         files={"empty/": None})
+    add(N, "run.h5 a directory", ["analyze", "r", "--no-plot"], 2, "r/run.h5: not a file",
+        files={"r/run.h5/": None})
     add(N, "a target's directory", ["analyze", "tg", "--no-plot"], 2, "tg/run.h5",
         files={"tg/": copy_of(ref["target"])})
     add(N, "a file, not a directory", ["analyze", "scene.toml", "--no-plot"], 2, "scene.toml",
@@ -805,9 +828,9 @@ def corpus(mesopen, ref):
     one = '[campaign]\nbase = "scene.toml"\n[[run]]\nname = "a"\n'
     frames = {"scene.toml": scene({"run.frame_interval": "0.0"})}
 
-    def bad_campaign(name, text, want, *extra):
+    def bad_campaign(name, text, want, *extra, **kw):
         add(C, name, ["campaign", "c.toml", "-o", "out"] + QUIET["campaign"] + list(extra), 2,
-            want, files=dict(frames, **{"c.toml": text}))
+            want, files=kw.pop("files", dict(frames, **{"c.toml": text})), **kw)
 
     bad_campaign("--representation foo", one, "--representation foo", "--representation", "foo")
     bad_campaign("--only an unknown run", one, "--only zzz", "--only", "zzz")
@@ -835,6 +858,16 @@ def corpus(mesopen, ref):
                  "campaign.base")
     bad_campaign("a run's key out of range", one + "run.velocity = -5.0\n", "run.velocity")
     bad_campaign("a run's unknown table", one + "bogus.key = 1\n", "[bogus]")
+    # what `mesopen run` refuses in a scene whose keys are each in range: refused before any run
+    for key, value in (("target.mesh", '"none"'), ("projectile.enabled", "false")):
+        bad_campaign("a run of %s = %s" % (key, value), one + "%s = %s\n" % (key, value),
+                     'replicate 1 (scene scene.toml): %s = ' % key,
+                     checks=[exists("out/runs", False)])
+    bad_campaign("--representation dem on a scene without grains", one, "run.representation",
+                 "--representation", "dem",
+                 files={"scene.toml": scene({"run.grains": "false", "run.frame_interval": "0.0"}),
+                        "c.toml": one},
+                 checks=[exists("out/runs", False)])
     bad_campaign("a later replicate's seed out of range",
                  one.replace("[[run]]", "seed_stride = 1000000000\nreplicates = 2\n[[run]]") +
                  "target.seed = 8999999999999999\n", "replicate 2")
