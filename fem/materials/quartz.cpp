@@ -42,15 +42,19 @@ public:
 private:
   // G(J) and dG/dJ: G = G0 + G1 P + G2 P^2, P = max(P-bar(mu), 0), mu = 1/J - 1.
   struct Shear {
-    double G, dG_dJ;
+    double G, dG_dJ, d2G_dJ2;
   };
   Shear shear(double J) const {
     const double mu = 1.0 / J - 1.0, P = std::max(eos_.cold(mu), 0.0);
-    const double dP_dmu = P > 0.0 ? (3.0 * eos_.K2 * mu + 2.0 * eos_.K1) * mu + eos_.K : 0.0;
+    const bool loaded = P > 0.0;
+    const double P_mu = loaded ? (3.0 * eos_.K2 * mu + 2.0 * eos_.K1) * mu + eos_.K : 0.0;
+    const double P_mumu = loaded ? 6.0 * eos_.K2 * mu + 2.0 * eos_.K1 : 0.0;
     const double G = G0_ + (G2_ * P + G1_) * P;
     if (G <= 0.0) // a fit falling below zero is held there
-      return {0.0, 0.0};
-    return {G, -(G1_ + 2.0 * G2_ * P) * dP_dmu / (J * J)};
+      return {0.0, 0.0, 0.0};
+    const double G_P = G1_ + 2.0 * G2_ * P, mu_J = -1.0 / (J * J), mu_JJ = 2.0 / (J * J * J);
+    return {G, G_P * P_mu * mu_J,
+            2.0 * G2_ * P_mu * P_mu * mu_J * mu_J + G_P * (P_mumu * mu_J * mu_J + P_mu * mu_JJ)};
   }
 
   // Without strength: the stored deviatoric energy W = G(J) / 2 (tr b* - 3) per initial volume;
@@ -76,7 +80,11 @@ private:
       energyEquation(a, b, p_min, in.volume_change[i], w_dev, s.energy[i], p_eos);
       s.pressure[i] = p_eos + p_shear;
       const double bulk = eos_.tangentBulk(mu, p_eos, a + b * s.energy[i], p_min);
-      const double G = iso.shearModulus(now.G), longitudinal = bulk + 4.0 / 3.0 * G;
+      // The stiffness W's dependence on J adds: in volume, -J dp_G/dJ = J G''(J) (tr b* - 3) / 2,
+      // and coupling volume and shear, about |G'(J)| |dev b*| (|dev b*|^2 ~ 2 (tr b* - 3)).
+      const double coupled = std::max(0.5 * iso.J * now.d2G_dJ2 * tr, 0.0) +
+                             std::abs(now.dG_dJ) * std::sqrt(2.0 * std::max(tr, 0.0));
+      const double G = iso.shearModulus(now.G), longitudinal = bulk + coupled + 4.0 / 3.0 * G;
       out.sound_speed[i] = std::sqrt(longitudinal * in.jacobian[i] / rho0_);
       out.shear_share[i] = longitudinal > 0.0 ? G / longitudinal : 0.75;
     }
