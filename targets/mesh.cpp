@@ -39,7 +39,8 @@ TriangleMesh fanMesh(const double *x, const double *y, std::size_t n) {
   m.x.push_back(c.x);
   m.y.push_back(c.y);
   for (std::uint32_t i = 0; i < n; ++i)
-    m.tri.insert(m.tri.end(), {static_cast<std::uint32_t>(n), i, static_cast<std::uint32_t>((i + 1) % n)});
+    m.tri.insert(m.tri.end(),
+                 {static_cast<std::uint32_t>(n), i, static_cast<std::uint32_t>((i + 1) % n)});
   return m;
 }
 
@@ -73,7 +74,8 @@ TriangleMesh qualityMesh(const double *x, const double *y, std::size_t n, double
     const int pieces = std::max(1, edgePieces(len, edge));
     for (int k = 0; k < pieces; ++k) {
       const double t = static_cast<double>(k) / pieces;
-      boundary.push_back(cdt.insert(K::Point_2(x[i] + t * (x[j] - x[i]), y[i] + t * (y[j] - y[i]))));
+      boundary.push_back(
+          cdt.insert(K::Point_2(x[i] + t * (x[j] - x[i]), y[i] + t * (y[j] - y[i]))));
     }
   }
   for (std::size_t i = 0; i < boundary.size(); ++i)
@@ -94,7 +96,8 @@ TriangleMesh qualityMesh(const double *x, const double *y, std::size_t n, double
   for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v)
     nodes.push_back(v);
   std::sort(nodes.begin(), nodes.end(), [](auto a, auto b) {
-    return a->point().x() < b->point().x() || (a->point().x() == b->point().x() && a->point().y() < b->point().y());
+    return a->point().x() < b->point().x() ||
+           (a->point().x() == b->point().x() && a->point().y() < b->point().y());
   });
   for (auto v : nodes) {
     id[v] = static_cast<std::uint32_t>(m.x.size());
@@ -116,7 +119,8 @@ TriangleMesh qualityMesh(const double *x, const double *y, std::size_t n, double
 
 void appendBody(Meshes &meshes, const TriangleMesh &body) {
   if (meshes.x.size() + body.x.size() > UINT32_MAX)
-    throw std::length_error("mesh: more than 2^32 nodes; use a coarser mesh_size or a smaller target");
+    throw std::length_error(
+        "mesh: more than 2^32 nodes; use a coarser mesh_size or a smaller target");
   const auto base = static_cast<std::uint32_t>(meshes.x.size());
   meshes.x.insert(meshes.x.end(), body.x.begin(), body.x.end());
   meshes.y.insert(meshes.y.end(), body.y.begin(), body.y.end());

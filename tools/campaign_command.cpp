@@ -25,17 +25,16 @@ namespace fs = std::filesystem;
 
 namespace {
 
-
 // One replicate of one run.
 struct Job {
   const CampaignRun *run = nullptr;
-  int replicate = 0;   // from 0
+  int replicate = 0; // from 0
   std::string dir, scene;
   toml::table tables; // the scene's
   std::int64_t seed = 0;
-  bool reused = false; // completed before, with the same scene
+  bool reused = false;  // completed before, with the same scene
   bool selected = true; // to run (see --only)
-  std::string status;  // completed, failed, interrupted, not run
+  std::string status;   // completed, failed, interrupted, not run
   std::string failure;
   double wall = 0.0;
   std::size_t steps = 0;
@@ -79,7 +78,9 @@ extern "C" void requestCampaignStop(int signal) {
 std::string cell(const std::string &text) {
   std::string out;
   for (char c : text)
-    out += c == '|' ? std::string("\\|") : c == '\n' || c == '\r' ? std::string(" ") : std::string(1, c);
+    out += c == '|'                 ? std::string("\\|")
+           : c == '\n' || c == '\r' ? std::string(" ")
+                                    : std::string(1, c);
   return out;
 }
 
@@ -123,8 +124,7 @@ void writeTables(const std::string &dir, const Campaign &c, const std::vector<Jo
     runs << csvField(j.run->name) << "," << j.replicate + 1 << "," << j.seed << "," << j.status
          << "," << show(j.wall, 6) << "," << j.steps;
     for (const auto &m : campaign_measures)
-      runs << ","
-           << (j.measures.contains(m.name) ? show(j.measures[m.name].get<double>(), 8) : "");
+      runs << "," << (j.measures.contains(m.name) ? show(j.measures[m.name].get<double>(), 8) : "");
     runs << "\n";
   }
   writeText(dir + "/runs.csv", runs.str());
@@ -189,7 +189,8 @@ void writeTables(const std::string &dir, const Campaign &c, const std::vector<Jo
       }
       md << "| " << cell(tr.name) << " | " << tr.measure << " | "
          << nameOf(tr.expect, trend_kind_names)
-         << (tr.expect == TrendKind::similar ? " (within " + show(100 * tr.tolerance, 3) + " %)" : "")
+         << (tr.expect == TrendKind::similar ? " (within " + show(100 * tr.tolerance, 3) + " %)"
+                                             : "")
          << " | " << cell(runs_text) << " | " << means << " | " << trends[t].seen << " | "
          << show(trends[t].effect, 3)
          << (std::isnan(trends[t].half_width) ? "" : " ± " + show(trends[t].half_width, 2)) << " | "
@@ -218,13 +219,15 @@ int campaignCommand(const CampaignOptions &options) {
                          " is not known; allowed: fe, dem, hybrid");
     }
     for (const std::string &name : options.only)
-      if (std::none_of(c.runs.begin(), c.runs.end(), [&](const CampaignRun &r) { return r.name == name; }))
+      if (std::none_of(c.runs.begin(), c.runs.end(),
+                       [&](const CampaignRun &r) { return r.name == name; }))
         throw InputError("--only " + name + ": no run of " + c.path + " has that name");
     // Every replicate's scene, composed and checked as `mesopen run` checks it before the
     // directory is touched: bad input stops the campaign before anything runs.
     for (const CampaignRun &r : c.runs) {
-      const bool selected = options.only.empty() || std::find(options.only.begin(), options.only.end(),
-                                                              r.name) != options.only.end();
+      const bool selected =
+          options.only.empty() ||
+          std::find(options.only.begin(), options.only.end(), r.name) != options.only.end();
       for (int k = 0; k < c.replicates; ++k) {
         Job j;
         j.run = &r, j.replicate = k, j.selected = selected;
@@ -319,7 +322,8 @@ int campaignCommand(const CampaignOptions &options) {
                        "%zu failed; elapsed %.0f s%s",
                        ran + 1, pending, j.run->name.c_str(), j.replicate + 1,
                        secondsSince(run_start), failed, secondsSince(start),
-                       std::isnan(eta) ? "" : (", ETA " + show(std::max(eta, 0.0), 3) + " s").c_str());
+                       std::isnan(eta) ? ""
+                                       : (", ETA " + show(std::max(eta, 0.0), 3) + " s").c_str());
           return 0;
         };
         const int code = runProgram(words, j.dir + "/log.txt", show_progress);
@@ -381,11 +385,15 @@ int campaignCommand(const CampaignOptions &options) {
     for (const Job &j : jobs) {
       completed += j.status == "completed";
       completed_now += j.status == "completed" && !j.reused;
-      nlohmann::json r = {{"run", j.run->name},        {"label", j.run->label},
-                          {"replicate", j.replicate + 1}, {"seed", j.seed},
+      nlohmann::json r = {{"run", j.run->name},
+                          {"label", j.run->label},
+                          {"replicate", j.replicate + 1},
+                          {"seed", j.seed},
                           {"dir", fs::relative(j.dir, dir).string()},
-                          {"status", j.status},         {"reused", j.reused},
-                          {"wall_seconds", j.wall},     {"steps", j.steps},
+                          {"status", j.status},
+                          {"reused", j.reused},
+                          {"wall_seconds", j.wall},
+                          {"steps", j.steps},
                           {"measures", j.measures}};
       if (!j.failure.empty())
         r["failure"] = j.failure;
@@ -412,40 +420,45 @@ int campaignCommand(const CampaignOptions &options) {
     double run_seconds = 0.0;
     for (const Job &j : jobs)
       run_seconds += j.wall;
-    nlohmann::json summary = {{"command", "campaign"},
-               {"campaign", fs::absolute(c.path).lexically_normal().string()},
-               {"name", c.name},
-               {"representation", c.representation ? nameOf(*c.representation, representation_names) : "as in the scenes"},
-               {"replicates", c.replicates},
-               {"seed_stride", c.seed_stride},
-               {"runs", runs},
-               {"trends", trend_list},
-               {"completed", completed},
-               {"failed", failed},
-               {"interrupted", stop_signal != 0},
-               {"run_seconds_sum", run_seconds},
-               {"wall_seconds", secondsSince(start)},
-               {"files", {"runs.csv", "table.csv", "table.md", "summary.json"}}};
+    nlohmann::json summary = {
+        {"command", "campaign"},
+        {"campaign", fs::absolute(c.path).lexically_normal().string()},
+        {"name", c.name},
+        {"representation",
+         c.representation ? nameOf(*c.representation, representation_names) : "as in the scenes"},
+        {"replicates", c.replicates},
+        {"seed_stride", c.seed_stride},
+        {"runs", runs},
+        {"trends", trend_list},
+        {"completed", completed},
+        {"failed", failed},
+        {"interrupted", stop_signal != 0},
+        {"run_seconds_sum", run_seconds},
+        {"wall_seconds", secondsSince(start)},
+        {"files", {"runs.csv", "table.csv", "table.md", "summary.json"}}};
     // The plots read the summary; then it lists them.
     writeJson(dir + "/summary.json", summary);
     const char *plots[] = {"campaign-rotational-momentum.png", "campaign-trends.png",
                            "campaign-trend-curves.png"};
     for (const char *f : plots)
       fs::remove(fs::path(dir) / f, ec);
-    const bool plotted = completed > 0 && runPlotScript("campaign.py", {dir + "/summary.json", dir});
+    const bool plotted =
+        completed > 0 && runPlotScript("campaign.py", {dir + "/summary.json", dir});
     if (completed > 0 && !plotted)
-      std::cerr << "mesopen campaign: warning: no plots (needs /usr/bin/python3 with matplotlib, and "
-                << shareDirectory() << "/campaign.py)\n";
+      std::cerr
+          << "mesopen campaign: warning: no plots (needs /usr/bin/python3 with matplotlib, and "
+          << shareDirectory() << "/campaign.py)\n";
     for (const char *f : plots)
       if (fs::exists(fs::path(dir) / f))
         summary["files"].push_back(f);
     writeJson(dir + "/summary.json", summary);
     std::printf("mesopen campaign: %zu of %zu completed (%zu now, %zu failed) in %.0f s; the runs' "
                 "own time %.0f s; tables in %s/table.md%s\n",
-                completed, jobs.size(), completed_now, failed, secondsSince(start),
-                run_seconds, dir.c_str(), plotted ? ", plots campaign-*.png" : "");
+                completed, jobs.size(), completed_now, failed, secondsSince(start), run_seconds,
+                dir.c_str(), plotted ? ", plots campaign-*.png" : "");
   } catch (const std::exception &e) {
-    std::cerr << "mesopen campaign: failed writing the tables in " << dir << ": " << e.what() << '\n';
+    std::cerr << "mesopen campaign: failed writing the tables in " << dir << ": " << e.what()
+              << '\n';
     return 1;
   }
   return stop_signal != 0 ? 128 + stop_signal : failed_now > 0 ? 1 : 0;

@@ -16,19 +16,19 @@ namespace mesopen {
 struct SceneOptions {
   std::string scene;
   std::string out_dir;
-  std::optional<std::uint64_t> seed;   // overrides target.seed
+  std::optional<std::uint64_t> seed; // overrides target.seed
   std::optional<int> threads;
 };
 
 struct TargetOptions : SceneOptions {
-  bool no_mesh = false;                // skip meshing (grains as polygons only)
-  bool no_plot = false;                // skip the histogram PNG
+  bool no_mesh = false; // skip meshing (grains as polygons only)
+  bool no_plot = false; // skip the histogram PNG
 };
 
 int targetCommand(const TargetOptions &options);
 
 struct RunOptions : SceneOptions {
-  bool quiet = false;                  // no progress line
+  bool quiet = false; // no progress line
 };
 
 int runCommand(const RunOptions &options);
@@ -40,17 +40,17 @@ struct Scene;
 void checkRunnable(const Scene &scene, const std::string &where);
 
 struct ModalOptions {
-  std::string input;                   // scene (.toml), target.h5 or run.h5
+  std::string input; // scene (.toml), target.h5 or run.h5
   std::string out_dir;
-  std::optional<int> modes;            // overrides modal.modes
+  std::optional<int> modes; // overrides modal.modes
   std::optional<int> threads;
 };
 
 int modalCommand(const ModalOptions &options);
 
 struct AnalyzeOptions {
-  std::vector<std::string> dirs;       // run directories (each with run.h5)
-  std::string out_dir;                 // plots; empty: the first run's directory
+  std::vector<std::string> dirs; // run directories (each with run.h5)
+  std::string out_dir;           // plots; empty: the first run's directory
   bool no_plot = false;
 };
 
@@ -62,13 +62,13 @@ int analyzeCommand(const AnalyzeOptions &options);
 nlohmann::json analyzeRun(const std::string &dir);
 
 struct CampaignOptions {
-  std::string campaign;                // campaign file (TOML)
+  std::string campaign; // campaign file (TOML)
   std::string out_dir;
-  std::optional<int> replicates;       // overrides campaign.replicates
+  std::optional<int> replicates;             // overrides campaign.replicates
   std::optional<std::string> representation; // overrides campaign.representation
-  std::vector<std::string> only;       // run only these entries (by name); empty: all
-  std::optional<int> threads;          // per run
-  bool quiet = false;                  // no progress line
+  std::vector<std::string> only;             // run only these entries (by name); empty: all
+  std::optional<int> threads;                // per run
+  bool quiet = false;                        // no progress line
 };
 
 int campaignCommand(const CampaignOptions &options);
@@ -77,9 +77,9 @@ int campaignCommand(const CampaignOptions &options);
 std::string shareDirectory();
 
 // Runs a program (words[0], a path) with its arguments, without a shell, its standard output and
-// error into the file `output` (made anew); while it runs, `waiting` (if given) is called about five
-// times a second, and a signal it returns (not 0) is sent to the program. The program runs in a
-// process group of its own (a terminal's Ctrl-C does not reach it). Returns its exit code (128 +
+// error into the file `output` (made anew); while it runs, `waiting` (if given) is called about
+// five times a second, and a signal it returns (not 0) is sent to the program. The program runs in
+// a process group of its own (a terminal's Ctrl-C does not reach it). Returns its exit code (128 +
 // the signal if one ended it), -1 if it did not start.
 int runProgram(const std::vector<std::string> &words, const std::string &output,
                const std::function<int()> &waiting = {});

@@ -50,13 +50,14 @@ int main(int argc, char **argv) {
   app.require_subcommand(1);
 
   mesopen::TargetOptions target;
-  auto *cmd = sceneCommand(app, "target", "make a sand target and the projectile from a scene", target);
+  auto *cmd =
+      sceneCommand(app, "target", "make a sand target and the projectile from a scene", target);
   cmd->add_flag("--no-mesh", target.no_mesh, "grains as polygons only, no triangles");
   cmd->add_flag("--no-plot", target.no_plot, "no grain-size histogram PNG");
 
   mesopen::RunOptions run;
-  auto *run_cmd =
-      sceneCommand(app, "run", "run a scene: the projectile and the grains as finite elements", run);
+  auto *run_cmd = sceneCommand(
+      app, "run", "run a scene: the projectile and the grains as finite elements", run);
   run_cmd->add_flag("--quiet", run.quiet, "no progress line");
 
   mesopen::AnalyzeOptions analyze;
@@ -91,17 +92,20 @@ int main(int argc, char **argv) {
   campaign_cmd->add_option("-o,--output", campaign.out_dir, "output directory")
       ->required()
       ->check(output_directory);
-  campaign_cmd->add_option("--replicates", campaign.replicates,
-                           "target layouts per run (overrides campaign.replicates)")
+  campaign_cmd
+      ->add_option("--replicates", campaign.replicates,
+                   "target layouts per run (overrides campaign.replicates)")
       ->check(CLI::Range(1, 1000));
   campaign_cmd->add_option("--representation", campaign.representation,
                            "fe, dem or hybrid for every run (overrides campaign.representation)");
   campaign_cmd->add_option("--only", campaign.only, "run only these runs (names)")->delimiter(',');
-  campaign_cmd->add_option("--threads", campaign.threads, "threads of each run (default: all cores)")
+  campaign_cmd
+      ->add_option("--threads", campaign.threads, "threads of each run (default: all cores)")
       ->check(CLI::Range(1, 1024));
   campaign_cmd->add_flag("--quiet", campaign.quiet, "no progress line");
 
-  auto *keys = app.add_subcommand("keys", "print every scene key with its default and allowed range");
+  auto *keys =
+      app.add_subcommand("keys", "print every scene key with its default and allowed range");
 
   // A first word that names no command is said with the command names (CLI11 says only that a
   // subcommand is required).

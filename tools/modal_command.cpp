@@ -310,8 +310,7 @@ int modalCommand(const ModalOptions &options) {
     const nlohmann::json modes = modesJson(options, problem, result);
     writeJson(options.out_dir + "/modes.json", modes);
     writeModesVtu(options.out_dir + "/modes.vtu", problem.mesh, result);
-    const double wall =
-        secondsSince(start);
+    const double wall = secondsSince(start);
     nlohmann::json summary = {{"command", "modal"},
                               {"input", modes["input"]},
                               {"body", problem.body},

@@ -33,7 +33,8 @@ namespace fs = std::filesystem;
 std::string shareDirectory() {
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  return ec ? std::string("share/mesopen") : (exe.parent_path().parent_path() / "share" / "mesopen").string();
+  return ec ? std::string("share/mesopen")
+            : (exe.parent_path().parent_path() / "share" / "mesopen").string();
 }
 
 int runProgram(const std::vector<std::string> &words, const std::string &output,
@@ -97,8 +98,10 @@ double peakMemoryBytes() {
 bool plotHistogram(const std::string &dir) {
   if (runPlotScript("grain_sizes.py", {dir + "/target.json", dir + "/grain-sizes.png"}))
     return true;
-  std::cerr << "mesopen target: warning: no grain-size plot (needs /usr/bin/python3 with matplotlib, "
-               "and " << shareDirectory() << "/grain_sizes.py)\n";
+  std::cerr
+      << "mesopen target: warning: no grain-size plot (needs /usr/bin/python3 with matplotlib, "
+         "and "
+      << shareDirectory() << "/grain_sizes.py)\n";
   return false;
 }
 
@@ -154,7 +157,8 @@ int targetCommand(const TargetOptions &options) {
     phase = "placing the projectile";
     PlacedProjectile projectile;
     if (scene.projectile.enabled)
-      projectile = placeProjectile(scene.projectile, scene.target.mesh_size, scene.target, target.grains);
+      projectile =
+          placeProjectile(scene.projectile, scene.target.mesh_size, scene.target, target.grains);
     const PlacedProjectile *pp = scene.projectile.enabled ? &projectile : nullptr;
 
     if (stopSignal() != 0)
@@ -164,8 +168,10 @@ int targetCommand(const TargetOptions &options) {
     const std::string dir = options.out_dir;
     // The four files are independent: written side by side (HDF5 is used by one thread only).
     std::vector<std::future<void>> writes;
-    writes.push_back(std::async(std::launch::async, [&] { writeTargetH5(dir + "/target.h5", target, pp); }));
-    writes.push_back(std::async(std::launch::async, [&] { writeTargetVtu(dir + "/target.vtu", target, pp); }));
+    writes.push_back(
+        std::async(std::launch::async, [&] { writeTargetH5(dir + "/target.h5", target, pp); }));
+    writes.push_back(
+        std::async(std::launch::async, [&] { writeTargetVtu(dir + "/target.vtu", target, pp); }));
     // The disks of both DEM files, inside the walls; the projectile is not in them.
     const Disks disks = targetDisks(target, scene.dem.disk_size);
     writes.push_back(std::async(std::launch::async,
@@ -183,7 +189,8 @@ int targetCommand(const TargetOptions &options) {
                          std::to_string(t.porosity) + " by more than 0.005");
     const double lost = static_cast<double>(report.grain_sites) - static_cast<double>(m.grains);
     if (lost > 0.01 * report.grain_sites)
-      warnings.push_back(std::to_string(static_cast<long>(lost)) + " of " + std::to_string(report.grain_sites) +
+      warnings.push_back(std::to_string(static_cast<long>(lost)) + " of " +
+                         std::to_string(report.grain_sites) +
                          " grain sites lost (merged or without a cell)");
     for (const auto &w : warnings)
       std::cerr << "mesopen target: warning: " << w << '\n';
@@ -203,12 +210,16 @@ int targetCommand(const TargetOptions &options) {
                              {"delaunay", report.tessellation.delaunay_seconds},
                              {"mesh", report.seconds_mesh}};
     j["peak_memory_bytes"] = peakMemoryBytes();
-    j["requested"] = {{"width", t.width},       {"height", t.height},
-                      {"diameter_min", t.diameter_min}, {"diameter_max", t.diameter_max},
-                      {"porosity", t.porosity}, {"void_ratio", t.void_ratio},
+    j["requested"] = {{"width", t.width},
+                      {"height", t.height},
+                      {"diameter_min", t.diameter_min},
+                      {"diameter_max", t.diameter_max},
+                      {"porosity", t.porosity},
+                      {"void_ratio", t.void_ratio},
                       {"placement", nameOf(t.placement, placement_names)},
                       {"tessellation", nameOf(t.tessellation, tessellation_names)},
-                      {"seed", t.seed},         {"mesh", nameOf(t.mesh, mesh_names)},
+                      {"seed", t.seed},
+                      {"mesh", nameOf(t.mesh, mesh_names)},
                       {"mesh_size", t.mesh_size}};
     j["sites"] = {{"grains", report.grain_sites}, {"voids", report.void_sites}};
     j["porosity_control"] = {{"void_factor", report.void_factor},
@@ -255,8 +266,9 @@ int targetCommand(const TargetOptions &options) {
     writeJson(dir + "/summary.json", summary);
 
     std::cout << "mesopen target: " << m.grains << " grains, porosity " << 100 * m.porosity
-              << " %, mean diameter " << 1e6 * m.mean_diameter << " um, std " << 1e6 * m.std_diameter
-              << " um, " << target.mesh.triangles() << " triangles, " << seconds << " s\n"
+              << " %, mean diameter " << 1e6 * m.mean_diameter << " um, std "
+              << 1e6 * m.std_diameter << " um, " << target.mesh.triangles() << " triangles, "
+              << seconds << " s\n"
               << "  files in " << dir << ": target.h5 target.data target.vtu (ParaView) "
               << "target.spheres target.json summary.json\n";
     return 0;

@@ -21,8 +21,9 @@ using mesopen::test::ScratchDir;
 
 namespace {
 
-const char *tiny_base = "[target]\nwidth = 0.6e-3\nheight = 0.3e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
-                        "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 1e-8\n";
+const char *tiny_base =
+    "[target]\nwidth = 0.6e-3\nheight = 0.3e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
+    "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 1e-8\n";
 
 // The message of the InputError that reading `campaign` (beside the tiny base scene) raises.
 std::string errorOf(const ScratchDir &dir, const std::string &campaign) {
@@ -41,7 +42,7 @@ std::string errorOf(const ScratchDir &dir, const std::string &campaign) {
 // Student's t, two-sided 95 %: the values of standard tables (e.g. NIST/SEMATECH e-Handbook,
 // Table 1.3.6.7.2) to their 3 decimals; beyond dof 30 the expansion, against the same table.
 TEST(Campaign, StudentQuantileMatchesTables) {
-  const std::pair<int, double> table[] = {{1, 12.706}, {2, 4.303}, {4, 2.776}, {9, 2.262},
+  const std::pair<int, double> table[] = {{1, 12.706}, {2, 4.303},  {4, 2.776},  {9, 2.262},
                                           {30, 2.042}, {40, 2.021}, {60, 2.000}, {100, 1.984}};
   for (auto [dof, t] : table)
     EXPECT_NEAR(studentT95(dof), t, 1.5e-3) << dof;
@@ -137,7 +138,8 @@ TEST(Campaign, BadInputNamesTheKey) {
       {"[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\n"
        "[[trend]]\nexpect = \"rises\"\nruns = [\"a\", \"a\"]\n",
        "\"a\" twice"},
-      {"[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\nscene = 3\n", "scene = 3 is not a string"},
+      {"[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\nscene = 3\n",
+       "scene = 3 is not a string"},
       {"[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\nreference = 3\n",
        "reference must be a table"},
   };
@@ -204,7 +206,8 @@ TEST(Campaign, RunsEachReplicateOnce) {
 TEST(Campaign, OneCampaignADirectory) {
   ScratchDir dir("campaign-lock");
   mesopen::test::writeFile(dir / "base.toml", tiny_base);
-  mesopen::test::writeFile(dir / "c.toml", "[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\n");
+  mesopen::test::writeFile(dir / "c.toml",
+                           "[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\n");
   std::filesystem::create_directories(dir / "out");
   const int held = open((dir / "out/.campaign.lock").c_str(), O_RDWR | O_CREAT, 0644);
   ASSERT_GE(held, 0);

@@ -70,7 +70,8 @@ TEST(StableStep, BoundsTheElementCriticalStep) {
       fem::Model model = mesh.model(test::oneMaterial(
           "elastic", {{"density", rho}, {"bulk_modulus", K}, {"shear_modulus", G}}));
       model.nodes.vx[0] = 1e-9; // take part in the time loop
-      fem::Solver solver(model, {.safety = 1.0, .viscosity_linear = 0.0, .viscosity_quadratic = 0.0});
+      fem::Solver solver(model,
+                         {.safety = 1.0, .viscosity_linear = 0.0, .viscosity_quadratic = 0.0});
       // Exact: K_e = A B^T C B, M = rho A / 3 I.
       const double lam = K - 2.0 * G / 3.0, A = std::abs(area);
       Eigen::Matrix3d C;
@@ -83,14 +84,15 @@ TEST(StableStep, BoundsTheElementCriticalStep) {
         B(1, 2 * i + 1) = B(2, 2 * i) = (x[k] - x[j]) / (2 * A);
       }
       const Eigen::Matrix<double, 6, 6> Ke = A * B.transpose() * C * B / (rho * A / 3.0);
-      const double omega = std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(Ke)
-                                         .eigenvalues()
-                                         .maxCoeff());
+      const double omega = std::sqrt(
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(Ke).eigenvalues().maxCoeff());
       const double critical = 2.0 / omega;
       // Exact: the element's own bound (see criticalStepGain) is the critical step, slivers
       // included (L / c alone is off by up to 1.5 either way); never above it beyond round-off.
-      ASSERT_LE(solver.dt(), critical * (1 + 1e-9)) << "K " << K << " G " << G << " trial " << trial;
-      ASSERT_GT(solver.dt(), critical * (1 - 1e-6)) << "K " << K << " G " << G << " trial " << trial;
+      ASSERT_LE(solver.dt(), critical * (1 + 1e-9))
+          << "K " << K << " G " << G << " trial " << trial;
+      ASSERT_GT(solver.dt(), critical * (1 - 1e-6))
+          << "K " << K << " G " << G << " trial " << trial;
     }
   }
 }
@@ -116,7 +118,8 @@ TEST(StableStep, ScaledForAPenaltyTiedToTheStep) {
     fem::Model model = mesh.model(test::oneMaterial("steel"));
     model.nodes.vx[1] = 1e-3, model.nodes.vy[2] = -1e-3; // small: the step stays constant
     // safety 0.95: at 1 the bound is the limit itself, where central differences grow linearly
-    fem::Solver solver(model, {.safety = 0.95, .viscosity_linear = 0.0, .viscosity_quadratic = 0.0});
+    fem::Solver solver(model,
+                       {.safety = 0.95, .viscosity_linear = 0.0, .viscosity_quadratic = 0.0});
     StepSpring spring;
     spring.kappa = 2.0, spring.declared = declared, spring.x0 = 0.0, spring.y0 = 0.0;
     solver.addForceProvider(&spring);
@@ -127,7 +130,8 @@ TEST(StableStep, ScaledForAPenaltyTiedToTheStep) {
       for (int i = 0; i < 2000 && std::max(fastest[0], fastest[1]) < 1.0; ++i) {
         solver.step();
         for (std::size_t a = 0; a < 3; ++a)
-          fastest[i / 1000] = std::max(fastest[i / 1000], std::hypot(model.nodes.vx[a], model.nodes.vy[a]));
+          fastest[i / 1000] =
+              std::max(fastest[i / 1000], std::hypot(model.nodes.vx[a], model.nodes.vy[a]));
       }
     } catch (const fem::RunFailure &) {
       fastest[1] = HUGE_VAL; // inverted
@@ -197,9 +201,10 @@ TEST(StableStep, CollapsedElementErodes) {
 // drawn out into a sliver (the shape that sets the step late in a penetration run). Without mass
 // scaling its step falls below 0.3 of the first; with it, the step stays at 0.5 of the first (to
 // round-off), and at each step that adds mass it is 0.9 (`safety`) of the element's exact critical
-// step 2 / omega_max with the nodes' grown masses (elastic stiffness, no viscosity), to 1e-6: the mass added is
-// what brings it there, no more. The momentum stays zero to round-off, and the balance, the kinetic
-// energy the added mass took booked, closes as without mass scaling (1e-5; a single element).
+// step 2 / omega_max with the nodes' grown masses (elastic stiffness, no viscosity), to 1e-6: the
+// mass added is what brings it there, no more. The momentum stays zero to round-off, and the
+// balance, the kinetic energy the added mass took booked, closes as without mass scaling (1e-5; a
+// single element).
 TEST(StableStep, MassScalingHoldsTheStepAndMomentum) {
   const double rho = 7823.0, K = 163.9e9, G = 77.5e9;
   // Exact: K_e = A B^T C B on the current shape, M the nodes' masses.
@@ -232,11 +237,14 @@ TEST(StableStep, MassScalingHoldsTheStepAndMomentum) {
     TestMesh mesh;
     mesh.node_offset = {0, 3}, mesh.tri_offset = {0, 1}, mesh.tri = {0, 1, 2};
     mesh.x = {0, 1e-5, 0.5e-5}, mesh.y = {0, 0, 0.5e-5 * std::sqrt(3.0)};
-    fem::Model model = mesh.model(test::oneMaterial(
-        "von-mises", {{"density", rho}, {"bulk_modulus", K}, {"shear_modulus", G},
-                      {"yield_stress", 1e6}, {"hardening_modulus", 0.0}}));
+    fem::Model model = mesh.model(test::oneMaterial("von-mises", {{"density", rho},
+                                                                  {"bulk_modulus", K},
+                                                                  {"shear_modulus", G},
+                                                                  {"yield_stress", 1e6},
+                                                                  {"hardening_modulus", 0.0}}));
     model.nodes.vx = {-150.0, -150.0, 300.0};
-    fem::Solver solver(model, {.viscosity_linear = 0.0, .viscosity_quadratic = 0.0, // undamped
+    fem::Solver solver(model, {.viscosity_linear = 0.0,
+                               .viscosity_quadratic = 0.0, // undamped
                                .mass_scaling_dt_ratio = ratio});
     Result r;
     r.first = r.shortest = solver.dt();
@@ -252,7 +260,8 @@ TEST(StableStep, MassScalingHoldsTheStepAndMomentum) {
       }
     }
     for (std::size_t a = 0; a < 3; ++a)
-      r.px += model.nodes.mass[a] * model.nodes.vx[a], r.py += model.nodes.mass[a] * model.nodes.vy[a];
+      r.px += model.nodes.mass[a] * model.nodes.vx[a],
+          r.py += model.nodes.mass[a] * model.nodes.vy[a];
     r.added = solver.addedMass();
     r.energy = solver.energy();
     EXPECT_EQ(solver.massScaledElements(), r.added > 0.0 ? 1u : 0u);
@@ -264,8 +273,9 @@ TEST(StableStep, MassScalingHoldsTheStepAndMomentum) {
               "added mass %.3g of the element's, mass-scaling energy %.3g of the initial, steps "
               "adding mass at %.7f-%.7f of the exact critical step\n",
               without.shortest / without.first, without.balance, with.shortest / with.first,
-              with.balance, with.added / element_mass, with.energy.mass_scaling / with.energy.initial,
-              with.lowest_ratio, with.highest_ratio);
+              with.balance, with.added / element_mass,
+              with.energy.mass_scaling / with.energy.initial, with.lowest_ratio,
+              with.highest_ratio);
   EXPECT_LT(without.shortest, 0.3 * without.first) << "the element is not drawn out enough";
   EXPECT_GE(with.shortest, 0.5 * with.first * (1.0 - 1e-12));
   EXPECT_GT(with.added, 0.0);
@@ -314,7 +324,8 @@ TEST(Erosion, BoundaryAreasAndDetachedNodes) {
     int uses = 0;
     for (std::size_t e = 0; e < model.elements.size(); ++e)
       for (int i = 0; i < 3 && !model.elements.eroded[e]; ++i)
-        uses += model.elements.node[3 * e + i] == b[k] && model.elements.node[3 * e + (i + 1) % 3] == b[k + 1];
+        uses += model.elements.node[3 * e + i] == b[k] &&
+                model.elements.node[3 * e + (i + 1) % 3] == b[k + 1];
     EXPECT_EQ(uses, 1) << "edge " << b[k] << "-" << b[k + 1];
   }
   // The two elements at the corner node 0: it is left alone, a free mass.
@@ -371,8 +382,9 @@ TEST(Solver, SameResultWithAnyThreadCount) {
     mesh.addRectangle(0, 0, 1e-3, 1e-3, 30, 30, 0.3);
     fem::Model model = mesh.model(test::oneMaterial("quartz"));
     fem::setBodyVelocity(model, 0, 0.0, -200.0, 1e5);
-    model.constraints.push_back(
-        {"base", test::nodesWhere(model, [](double, double y) { return y < 1e-9; }), true, true, 0, 0});
+    model.constraints.push_back({"base",
+                                 test::nodesWhere(model, [](double, double y) { return y < 1e-9; }),
+                                 true, true, 0, 0});
     fem::Solver solver(model, {.chunk = 64});
     for (int i = 0; i < 100; ++i)
       solver.step();

@@ -6,8 +6,8 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <csignal>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 
 using namespace mesopen;
@@ -124,8 +124,8 @@ TEST(Run, BadInputNamesTheKey) {
 TEST(Run, DiskRunNeedsAPlainOutputPath) {
   ScratchDir dir("run-dem-path");
   test::writeFile(dir / "scene.toml", tinyScene("representation = \"dem\"\n"));
-  const auto r = test::runMesopen("run " + (dir / "scene.toml") + " -o '" + (dir / "out put") +
-                                  "' --quiet");
+  const auto r =
+      test::runMesopen("run " + (dir / "scene.toml") + " -o '" + (dir / "out put") + "' --quiet");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("run.representation"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("out put"), std::string::npos) << r.output;
