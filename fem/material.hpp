@@ -28,9 +28,11 @@ struct StrainBatch {
   const double *volume_change;   // V(n+1) - V(n) of the element [m^2]
   const double *volume_mid;      // V at mid-step [m^2]
   const double *volume0;         // initial V [m^2]
-  // The deformation gradient F = dx/dX at n+1 and at n (xx, xy, yx, yy), for the materials that
-  // ask for it (Material::usesDeformationGradient; null otherwise).
+  // The deformation gradient F = dx/dX at n+1 and at n (xx, xy, yx, yy), and J^(-1/3) of each
+  // (hyperelastic.hpp, inverseCubeRoots), for the materials that ask for them
+  // (Material::usesDeformationGradient; null otherwise).
   std::array<const double *, 4> f{}, f_old{};
+  const double *inverse_cube_root_j = nullptr, *inverse_cube_root_j_old = nullptr;
 };
 
 // Element state the material updates in place (pointers to the first element of the batch).

@@ -1,4 +1,5 @@
 #include "solver.hpp"
+#include "materials/hyperelastic.hpp"
 #include "threads.hpp"
 
 #include <algorithm>
@@ -185,6 +186,7 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
   m_.nodes.clearExternal();
   updateActivity();
   failed_.assign(el.size(), 0);
+  storeReferenceShapes();
   internalForces(0.0);
   erode_below_ = s_.erode_dt_ratio * shortest_step_;
   scale_below_ = s_.mass_scaling_dt_ratio * shortest_step_;
@@ -195,6 +197,24 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
   accountEnergy();
   energy_.initial = energy_.kinetic + energy_.internal;
   energy_.balance_error = 0.0;
+}
+
+void Solver::storeReferenceShapes() {
+  const Elements &el = m_.elements;
+  const double *X = m_.nodes.x0.data(), *Y = m_.nodes.y0.data();
+  for (const Body &body : m_.bodies) {
+    if (!m_.materials[body.material]->usesDeformationGradient())
+      continue;
+    for (auto &inverse : reference_inverse_)
+      inverse.resize(el.size(), 0.0);
+    for (std::size_t e = body.element_begin; e < body.element_end; ++e) {
+      const std::uint32_t a = el.node[3 * e], b = el.node[3 * e + 1], c = el.node[3 * e + 2];
+      const double exx = X[b] - X[a], exy = X[c] - X[a], eyx = Y[b] - Y[a], eyy = Y[c] - Y[a];
+      const double inv = 1.0 / (exx * eyy - exy * eyx);
+      reference_inverse_[0][e] = eyy * inv, reference_inverse_[1][e] = -exy * inv;
+      reference_inverse_[2][e] = -eyx * inv, reference_inverse_[3][e] = exx * inv;
+    }
+  }
 }
 
 void Solver::addForceProvider(ForceProvider *provider) {
@@ -733,29 +753,35 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   // Materials without strength take their deviator from the deformation gradient F = dx/dX, at
   // n + 1 and at n (x(n) = x(n+1) - dt v(n+1/2)), on the constant-strain triangle's initial shape.
   alignas(64) double f_new[4][max_chunk], f_old[4][max_chunk];
+  alignas(64) double r_new[max_chunk], r_old[max_chunk]; // J^(-1/3)
   const bool total_form = chunk.material->usesDeformationGradient();
   if (total_form) {
-    const double *X = m_.nodes.x0.data(), *Y = m_.nodes.y0.data();
+    alignas(64) double j_new[max_chunk], j_old[max_chunk];
+    const double *ixx = reference_inverse_[0].data() + e0, *ixy = reference_inverse_[1].data() + e0;
+    const double *iyx = reference_inverse_[2].data() + e0, *iyy = reference_inverse_[3].data() + e0;
+#pragma omp simd
     for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t a = conn[3 * i], b = conn[3 * i + 1], c = conn[3 * i + 2];
-      const double inv = 1.0 / ((X[b] - X[a]) * (Y[c] - Y[a]) - (X[c] - X[a]) * (Y[b] - Y[a]));
-      const double gxk[3] = {(Y[b] - Y[c]) * inv, (Y[c] - Y[a]) * inv, (Y[a] - Y[b]) * inv};
-      const double gyk[3] = {(X[c] - X[b]) * inv, (X[a] - X[c]) * inv, (X[b] - X[a]) * inv};
-      for (int m = 0; m < 4; ++m)
-        f_new[m][i] = f_old[m][i] = 0.0;
-      for (int k = 0; k < 3; ++k) {
-        const double xo = x[k][i] - dt * vx[k][i], yo = y[k][i] - dt * vy[k][i];
-        f_new[0][i] += x[k][i] * gxk[k], f_new[1][i] += x[k][i] * gyk[k];
-        f_new[2][i] += y[k][i] * gxk[k], f_new[3][i] += y[k][i] * gyk[k];
-        f_old[0][i] += xo * gxk[k], f_old[1][i] += xo * gyk[k];
-        f_old[2][i] += yo * gxk[k], f_old[3][i] += yo * gyk[k];
-      }
+      // F = [x_b - x_a, x_c - x_a] [X_b - X_a, X_c - X_a]^-1, at n+1 and at n.
+      double exx = x[1][i] - x[0][i], exy = x[2][i] - x[0][i];
+      double eyx = y[1][i] - y[0][i], eyy = y[2][i] - y[0][i];
+      f_new[0][i] = exx * ixx[i] + exy * iyx[i], f_new[1][i] = exx * ixy[i] + exy * iyy[i];
+      f_new[2][i] = eyx * ixx[i] + eyy * iyx[i], f_new[3][i] = eyx * ixy[i] + eyy * iyy[i];
+      j_new[i] = f_new[0][i] * f_new[3][i] - f_new[1][i] * f_new[2][i];
+      exx -= dt * (vx[1][i] - vx[0][i]), exy -= dt * (vx[2][i] - vx[0][i]);
+      eyx -= dt * (vy[1][i] - vy[0][i]), eyy -= dt * (vy[2][i] - vy[0][i]);
+      f_old[0][i] = exx * ixx[i] + exy * iyx[i], f_old[1][i] = exx * ixy[i] + exy * iyy[i];
+      f_old[2][i] = eyx * ixx[i] + eyy * iyx[i], f_old[3][i] = eyx * ixy[i] + eyy * iyy[i];
+      j_old[i] = f_old[0][i] * f_old[3][i] - f_old[1][i] * f_old[2][i];
     }
+    inverseCubeRoots(j_new, r_new, n);
+    inverseCubeRoots(j_old, r_old, n);
   }
   StrainBatch in{n, dt, dxx, dyy, dxy, spin, jac, dvol, vmid, el.area0.data() + e0};
-  if (total_form)
-    in.f = {f_new[0], f_new[1], f_new[2], f_new[3]},
+  if (total_form) {
+    in.f = {f_new[0], f_new[1], f_new[2], f_new[3]};
     in.f_old = {f_old[0], f_old[1], f_old[2], f_old[3]};
+    in.inverse_cube_root_j = r_new, in.inverse_cube_root_j_old = r_old;
+  }
   StressState state{el.sxx.data() + e0,      el.syy.data() + e0,    el.sxy.data() + e0,
                     el.pressure.data() + e0, el.energy.data() + e0, el.plastic_strain.data() + e0};
   alignas(64) double shear_share[max_chunk];

@@ -182,6 +182,7 @@ private:
   void kickAndDrift(double dt);
   void forces(double dt, bool kick);
   void nodalVolumes(const Unit &unit, const UnitNodes &nodes);
+  void storeReferenceShapes();
   void elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums);
   void applyConstraints(double half_dt, bool second_half);
   void erode();
@@ -224,6 +225,9 @@ private:
   double scale_below_ = 0.0; // mass_scaling_dt_ratio times it
   std::unordered_map<std::uint32_t, double> added_mass_; // by element, what mass scaling added
   std::vector<std::uint8_t> constrained_;                // by node: 1 x imposed, 2 y imposed
+  // The inverse of each total-form element's initial edge matrix [X_b - X_a, X_c - X_a] (rows x, y;
+  // xx, xy, yx, yy): F = [x_b - x_a, x_c - x_a] times it. Empty when no material uses F.
+  std::array<std::vector<double>, 4> reference_inverse_;
   std::vector<std::uint8_t>
       failed_; // per element: failed in this step's pass, 2 for a collapsed step
   // The shortest element step of the last element pass, before the safety factor and the

@@ -21,25 +21,27 @@ public:
   bool usesDeformationGradient() const override { return true; }
 
   void update(const StrainBatch &in, StressState &s, MaterialOutput &out) const override {
+    const double *f0 = in.f[0], *f1 = in.f[1], *f2 = in.f[2], *f3 = in.f[3];
+    const double *g0 = in.f_old[0], *g1 = in.f_old[1], *g2 = in.f_old[2], *g3 = in.f_old[3];
+    const double *r = in.inverse_cube_root_j, *r_old = in.inverse_cube_root_j_old;
     for (std::size_t i = 0; i < in.n; ++i) {
-      const DeformationGradient F{in.f[0][i], in.f[1][i], in.f[2][i], in.f[3][i]};
-      const DeformationGradient F_old{in.f_old[0][i], in.f_old[1][i], in.f_old[2][i],
-                                      in.f_old[3][i]};
-      const Isochoric now(F), before(F_old);
-      neoHookeanDeviator(F, now, G_, s.sxx[i], s.syy[i], s.sxy[i]);
-      s.energy[i] += in.volume0[i] * (storedEnergy(now) - storedEnergy(before));
-      s.pressure[i] = -K_ * std::log(now.J);
-      const double shear = now.shearModulus(G_);
-      out.sound_speed[i] = std::sqrt((K_ + 4.0 / 3.0 * shear) * now.J / rho0_); // rho = rho0 / J
+      const double J = determinant(f0[i], f1[i], f2[i], f3[i]);
+      const double J_old = determinant(g0[i], g1[i], g2[i], g3[i]);
+      const double trace = isochoricTrace(f0[i], f1[i], f2[i], f3[i], r[i]);
+      const double trace_old = isochoricTrace(g0[i], g1[i], g2[i], g3[i], r_old[i]);
+      neoHookeanDeviator(f0[i], f1[i], f2[i], f3[i], J, r[i], G_, s.sxx[i], s.syy[i], s.sxy[i]);
+      s.energy[i] += in.volume0[i] * (storedEnergy(J, trace) - storedEnergy(J_old, trace_old));
+      s.pressure[i] = -K_ * std::log(J);
+      const double shear = incrementalShearModulus(G_, trace, J);
+      out.sound_speed[i] = std::sqrt((K_ + 4.0 / 3.0 * shear) * J / rho0_); // rho = rho0 / J
       out.shear_share[i] = shear / (K_ + 4.0 / 3.0 * shear);
     }
   }
 
 private:
   // W + U per initial volume.
-  double storedEnergy(const Isochoric &iso) const {
-    const double J = iso.J;
-    return 0.5 * G_ * (iso.trace - 3.0) + K_ * (J * std::log(J) - J + 1.0);
+  double storedEnergy(double J, double trace) const {
+    return 0.5 * G_ * (trace - 3.0) + K_ * (J * std::log(J) - J + 1.0);
   }
 
   double rho0_, K_, G_;

@@ -62,15 +62,18 @@ private:
   // takes W's change.
   void elasticUpdate(const StrainBatch &in, StressState &s, MaterialOutput &out) const {
     const double p_min = -eos_.cutoff;
+    const double *f0 = in.f[0], *f1 = in.f[1], *f2 = in.f[2], *f3 = in.f[3];
+    const double *g0 = in.f_old[0], *g1 = in.f_old[1], *g2 = in.f_old[2], *g3 = in.f_old[3];
+    const double *r = in.inverse_cube_root_j, *r_old = in.inverse_cube_root_j_old;
     for (std::size_t i = 0; i < in.n; ++i) {
-      const DeformationGradient F{in.f[0][i], in.f[1][i], in.f[2][i], in.f[3][i]};
-      const DeformationGradient F_old{in.f_old[0][i], in.f_old[1][i], in.f_old[2][i],
-                                      in.f_old[3][i]};
-      const Isochoric iso(F), iso_old(F_old);
-      const Shear now = shear(iso.J), before = shear(iso_old.J);
-      const double tr = iso.trace - 3.0, tr_old = iso_old.trace - 3.0;
+      const double J = determinant(f0[i], f1[i], f2[i], f3[i]);
+      const double J_old = determinant(g0[i], g1[i], g2[i], g3[i]);
+      const Shear now = shear(J), before = shear(J_old);
+      const double trace = isochoricTrace(f0[i], f1[i], f2[i], f3[i], r[i]);
+      const double tr = trace - 3.0,
+                   tr_old = isochoricTrace(g0[i], g1[i], g2[i], g3[i], r_old[i]) - 3.0;
       const double p_shear = -0.5 * now.dG_dJ * tr, p_shear_old = -0.5 * before.dG_dJ * tr_old;
-      neoHookeanDeviator(F, iso, now.G, s.sxx[i], s.syy[i], s.sxy[i]);
+      neoHookeanDeviator(f0[i], f1[i], f2[i], f3[i], J, r[i], now.G, s.sxx[i], s.syy[i], s.sxy[i]);
       const double w_dev = in.volume0[i] * 0.5 * (now.G * tr - before.G * tr_old);
       const double mu = 1.0 / in.jacobian[i] - 1.0;
       // The stored shear energy is not heat: the thermal term Gamma rho0 e sees E - A0 W.
@@ -82,9 +85,10 @@ private:
       const double bulk = eos_.tangentBulk(mu, p_eos, a + b * s.energy[i], p_min);
       // The stiffness W's dependence on J adds: in volume, -J dp_G/dJ = J G''(J) (tr b* - 3) / 2,
       // and coupling volume and shear, about |G'(J)| |dev b*| (|dev b*|^2 ~ 2 (tr b* - 3)).
-      const double coupled = std::max(0.5 * iso.J * now.d2G_dJ2 * tr, 0.0) +
+      const double coupled = std::max(0.5 * J * now.d2G_dJ2 * tr, 0.0) +
                              std::abs(now.dG_dJ) * std::sqrt(2.0 * std::max(tr, 0.0));
-      const double G = iso.shearModulus(now.G), longitudinal = bulk + coupled + 4.0 / 3.0 * G;
+      const double G = incrementalShearModulus(now.G, trace, J),
+                   longitudinal = bulk + coupled + 4.0 / 3.0 * G;
       out.sound_speed[i] = std::sqrt(longitudinal * in.jacobian[i] / rho0_);
       out.shear_share[i] = longitudinal > 0.0 ? G / longitudinal : 0.75;
     }

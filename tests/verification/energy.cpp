@@ -63,17 +63,12 @@ TEST(Energy, ExternalWorkOfImposedVelocity) {
 }
 
 // An elastic block whose every node starts with a random velocity (up to 50 m/s each way, strain
-// steps of 1 % a step): all its energy sits in the modes at the stable step, where a rate-form
-// deviator, or a step that follows the elements up and down, pumps energy in (the balance reached
-// 0.065 in 8,000 steps, and 500 m/s inverted an element). With the neo-Hookean deviator and the
-// step rising only every 50 steps the leapfrog keeps a shadow energy: the balance stays bounded,
-// 2.7e-4 measured over 20,000 steps; the bound 2e-3 is far below what energy creation gives.
-TEST(Energy, RingingElasticBlockCreatesNoEnergy) {
+// steps of 1 % a step), rung for 20,000 steps without viscosity: its largest |balance error| and
+// the share of its energy that is internal at the end.
+std::pair<double, double> ringingBlock(std::vector<std::unique_ptr<fem::Material>> material) {
   TestMesh mesh;
   mesh.addRectangle(0, 0, 100e-6, 100e-6, 10, 10, 0.3);
-  const fem::Parameters quartz{
-      {"density", 2648.5}, {"bulk_modulus", 43.19e9}, {"shear_modulus", 46.92e9}};
-  fem::Model model = mesh.model(test::oneMaterial("elastic", quartz));
+  fem::Model model = mesh.model(std::move(material));
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-50.0, 50.0);
   for (std::size_t a = 0; a < model.nodes.size(); ++a)
@@ -85,8 +80,32 @@ TEST(Energy, RingingElasticBlockCreatesNoEnergy) {
     solver.step();
     worst = std::max(worst, std::abs(solver.energy().balance_error));
   }
-  EXPECT_GT(solver.energy().internal, 0.3 * solver.energy().kinetic);
+  return {worst, solver.energy().internal / solver.energy().kinetic};
+}
+
+// All the block's energy sits in the modes at the stable step, where a rate-form deviator, or a
+// step that follows the elements up and down, pumps energy in (the balance reached 0.065 in 8,000
+// steps, and 500 m/s inverted an element). With the neo-Hookean deviator and the step rising only
+// every 50 steps the leapfrog keeps a shadow energy: the balance stays bounded, 2.7e-4 measured
+// over 20,000 steps; the bound 2e-3 is far below what energy creation gives.
+TEST(Energy, RingingElasticBlockCreatesNoEnergy) {
+  const fem::Parameters quartz{
+      {"density", 2648.5}, {"bulk_modulus", 43.19e9}, {"shear_modulus", 46.92e9}};
+  const auto [worst, internal_over_kinetic] = ringingBlock(test::oneMaterial("elastic", quartz));
+  EXPECT_GT(internal_over_kinetic, 0.3);
   EXPECT_LT(worst, 2e-3);
+}
+
+// The same block of the thesis's elastic projectile steel (preset steel-elastic: Mie-Grueneisen
+// pressure without tension, "von-mises" without plasticity). With the deviator in rate form the
+// balance reached 0.26; with the neo-Hookean deviator 3.3e-3 is measured. The bound 1e-2 leaves
+// room for the equation of state's energy update (the trapezoid rule, second order in the volume
+// step: 1.1e-3 to 3.3e-3 here with or without the cut-off and the K1, K2, Gamma terms) and is far
+// below what energy creation gives.
+TEST(Energy, RingingElasticSteelCreatesNoEnergy) {
+  const auto [worst, internal_over_kinetic] = ringingBlock(test::oneMaterial("steel-elastic"));
+  EXPECT_GT(internal_over_kinetic, 0.3);
+  EXPECT_LT(worst, 1e-2);
 }
 
 // One quartz element without strength (G follows the pressure: 47 GPa at rest, 71 GPa at
@@ -205,4 +224,20 @@ TEST(Energy, ElasticQuartzImpactWithoutViscosity) {
   const auto [end, worst] = impact("energy-impact-quartz", scene);
   EXPECT_EQ(end, 3e-7);
   EXPECT_LT(worst, 1e-3);
+}
+
+// The impact with the presets of the thesis's run 6: the elastic projectile steel
+// (steel-elastic) and elastic quartz grains (quartz-elastic), without viscosity, for 3 us. With
+// the projectile's deviator in rate form the balance reached 9.7e-3 (and before the grains took
+// the neo-Hookean deviator an element inverted at 0.18 us); 2.1e-3 is measured. Bound 5e-3: the
+// equations of state's trapezoid energy update and the undamped grain collisions leave a few
+// 1e-3 that vary with the layout (1.3e-3 to 3.0e-3 over variants of the projectile's pressure).
+TEST(Energy, ThesisPresetsImpactWithoutViscosity) {
+  std::string scene = impact_scene;
+  scene = scene.substr(0, scene.find("[materials.projectile]")) +
+          "[materials.projectile]\npreset = \"steel-elastic\"\n"
+          "[materials.grains]\npreset = \"quartz-elastic\"\n";
+  const auto [end, worst] = impact("energy-impact-presets", scene);
+  EXPECT_EQ(end, 3e-6);
+  EXPECT_LT(worst, 5e-3);
 }
