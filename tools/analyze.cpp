@@ -32,9 +32,24 @@ RunSeries readRunSeries(const std::string &path) {
   s.rotational_momentum = column("/series/projectile/rotational_momentum");
   s.lateral_force = column("/series/projectile/lateral_force");
   s.tilt = column("/series/projectile/tilt");
+  // Read when present (files of every version have them; hand-made ones may not).
+  if (h5.exists("/series/projectile/vy"))
+    s.vy = column("/series/projectile/vy");
+  if (h5.exists("/series/projectile/axial_force"))
+    s.axial_force = column("/series/projectile/axial_force");
+  for (const char *term : {"kinetic", "internal", "plastic", "viscous", "friction", "contact",
+                           "eroded", "mass_scaling", "external", "balance_error"})
+    if (h5.exists(std::string("/series/energy/") + term))
+      s.energy.emplace_back(term, column(std::string("/series/energy/") + term));
   for (const auto *v :
        {&s.depth, &s.com_x, &s.vx, &s.rotational_momentum, &s.lateral_force, &s.tilt})
     if (v->size() != s.time.size())
+      throw std::runtime_error(path + ": the series have different lengths");
+  for (const auto *v : {&s.vy, &s.axial_force})
+    if (!v->empty() && v->size() != s.time.size())
+      throw std::runtime_error(path + ": the series have different lengths");
+  for (const auto &[term, v] : s.energy)
+    if (v.size() != s.time.size())
       throw std::runtime_error(path + ": the series have different lengths");
   if (s.time.size() < 2)
     throw std::runtime_error(path + ": fewer than two samples in /series");
@@ -173,6 +188,8 @@ Spectrum dominantPeriod(const std::vector<double> &x, const std::vector<double> 
   s.period = 1.0 / f_peak;
   s.peak_over_median = median > 0.0 ? s.power[peak] / median : 0.0;
   s.peak_over_largest = s.power[peak] / *std::max_element(s.power.begin(), s.power.end());
+  constexpr std::size_t resolution = 8; // grid points per 1 / record
+  s.at_band_edge = peak <= resolution || peak + 1 + resolution >= s.power.size();
   return s;
 }
 

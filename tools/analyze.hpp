@@ -4,6 +4,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mesopen {
@@ -17,6 +18,10 @@ struct RunSeries {
   std::vector<double> rotational_momentum; // H about the centre of mass [kg m^2/s per m]
   std::vector<double> lateral_force;       // F_x on the projectile [N/m]
   std::vector<double> tilt;                // axis rotation from the start, CCW positive [rad]
+  std::vector<double> vy;                  // centre-of-mass velocity, y (negative: down) [m/s]
+  std::vector<double> axial_force;         // F_y on the projectile [N/m]
+  // The energy terms of /series/energy by name ([J/m]; balance_error relative), in file order.
+  std::vector<std::pair<std::string, std::vector<double>>> energy;
   double length = 0.0;                     // the projectile's initial length [m]
   double mass = 0.0;                       // [kg/m]; 0 when the file does not say
   double velocity = 0.0;                   // initial speed [m/s]
@@ -40,12 +45,15 @@ std::vector<double> cumulativeImpulse(const std::vector<double> &time,
 // from 2 cycles per record (a period no longer than half the record) to a quarter of the grid's
 // Nyquist frequency. The period is that of the highest local maximum inside this band (the power
 // at the band's low edge is mostly the trend's), refined by a parabola through its three grid
-// points; 0 when the power has no local maximum.
+// points; 0 when the power has no local maximum. A maximum within one frequency resolution
+// (1 / record) of either edge of the band is flagged: the record does not resolve it (a longer
+// period than half the record, or a trend the quadratic did not remove, puts it there).
 struct Spectrum {
   std::vector<double> frequency, power; // cycles per unit x; arbitrary units
   double period = 0.0;                  // 1 / the peak frequency [unit of x per cycle]; 0: none
   double peak_over_median = 0.0;        // the peak's power over the median power
   double peak_over_largest = 0.0;       // over the band's largest (1: the peak is the largest)
+  bool at_band_edge = false;            // the peak lies within 1 / record of the band's edge
   double x_begin = 0.0, x_end = 0.0;    // the record used
 };
 Spectrum dominantPeriod(const std::vector<double> &x, const std::vector<double> &y,

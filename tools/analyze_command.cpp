@@ -17,7 +17,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char *plot_files[] = {"instability-rotational-momentum.png",
+const char *plot_files[] = {"instability-energy.png",
+                            "instability-velocity.png",
+                            "instability-axial-force.png",
+                            "instability-rotational-momentum.png",
                             "instability-lateral-force.png",
                             "instability-lateral-impulse.png",
                             "instability-lateral-displacement.png",
@@ -52,6 +55,7 @@ nlohmann::json spectrumJson(const Spectrum &s, const std::string &unit) {
           {"frequency", s.period > 0 ? 1.0 / s.period : 0.0},
           {"peak_over_median_power", s.peak_over_median},
           {"peak_over_largest_power", s.peak_over_largest},
+          {"peak_at_band_edge", s.at_band_edge},
           {"record", {s.x_begin, s.x_end}},
           {"method",
            "H resampled uniformly, least-squares quadratic removed, Hann window, power "
@@ -88,6 +92,7 @@ nlohmann::json instabilityJson(const std::string &dir, const RunSeries &s, const
   }
   // The oscillation of H: its period in scaled depth per cycle (thesis Table 5.3) and in time.
   j["oscillation_period_scaled_depth"] = m.in_depth.period;
+  j["oscillation_period_at_band_edge"] = m.in_depth.at_band_edge;
   j["oscillation_period_time"] = m.in_time.period;
   j["oscillation_frequency_hz"] = m.in_time.period > 0 ? 1.0 / m.in_time.period : 0.0;
   j["oscillation_omega"] = m.in_time.period > 0 ? 2.0 * M_PI / m.in_time.period : 0.0;
@@ -100,7 +105,10 @@ nlohmann::json instabilityJson(const std::string &dir, const RunSeries &s, const
                 {"rotational_momentum", "kg m^2/s per m"},
                 {"radial_momentum", "kg m/s per m"},
                 {"oscillation_period_scaled_depth", "projectile lengths per cycle"},
-                {"oscillation_period_time", "s"}};
+                {"oscillation_period_time", "s"},
+                {"velocity_y", "m/s, negative: down"},
+                {"axial_force", "N/m"},
+                {"energy", "J/m (balance_error: relative)"}};
   j["spectrum_scaled_depth"] = spectrumJson(m.in_depth, "projectile lengths per cycle");
   j["spectrum_time"] = spectrumJson(m.in_time, "s");
   j["curves"] = {{"time", thinned(s.time)},
@@ -111,7 +119,13 @@ nlohmann::json instabilityJson(const std::string &dir, const RunSeries &s, const
                  {"average_lateral_force", thinned(m.average_lateral_force)},
                  {"lateral_displacement", thinned(m.lateral_displacement)},
                  {"tilt", thinned(s.tilt)},
-                 {"radial_momentum", thinned(m.radial_momentum)}};
+                 {"radial_momentum", thinned(m.radial_momentum)},
+                 {"velocity_y", thinned(s.vy)},
+                 {"axial_force", thinned(s.axial_force)}};
+  nlohmann::json energy = nlohmann::json::object();
+  for (const auto &[term, v] : s.energy)
+    energy[term] = thinned(v);
+  j["curves"]["energy"] = energy;
   return j;
 }
 
@@ -193,13 +207,16 @@ int analyzeCommand(const AnalyzeOptions &options) {
                            : fs::path(dir).lexically_normal().filename().string());
       std::printf("%s: depth %.3f L, average lateral force %.4g N/m, lateral impulse %.4g N s/m, "
                   "lateral displacement %.3g m, tilt %.3g rad, max |H| %.4g kg m^2/s, period of H "
-                  "%.4f L per cycle (%.4g s)\n",
+                  "%.4f L per cycle (%.4g s)%s\n",
                   dir.c_str(), j["final_depth_over_length"].get<double>(),
                   j["average_lateral_force"].get<double>(), j["lateral_impulse"].get<double>(),
                   j["lateral_displacement"].get<double>(), j["tilt"].get<double>(),
                   j["max_abs_rotational_momentum"].get<double>(),
                   j["oscillation_period_scaled_depth"].get<double>(),
-                  j["oscillation_period_time"].get<double>());
+                  j["oscillation_period_time"].get<double>(),
+                  j["oscillation_period_at_band_edge"].get<bool>()
+                      ? ", at the edge of the band searched (not resolved by this record)"
+                      : "");
       runs.push_back(j);
     }
     const bool plotted = !options.no_plot && plot(out_dir, jsons, labels);

@@ -233,23 +233,24 @@ nlohmann::json modesJson(const ModalOptions &options, const ModalProblem &p,
       {"nodes", p.mesh.nodes()}, {"triangles", p.mesh.triangles()}, {"mesh_size", p.mesh_size}};
   j["mass"] = r.mass;
   j["length"] = p.length;
-  j["velocity"] = p.velocity;
+  const bool penetrator = p.body != "beam"; // a beam does not penetrate: no depth per cycle
+  if (penetrator)
+    j["velocity"] = p.velocity;
   j["rigid_modes_removed"] = r.rigid_modes;
   j["rigid_mode_omega"] = r.rigid_omega;
-  // Thesis Table 5.2's "depth of penetration per cycle": the distance travelled at `velocity` in
-  // one period, over the body's length, v T / L with T = 1 / f.
+  // Thesis Table 5.2's "depth of penetration per cycle" (projectiles only): the distance travelled
+  // at `velocity` in one period, over the body's length, v T / L with T = 1 / f.
   j["modes"] = nlohmann::json::array();
   std::vector<double> hz, rad;
   for (std::size_t k = 0; k < r.omega.size(); ++k) {
     const double f = r.omega[k] / (2 * M_PI);
     const double axial = fem::directionShare(p.mesh, p.solid, r.shapes[k], p.axis_angle);
-    j["modes"].push_back({{"mode", k + 1},
-                          {"omega", r.omega[k]},
-                          {"frequency", f},
-                          {"period", 1.0 / f},
-                          {"axial_share", axial},
-                          {"kind", axial > 0.5 ? "axial" : "bending"},
-                          {"scaled_depth_per_cycle", p.velocity / f / p.length}});
+    nlohmann::json mode = {{"mode", k + 1},        {"omega", r.omega[k]},
+                           {"frequency", f},       {"period", 1.0 / f},
+                           {"axial_share", axial}, {"kind", axial > 0.5 ? "axial" : "bending"}};
+    if (penetrator)
+      mode["scaled_depth_per_cycle"] = p.velocity / f / p.length;
+    j["modes"].push_back(mode);
     hz.push_back(f), rad.push_back(r.omega[k]);
   }
   j["frequency_hz"] = hz;

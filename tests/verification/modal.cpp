@@ -110,6 +110,10 @@ TEST(Modal, FreeFreeStripMatchesEulerBernoulli) {
     }
     // Hz and rad/s side by side: f = omega / 2 pi.
     EXPECT_NEAR(j["frequency_hz"][0].get<double>() * 2 * M_PI, w1, 1e-9 * w1);
+    // A beam does not penetrate: no depth per cycle, no speed.
+    EXPECT_FALSE(j.contains("velocity"));
+    for (const auto &mode : j["modes"])
+      EXPECT_FALSE(mode.contains("scaled_depth_per_cycle"));
   }
 }
 
