@@ -27,6 +27,21 @@ GrainFigures grainFigures(const Polygons &grains) {
   return f;
 }
 
+DiameterRatios cellOverSiteDiameter(const Target &target) {
+  const std::vector<double> d = grainFigures(target.grains).diameter;
+  std::vector<double> ratio;
+  for (std::size_t g = 0; g < d.size() && g < target.grain_site.size(); ++g)
+    ratio.push_back(d[g] / (2.0 * target.sites.r[target.grain_site[g]]));
+  DiameterRatios q;
+  if (ratio.empty())
+    return q;
+  std::sort(ratio.begin(), ratio.end());
+  auto quantile = [&](double p) { return ratio[static_cast<std::size_t>(p * (ratio.size() - 1))]; };
+  q.min = ratio.front(), q.p01 = quantile(0.01), q.median = quantile(0.5);
+  q.p99 = quantile(0.99), q.max = ratio.back();
+  return q;
+}
+
 TargetMeasures measureTarget(const Polygons &grains, const TargetSpec &spec) {
   TargetMeasures m;
   const std::size_t n = grains.size();

@@ -24,6 +24,14 @@ struct TargetMeasures {
 
 TargetMeasures measureTarget(const Polygons &grains, const TargetSpec &spec);
 
+// Each grain's equivalent diameter over its site's disk diameter 2 r: how far the tessellation's
+// cells stray from the sizes drawn for the sites (a cell's area depends on its neighbours and the
+// voids around it), which is why the diameters of the grains span more than [d_min, d_max].
+struct DiameterRatios {
+  double min = 0.0, p01 = 0.0, median = 0.0, p99 = 0.0, max = 0.0; // quantiles; 0: no grain
+};
+DiameterRatios cellOverSiteDiameter(const Target &target);
+
 // Area, equivalent diameter D = sqrt(4A/pi) and centroid of every grain polygon.
 struct GrainFigures {
   std::vector<double> area, diameter, centroid_x, centroid_y;

@@ -2,6 +2,7 @@
 #include "atomic_file.hpp"
 #include "commands.hpp"
 #include "generator.hpp"
+#include "measures.hpp"
 #include "output.hpp"
 #include "projectile.hpp"
 #include "scene.hpp"
@@ -245,6 +246,12 @@ int targetCommand(const TargetOptions &options) {
                          {"nodes", projectile.mesh.x.size()},
                          {"triangles", projectile.mesh.tri.size() / 3}};
     j["histogram"] = {{"edges", m.histogram_edges}, {"counts", m.histogram_counts}};
+    const DiameterRatios ratio = cellOverSiteDiameter(target);
+    j["cell_over_site_diameter"] = {{"min", ratio.min},
+                                    {"p01", ratio.p01},
+                                    {"median", ratio.median},
+                                    {"p99", ratio.p99},
+                                    {"max", ratio.max}};
     writeJson(dir + "/target.json", j);
 
     const bool plotted = !options.no_plot && plotHistogram(dir);
