@@ -8,10 +8,7 @@ namespace mesopen::coupling {
 
 FeDemCoupling::FeDemCoupling(const fem::Model &model, DemParticipant &dem,
                              DiskContactSettings settings, double window)
-    : dem_(dem), contact_(model, std::move(settings)), r_max_(dem.largestRadius()),
-      data_{{"Particle-State", "DEM-Particles", "DEM", "FE"},
-            {"Particle-Motion", "DEM-Particles", "FE", "DEM"},
-            {"Reaction-Force", "FE-Boundary", "FE", "FE"}} {
+    : dem_(dem), contact_(model, std::move(settings)), r_max_(dem.largestRadius()) {
   if (window > 0.0)
     planned_ = window;
   else { // (window is the same on every rank: every rank calls it, or none)
@@ -67,8 +64,9 @@ void FeDemCoupling::startWindow(double dt) {
     }
   }
   elapsed_ = 0.0;
+  window_steps_ = 0;
   open_ = true;
-  data_[0].window = window_ + 1;
+  exchanges_.record(Datum::particle_state, window_ + 1);
 }
 
 // The disks that may touch an FE body before the window ends: those whose slow path from now to
@@ -149,7 +147,8 @@ void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
     kick(c, 0.5 * dt);
   dem_.gatherReactions(reactions_);
   DiskContact::apply(model, reactions_);
-  data_[2].window = window_ + 1;
+  exchanges_.record(Datum::reaction_force, window_ + 1);
+  ++window_steps_;
   if (elapsed_ + 0.5 * dt >= length_) // the FE step nearest to the planned end
     endWindow();
   seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -163,8 +162,9 @@ void FeDemCoupling::endWindow() {
   for (std::size_t c = 0; c < motion_.moved.size(); ++c)
     if (fast_.fx[c] != 0.0 || fast_.fy[c] != 0.0 || fast_.torque[c] != 0.0)
       carried_.push_back({p.id[motion_.moved[c]], fast_.fx[c], fast_.fy[c], fast_.torque[c]});
-  data_[1].window = window_ + 1;
   dem_.endWindow(elapsed_, length_, motion_);
+  exchanges_.record(Datum::particle_motion, window_ + 1);
+  exchanges_.checkWindow(window_ + 1, window_steps_);
   dem_.gatherDiskForces(carried_);
   ++window_;
   open_ = false;

@@ -23,6 +23,7 @@
 
 #include "dem.hpp"
 #include "disk_contact.hpp"
+#include "exchange.hpp"
 #include "solver.hpp"
 
 #include <array>
@@ -30,13 +31,6 @@
 #include <string>
 
 namespace mesopen::coupling {
-
-// One exchanged quantity (preCICE's data on a mesh), written by one participant and read by the
-// other, with the last window it was exchanged in.
-struct Data {
-  std::string name, mesh, writer, reader;
-  std::uint64_t window = 0;
-};
 
 class FeDemCoupling : public fem::ForceProvider {
 public:
@@ -57,7 +51,7 @@ public:
   double window() const { return planned_; }
   std::size_t nearDisks() const { return motion_.moved.size(); } // moved step by step in this window
   double seconds() const { return seconds_; } // in the coupling: the FE-DEM contact, the DEM steps
-  const std::vector<Data> &data() const { return data_; }
+  const ExchangeLedger &exchanges() const { return exchanges_; }
 
 private:
   // Disk i's velocity and spin after the slow half kick of its own forces over the window:
@@ -91,7 +85,8 @@ private:
   ParticleForces fast_;            // per near disk
   Particles now_;                  // per near disk
   std::vector<DiskForce> carried_; // the last forces of the window before, by disk id
-  std::vector<Data> data_; // the particles' state, their motion, the reactions on FE nodes
+  ExchangeLedger exchanges_;       // every datum's exchanges, checked at each window's end
+  std::uint64_t window_steps_ = 0; // FE steps in the window under way
   std::vector<Reaction> reactions_;
 };
 

@@ -74,6 +74,32 @@ TEST(Coupling, ExchangedForcesBalance) {
 // stays a small fraction of the block's elements. Without forces of its own (no disk-disk or
 // wall contact) a disk's motion is the same in long windows as in windows of one step: to 1e-9 of
 // the speed (round-off, summed in another order).
+// The ledger of a window's exchanges: a window with each datum exchanged as declared (the state
+// and the motion once, the reactions every FE step) passes; one that missed the motion, or that
+// took fewer reactions than steps, ends with an error naming the datum.
+TEST(Coupling, ExchangeLedgerChecksEveryWindow) {
+  using coupling::Datum;
+  coupling::ExchangeLedger ledger;
+  auto window = [&](std::uint64_t w, bool motion, int reactions) {
+    ledger.record(Datum::particle_state, w);
+    for (int s = 0; s < reactions; ++s)
+      ledger.record(Datum::reaction_force, w);
+    if (motion)
+      ledger.record(Datum::particle_motion, w);
+  };
+  window(1, true, 3);
+  EXPECT_NO_THROW(ledger.checkWindow(1, 3));
+  window(2, false, 3);
+  try {
+    ledger.checkWindow(2, 3);
+    ADD_FAILURE() << "a window without Particle-Motion passed";
+  } catch (const std::logic_error &e) {
+    EXPECT_NE(std::string(e.what()).find("Particle-Motion"), std::string::npos) << e.what();
+  }
+  window(3, true, 2);
+  EXPECT_THROW(ledger.checkWindow(3, 3), std::logic_error); // a step without its reactions
+}
+
 TEST(Coupling, DiskHittingABlockConservesMomentum) {
   auto run = [](double window, std::uint64_t &windows, std::uint64_t &steps) {
     fem::Model model = block();
@@ -110,8 +136,10 @@ TEST(Coupling, DiskHittingABlockConservesMomentum) {
     EXPECT_GT(d.vy[0], 0.0); // bounced
     EXPECT_LT(worst, 1e-12 * scale);
     EXPECT_LT(coupling.contact().statistics().deepest, 0.1);
-    for (const coupling::Data &data : coupling.data())
-      EXPECT_GE(data.window, coupling.windows()) << data.name;
+    // Every datum exchanged in the last window ended (each window's are checked as it ends).
+    for (auto datum : {coupling::Datum::particle_state, coupling::Datum::particle_motion,
+                       coupling::Datum::reaction_force})
+      EXPECT_GE(coupling.exchanges().lastWindow(datum), coupling.windows());
     windows = coupling.windows(), steps = solver.steps();
     return std::array<double, 3>{d.vx[0], d.vy[0], d.omega[0]};
   };
