@@ -218,7 +218,8 @@ static TriangleMesh plateMesh(const ProjectileSpec &spec, double width, double e
 }
 
 PlacedProjectile placeProjectile(const ProjectileSpec &spec, double default_mesh_size,
-                                 const TargetSpec &target, const Polygons &grains) {
+                                 const TargetSpec &target, const Polygons &grains,
+                                 const ProjectileAttitude &attitude) {
   PlacedProjectile p;
   const double h = spec.mesh_size > 0.0 ? spec.mesh_size : default_mesh_size;
   std::vector<double> bx, by;
@@ -230,17 +231,32 @@ PlacedProjectile placeProjectile(const ProjectileSpec &spec, double default_mesh
     p.mesh = projectileMesh(p.shape, spec, h, bx, by);
   }
 
-  // Start with the blunted tip at (W/2, H); then lower by the smallest vertical gap between the
-  // projectile and any grain below it (both convex: the gap's minimum over a common abscissa
-  // lies at a vertex of one of them, above or below an edge of the other).
-  p.offset_x = 0.5 * target.width;
-  const double start_y = target.height - p.shape.tip_cut;
+  // The axis turned about the (sharp) tip, the body frame's origin: x' = R x.
+  if (spec.shape != ProjectileKind::plate && attitude.angle != 0.0) {
+    const double c = std::cos(attitude.angle), s = std::sin(attitude.angle);
+    auto turn = [&](std::vector<double> &x, std::vector<double> &y) {
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        const double xi = x[i];
+        x[i] = c * xi - s * y[i], y[i] = s * xi + c * y[i];
+      }
+    };
+    turn(bx, by);
+    turn(p.mesh.x, p.mesh.y);
+  }
+  // Start with the lowest point at height H, the tip at x = W/2 + offset; then lower by the
+  // smallest vertical gap between the projectile and any grain below it (both convex: the gap's
+  // minimum over a common abscissa lies at a vertex of one of them, above or below an edge of the
+  // other).
+  p.offset_x = 0.5 * target.width + (spec.shape == ProjectileKind::plate ? 0.0 : attitude.offset);
+  const bool turned = spec.shape != ProjectileKind::plate && attitude.angle != 0.0;
+  const double lowest = turned ? *std::min_element(by.begin(), by.end()) : p.shape.tip_cut;
+  const double start_y = target.height - lowest;
   const std::size_t n = bx.size();
   std::vector<double> px(n), py(n);
   for (std::size_t i = 0; i < n; ++i)
     px[i] = bx[i] + p.offset_x, py[i] = by[i] + start_y;
-  const double x_lo = p.offset_x - 0.5 * p.shape.diameter;
-  const double x_hi = p.offset_x + 0.5 * p.shape.diameter;
+  const double x_lo = *std::min_element(px.begin(), px.end());
+  const double x_hi = *std::max_element(px.begin(), px.end());
 
   double gap = std::numeric_limits<double>::infinity();
   for (std::size_t g = 0; g < grains.size(); ++g) {

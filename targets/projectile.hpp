@@ -64,9 +64,18 @@ struct PlacedProjectile {
   double offset_x = 0.0, offset_y = 0.0; // body frame -> target frame translation
 };
 
-// Tip down at x = W/2, lowered from above the box until it first touches a grain. A plate spans
-// the box, 0 <= x <= W, its face down (its shape: diameter W, length its thickness, no nose).
+// How the projectile meets the target: its axis turned counter-clockwise by `angle` from straight
+// down (about its tip; the angle of attack plus the obliquity), and its tip `offset` to the side of
+// the box's middle [m].
+struct ProjectileAttitude {
+  double angle = 0.0, offset = 0.0;
+};
+
+// Tip down at x = W/2 (+ offset, the axis turned by the attitude's angle), lowered from above the
+// box until it first touches a grain. A plate spans the box, 0 <= x <= W, its face down (its
+// shape: diameter W, length its thickness, no nose); it takes no attitude.
 PlacedProjectile placeProjectile(const ProjectileSpec &spec, double default_mesh_size,
-                                 const TargetSpec &target, const Polygons &grains);
+                                 const TargetSpec &target, const Polygons &grains,
+                                 const ProjectileAttitude &attitude = {});
 
 } // namespace mesopen

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -455,4 +456,42 @@ TEST(PlaceProjectile, TouchesASlopedGrainTop) {
   expectTouching(p, gx, gy);
   // Apex on the edge's midpoint height (1.22 mm).
   EXPECT_NEAR(*std::min_element(p.outline_y.begin(), p.outline_y.end()), 1.22e-3, 1e-12);
+}
+
+// A yawed projectile (axis turned 10 degrees counter-clockwise from straight down about its tip)
+// moved 300 um to the side: it touches the grain below without overlapping it, its axis (from the
+// centroid to the sharp tip, the body frame's origin) points along (sin 10, -cos 10), the mesh
+// turned and moved with the outline, and its area is the unturned one's.
+TEST(PlaceProjectile, YawedAndOffsetTouchesTheGrain) {
+  const ProjectileSpec spec;
+  const TargetSpec t = box();
+  const double c = 0.5 * t.width, top = 1.5e-3, offset = 300e-6, angle = 10.0 * M_PI / 180.0;
+  const std::vector<double> gx{c - 600e-6, c + 900e-6, c + 900e-6, c - 600e-6};
+  const std::vector<double> gy{top - 100e-6, top - 100e-6, top, top};
+  Polygons grains;
+  grains.add(gx, gy);
+  const PlacedProjectile straight = placeProjectile(spec, 10e-6, t, grains);
+  const PlacedProjectile p = placeProjectile(spec, 10e-6, t, grains, {angle, offset});
+  expectTouching(p, gx, gy);
+  auto centroidAndArea = [](const PlacedProjectile &q) {
+    double ax = 0.0, ay = 0.0, area = 0.0;
+    const std::size_t n = q.outline_x.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t k = (i + 1) % n;
+      const double cross = q.outline_x[i] * q.outline_y[k] - q.outline_x[k] * q.outline_y[i];
+      area += 0.5 * cross;
+      ax += (q.outline_x[i] + q.outline_x[k]) * cross,
+          ay += (q.outline_y[i] + q.outline_y[k]) * cross;
+    }
+    return std::array<double, 3>{ax / (6 * area), ay / (6 * area), area};
+  };
+  const auto centroid = centroidAndArea(p), centroid0 = centroidAndArea(straight);
+  EXPECT_NEAR(centroid[2], centroid0[2], 1e-12 * centroid0[2]);
+  const double tip_x = p.offset_x, tip_y = p.offset_y;
+  const double dx = tip_x - centroid[0], dy = tip_y - centroid[1], len = std::hypot(dx, dy);
+  EXPECT_NEAR(dx / len, std::sin(angle), 1e-9);
+  EXPECT_NEAR(dy / len, -std::cos(angle), 1e-9);
+  EXPECT_NEAR(p.offset_x, c + offset, 1e-15);
+  EXPECT_NEAR(*std::min_element(p.mesh.y.begin(), p.mesh.y.end()),
+              *std::min_element(p.outline_y.begin(), p.outline_y.end()), 1e-12);
 }
