@@ -11,8 +11,9 @@ MESOPEN_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # Notes on the list:
 # - libvtk9-dev conflicts with Debian's paraview package: do not install paraview beside it
 #   (use a ParaView from paraview.org to open the .vtu/.pvd files).
-# - LIGGGHTS (libliggghts-dev) needs libopenmpi-dev for mpi.h; openmpi-bin provides mpirun.
-#   Both, and Spectra/SuiteSparse, are used by later parts of the project (solver, coupling, modal).
+# - LIGGGHTS (libliggghts-dev) needs libopenmpi-dev for mpi.h; openmpi-bin provides mpirun (the DEM
+#   coupling and the runs over several processes).
+# - Spectra and SuiteSparse solve the eigenproblem of `mesopen modal`.
 # - python3-matplotlib/numpy/h5py are used through /usr/bin/python3 (plots, post-processing).
 # - yade runs the test yade_spheres_at_rest (label yade): 63 packages, 118 MB download, 0.8 GB disk.
 MESOPEN_PACKAGES=(
