@@ -12,8 +12,8 @@ fem::SolverSettings solverSettings(const Scene &scene, double max_dt, const fem:
           .viscosity_quadratic = run.viscosity_quadratic,
           .anti_locking = run.anti_locking,
           .max_dt = max_dt,
-          .erode_dt_ratio = run.erode_step_ratio,
-          .mass_scaling_dt_ratio = run.mass_scaling_step_ratio,
+          .erode_step_ratio = run.erode_step_ratio,
+          .mass_scaling_step_ratio = run.mass_scaling_step_ratio,
           .sharing = sharing};
 }
 
