@@ -188,8 +188,8 @@ Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) 
   failed_.assign(el.size(), 0);
   storeReferenceShapes();
   internalForces(0.0);
-  erode_below_ = s_.erode_dt_ratio * shortest_step_;
-  scale_below_ = s_.mass_scaling_dt_ratio * shortest_step_;
+  erode_below_ = s_.erode_step_ratio * shortest_step_;
+  scale_below_ = s_.mass_scaling_step_ratio * shortest_step_;
   dt_ = std::min(next_dt_, s_.max_dt);
   for (const Range &r : node_ranges_)
     for (std::size_t a = r.begin; a < r.end; ++a)
@@ -953,7 +953,7 @@ void Solver::erode() {
     provider->boundaryChanged(m_, bodies);
 }
 
-// The mass the element pass asked for (mass_scaling_dt_ratio), added at v(n+1) to each element's
+// The mass the element pass asked for (mass_scaling_step_ratio), added at v(n+1) to each element's
 // three nodes, a third each. The nodes keep their momentum, v' = v m / m' (a velocity imposed by a
 // constraint is kept); the change of the leapfrog kinetic energy 1/2 m (|v|^2 - |dv|^2), dv the
 // half-kick dt/2 f / m, is booked as mass_scaling.

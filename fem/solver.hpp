@@ -32,11 +32,14 @@ public:
   virtual std::vector<double> allGather(const std::vector<double> &mine) const = 0;
 };
 
+// The defaults are also a scene's ([run] in run/scene.hpp takes them from here).
 struct SolverSettings {
   double safety = 0.9;              // dt = safety * the smallest element's stable step
   double viscosity_linear = 0.5;    // C_L (thesis Table 3.1)
   double viscosity_quadratic = 4.0; // C_Q (thesis Table 3.1)
-  bool anti_locking = true;         // averaged nodal volume in bodies with plastic flow
+  // Averaged nodal volume in bodies with plastic flow (against volumetric locking); off by
+  // default: under a penetrator it lets crushed elements collapse (docs/solver.md).
+  bool anti_locking = false;
   double max_dt = std::numeric_limits<double>::infinity();
   // The step may grow by at most this factor at a rise (it falls at once; dt_rise_interval). A
   // penalty tied to the step (contact, k ~ m / dt^2) otherwise changes its stiffness tenfold
@@ -50,12 +53,12 @@ struct SolverSettings {
   // start is eroded (a collapsed element, a sliver a grain corner drew out: the time-step erosion
   // of explicit codes, e.g. LS-DYNA's DTMIN with ERODE); 0: never. The thesis runs that finish
   // without it go no lower than 0.038 (docs/solver.md).
-  double erode_dt_ratio = 0.01;
+  double erode_step_ratio = 0.01;
   // Selective mass scaling (LS-DYNA's DT2MS < 0): an element whose stable step falls below this
   // fraction of the shortest element step at the start gets mass on its nodes, enough to bring its
   // step back to that fraction; the mass is not taken back, and the nodes keep their momentum
   // (the kinetic energy this takes is booked, Energy::mass_scaling). 0: never.
-  double mass_scaling_dt_ratio = 0.0;
+  double mass_scaling_step_ratio = 0.0;
   double gravity_x = 0.0, gravity_y = 0.0; // body force per unit mass [m/s^2]
   std::size_t chunk = 256;                 // elements per material batch
   const Sharing *sharing = nullptr;        // the element work shared by processes (null: one)
@@ -66,7 +69,7 @@ struct SolverSettings {
 // normal contact forces took out (held in the penalty springs or dissipated by their damping);
 // external is the work of the imposed velocities and of gravity; eroded the internal energy the
 // eroded elements took with them; mass_scaling the kinetic energy that mass added at constant
-// momentum took (mass_scaling_dt_ratio). The balance error is
+// momentum took (mass_scaling_step_ratio). The balance error is
 //   (kinetic + internal + friction + contact + eroded + mass_scaling - external - initial)
 //     / max(|total|, initial, |external|)
 // (0 when nothing moves).
@@ -120,9 +123,9 @@ public:
   // Elements updated in the last step (bodies at rest and eroded elements are skipped).
   std::size_t activeElements() const { return active_elements_; }
   std::size_t erodedElements() const { return eroded_elements_; } // over the run
-  // Of those, the ones eroded for a collapsed step (erode_dt_ratio).
+  // Of those, the ones eroded for a collapsed step (erode_step_ratio).
   std::size_t collapsedElements() const { return collapsed_elements_; }
-  // Mass scaling (mass_scaling_dt_ratio) over the run: the elements that took mass, and the mass
+  // Mass scaling (mass_scaling_step_ratio) over the run: the elements that took mass, and the mass
   // added [kg/m] to all bodies, or to one.
   static constexpr std::size_t all_bodies = static_cast<std::size_t>(-1);
   std::size_t massScaledElements() const { return added_mass_.size(); }
@@ -221,8 +224,8 @@ private:
   double step_scale_ = 1.0; // sqrt(1 - kappa_n / 4) for the providers' stiffness kappa_n
   double shortest_allowed_ = std::numeric_limits<double>::infinity(); // since the last rise
   double first_dt_ = 0.0;    // the first step (after the providers' scaling)
-  double erode_below_ = 0.0; // erode_dt_ratio times the shortest element step at the start
-  double scale_below_ = 0.0; // mass_scaling_dt_ratio times it
+  double erode_below_ = 0.0; // erode_step_ratio times the shortest element step at the start
+  double scale_below_ = 0.0; // mass_scaling_step_ratio times it
   std::unordered_map<std::uint32_t, double> added_mass_; // by element, what mass scaling added
   std::vector<std::uint8_t> constrained_;                // by node: 1 x imposed, 2 y imposed
   // The inverse of each total-form element's initial edge matrix [X_b - X_a, X_c - X_a] (rows x, y;

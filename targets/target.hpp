@@ -41,7 +41,7 @@ std::optional<Enum> valueOf(std::string_view name, const Named<Enum> (&names)[N]
   return std::nullopt;
 }
 
-// What the generator is asked for. Defaults are the scene's defaults (tools/scene.cpp lists them).
+// What the generator is asked for. Defaults are the scene's defaults (run/scene.cpp lists them).
 struct TargetSpec {
   double width = 7.076e-3;   // box W [m]
   double height = 3.538e-3;  // box H [m]

@@ -8,6 +8,7 @@
 #include "campaign.hpp"
 #include "commands.hpp"
 #include "output.hpp"
+#include "simulate.hpp"
 
 #include <nlohmann/json.hpp>
 

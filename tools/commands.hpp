@@ -33,12 +33,6 @@ struct RunOptions : SceneOptions {
 
 int runCommand(const RunOptions &options);
 
-struct Scene;
-// What `mesopen run` needs of a scene beyond its keys' ranges (target.mesh with the grains, the
-// representation, the projectile, dem.skin); `where` names the scene in messages. Throws
-// InputError.
-void checkRunnable(const Scene &scene, const std::string &where);
-
 struct ModalOptions {
   std::string input; // scene (.toml), target.h5 or run.h5
   std::string out_dir;

@@ -154,7 +154,7 @@ TEST(StableStep, CollapseEndsTheRunNamingTheElement) {
   model.nodes.vy[2] = -3000.0; // the apex driven at the base
   fem::VelocityConstraint drive{"apex", {2}, true, true, 0.0, -3000.0};
   model.constraints.push_back(drive);
-  fem::Solver solver(model, {.min_dt_ratio = 0.5, .erode_dt_ratio = 0.0});
+  fem::Solver solver(model, {.min_dt_ratio = 0.5, .erode_step_ratio = 0.0});
   std::string message;
   try {
     for (int i = 0; i < 100000; ++i)
@@ -166,7 +166,7 @@ TEST(StableStep, CollapseEndsTheRunNamingTheElement) {
   EXPECT_NE(message.find("element 0 of body"), std::string::npos) << message;
 }
 
-// The same element with time-step erosion (`erode_dt_ratio` 0.5 of the first step): it leaves
+// The same element with time-step erosion (`erode_step_ratio` 0.5 of the first step): it leaves
 // the model as its step crosses 0.5 of the first, its internal energy booked as eroded, and the
 // run goes on. The balance error (not small here: the apex starts at 3000 m/s against nodes at
 // rest) moves at the erosion step by no more than at the step before (the eroded energy fills
@@ -178,7 +178,7 @@ TEST(StableStep, CollapsedElementErodes) {
   fem::Model model = mesh.model(test::oneMaterial("steel"));
   model.nodes.vy[2] = -3000.0;
   model.constraints.push_back({"apex", {2}, true, true, 0.0, -3000.0});
-  fem::Solver solver(model, {.min_dt_ratio = 0.1, .erode_dt_ratio = 0.5});
+  fem::Solver solver(model, {.min_dt_ratio = 0.1, .erode_step_ratio = 0.5});
   const double first = solver.dt();
   double shortest = first, balance[3] = {0.0, 0.0, 0.0};
   for (int i = 0; i < 200 && solver.erodedElements() == 0; ++i) {
@@ -197,7 +197,7 @@ TEST(StableStep, CollapsedElementErodes) {
     solver.step(); // nothing left to fail
 }
 
-// Selective mass scaling (`mass_scaling_dt_ratio` 0.5): a free triangle of a soft plastic
+// Selective mass scaling (`mass_scaling_step_ratio` 0.5): a free triangle of a soft plastic
 // material (yield stress 1 MPa) whose apex is thrown along its base, the total momentum zero, is
 // drawn out into a sliver (the shape that sets the step late in a penetration run). Without mass
 // scaling its step falls below 0.3 of the first; with it, the step stays at 0.5 of the first (to
@@ -246,7 +246,7 @@ TEST(StableStep, MassScalingHoldsTheStepAndMomentum) {
     model.nodes.vx = {-150.0, -150.0, 300.0};
     fem::Solver solver(model, {.viscosity_linear = 0.0,
                                .viscosity_quadratic = 0.0, // undamped
-                               .mass_scaling_dt_ratio = ratio});
+                               .mass_scaling_step_ratio = ratio});
     Result r;
     r.first = r.shortest = solver.dt();
     for (int i = 0; i < 300; ++i) {

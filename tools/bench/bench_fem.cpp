@@ -5,11 +5,14 @@
 //     overstress strength active in every element, on 1 and 2 OpenMP threads;
 //   - the same with strength off (elastic grains run no plasticity code);
 //   - growth with element count on structured quartz meshes;
-//   - whole time steps of the baseline scene with the grains at rest (skipped) and all awake.
+//   - whole time steps of the baseline scene with the grains at rest (skipped) and all awake, its
+//     model and solver settings made as `mesopen run` makes them (run/run_assembly.hpp).
 // Prints a table and writes the figures as JSON.
 //     mesopen_bench_fem [--out DIR] [--repeats 5] [--passes 20]
 #include "generator.hpp"
-#include "projectile.hpp"
+#include "run_assembly.hpp"
+#include "run_settings.hpp"
+#include "scene.hpp"
 #include "solver.hpp"
 
 #include <nlohmann/json.hpp>
@@ -41,13 +44,13 @@ struct MeshData {
   std::vector<std::uint32_t> tri;
 };
 
-MeshData baselineGrains() {
-  TargetSpec spec; // the defaults are the thesis's baseline target (Table 3.4, run 6)
+// The thesis's baseline target (Table 3.4, run 6): the scene's defaults.
+Target baselineTarget() {
   GeneratorReport report;
-  const Target target = generateTarget(spec, report);
-  const Meshes &m = target.mesh;
-  return {m.node_offset, m.tri_offset, m.x, m.y, m.tri};
+  return generateTarget(Scene().target, report);
 }
+
+MeshData meshData(const Meshes &m) { return {m.node_offset, m.tri_offset, m.x, m.y, m.tri}; }
 
 // A structured square of n x n cells (2 n^2 triangles) as one body.
 MeshData grid(int n) {
@@ -59,7 +62,8 @@ MeshData grid(int n) {
   auto id = [n](int i, int j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i)
-      d.tri.insert(d.tri.end(), {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+      d.tri.insert(d.tri.end(), {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j),
+                                 id(i + 1, j + 1), id(i, j + 1)});
   d.node_offset.push_back(d.x.size());
   d.tri_offset.push_back(d.tri.size() / 3);
   return d;
@@ -70,8 +74,9 @@ MeshData grid(int n) {
 fem::Model stressedModel(const MeshData &d, const std::string &material) {
   std::vector<std::unique_ptr<fem::Material>> materials;
   materials.push_back(fem::makeMaterial(material));
-  fem::Model model = fem::buildModel({d.node_offset, d.tri_offset, d.x, d.y, d.tri}, std::move(materials),
-                                     std::vector<int>(d.node_offset.size() - 1, 0), {});
+  fem::Model model =
+      fem::buildModel({d.node_offset, d.tri_offset, d.x, d.y, d.tri}, std::move(materials),
+                      std::vector<int>(d.node_offset.size() - 1, 0), {});
   for (std::size_t a = 0; a < model.nodes.size(); ++a) {
     model.nodes.vx[a] = 1e4 * model.nodes.y[a] + 2e3 * model.nodes.x[a];
     model.nodes.vy[a] = -3e3 * model.nodes.x[a] - 1e3 * model.nodes.y[a];
@@ -94,7 +99,7 @@ Timing elementPass(const MeshData &d, const std::string &material, int threads, 
   omp_set_num_threads(threads);
   fem::Model model = stressedModel(d, material);
   fem::Solver solver(model, {});
-  const double dt = 1e-11; // small: the state stays in the same regime over the repetitions
+  const double dt = 1e-11;   // small: the state stays in the same regime over the repetitions
   solver.internalForces(dt); // warm-up
   std::vector<double> ns;
   for (int r = 0; r < o.repeats; ++r) {
@@ -104,42 +109,21 @@ Timing elementPass(const MeshData &d, const std::string &material, int threads, 
     const double s = std::chrono::duration<double>(Clock::now() - start).count();
     ns.push_back(1e9 * s / (static_cast<double>(o.passes) * model.elements.size()));
   }
-  return {median(ns), *std::min_element(ns.begin(), ns.end()), *std::max_element(ns.begin(), ns.end())};
+  return {median(ns), *std::min_element(ns.begin(), ns.end()),
+          *std::max_element(ns.begin(), ns.end())};
 }
 
 // Seconds per whole time step of the baseline scene (projectile moving, grains at rest or all
 // awake), median over repeats of `passes` steps.
-double stepSeconds(const MeshData &grains, bool wake_all, int threads, const Options &o) {
+double stepSeconds(const Target &target, bool wake_all, int threads, const Options &o) {
   omp_set_num_threads(threads);
-  TargetSpec spec;
-  Polygons none;
-  // The projectile (the default spec of the baseline), as body 0, ahead of the grains.
-  const PlacedProjectile p = placeProjectile(ProjectileSpec{}, spec.mesh_size, spec, none);
-  MeshData d;
-  d.x = p.mesh.x, d.y = p.mesh.y, d.tri = p.mesh.tri;
-  d.node_offset.push_back(d.x.size());
-  d.tri_offset.push_back(d.tri.size() / 3);
-  for (std::size_t b = 0; b + 1 < grains.node_offset.size(); ++b) {
-    const std::uint32_t shift = static_cast<std::uint32_t>(d.x.size());
-    for (std::size_t a = grains.node_offset[b]; a < grains.node_offset[b + 1]; ++a)
-      d.x.push_back(grains.x[a]), d.y.push_back(grains.y[a]);
-    for (std::size_t t = 3 * grains.tri_offset[b]; t < 3 * grains.tri_offset[b + 1]; ++t)
-      d.tri.push_back(grains.tri[t] - static_cast<std::uint32_t>(grains.node_offset[b]) + shift);
-    d.node_offset.push_back(d.x.size());
-    d.tri_offset.push_back(d.tri.size() / 3);
-  }
-  std::vector<std::unique_ptr<fem::Material>> materials;
-  materials.push_back(fem::makeMaterial("steel"));
-  materials.push_back(fem::makeMaterial("quartz"));
-  std::vector<int> body_material(d.node_offset.size() - 1, 1);
-  body_material[0] = 0;
-  fem::Model model = fem::buildModel({d.node_offset, d.tri_offset, d.x, d.y, d.tri}, std::move(materials),
-                                     body_material, {});
-  fem::setBodyVelocity(model, 0, 0.0, -1000.0);
+  const Scene scene; // the defaults: the baseline target, its projectile at 1000 m/s
+  const PlacedProjectile p = runProjectile(scene, &target);
+  fem::Model model = buildRunModel(scene, &target, p, meshedGrains(scene, target, p));
   if (wake_all)
     for (std::size_t b = 1; b < model.bodies.size(); ++b)
       fem::setBodyVelocity(model, b, 0.0, 0.0, 1.0);
-  fem::Solver solver(model, {});
+  fem::Solver solver(model, solverSettings(scene, HUGE_VAL, nullptr));
   solver.step();
   std::vector<double> s;
   for (int r = 0; r < o.repeats; ++r) {
@@ -168,32 +152,42 @@ int main(int argc, char **argv) {
     }
   }
   nlohmann::json j;
-  const MeshData baseline = baselineGrains();
+  const Target target = baselineTarget();
+  const MeshData baseline = meshData(target.mesh);
   const std::size_t n_base = baseline.tri.size() / 3;
-  std::printf("Element pass, ns per element-step, median (min-max) of %d x %d passes\n", o.repeats, o.passes);
+  std::printf("Element pass, ns per element-step, median (min-max) of %d x %d passes\n", o.repeats,
+              o.passes);
   std::printf("%-44s %10s %8s %22s\n", "case", "elements", "threads", "ns/element-step");
   auto row = [&](const std::string &name, std::size_t elements, int threads, Timing t) {
-    std::printf("%-44s %10zu %8d %10.1f (%.1f-%.1f)\n", name.c_str(), elements, threads, t.median_ns,
-                t.min_ns, t.max_ns);
+    std::printf("%-44s %10zu %8d %10.1f (%.1f-%.1f)\n", name.c_str(), elements, threads,
+                t.median_ns, t.min_ns, t.max_ns);
     std::fflush(stdout);
-    j["element_pass"].push_back({{"case", name}, {"elements", elements}, {"threads", threads},
-                                 {"ns_per_element_step", t.median_ns}, {"min", t.min_ns}, {"max", t.max_ns}});
+    j["element_pass"].push_back({{"case", name},
+                                 {"elements", elements},
+                                 {"threads", threads},
+                                 {"ns_per_element_step", t.median_ns},
+                                 {"min", t.min_ns},
+                                 {"max", t.max_ns}});
   };
   for (int threads : {1, 2})
     row("baseline grains, quartz, overstress active", n_base, threads,
         elementPass(baseline, "quartz", threads, o));
-  row("baseline grains, quartz, strength off", n_base, 1, elementPass(baseline, "quartz-elastic", 1, o));
+  row("baseline grains, quartz, strength off", n_base, 1,
+      elementPass(baseline, "quartz-elastic", 1, o));
   for (int n : {100, 200, 450, 900}) {
     const MeshData g = grid(n);
-    row("structured square, quartz, overstress active", g.tri.size() / 3, 1, elementPass(g, "quartz", 1, o));
+    row("structured square, quartz, overstress active", g.tri.size() / 3, 1,
+        elementPass(g, "quartz", 1, o));
   }
   std::printf("\nWhole time step of the baseline scene (projectile at 1000 m/s), ms per step\n");
   for (int threads : {1, 2}) {
-    const double rest = stepSeconds(baseline, false, threads, o), awake = stepSeconds(baseline, true, threads, o);
-    std::printf("threads %d: grains at rest (skipped) %.3f ms, all grains awake %.3f ms, saving x%.1f\n",
-                threads, 1e3 * rest, 1e3 * awake, awake / rest);
-    j["time_step"].push_back({{"threads", threads}, {"grains_at_rest_seconds", rest},
-                              {"all_awake_seconds", awake}});
+    const double rest = stepSeconds(target, false, threads, o),
+                 awake = stepSeconds(target, true, threads, o);
+    std::printf(
+        "threads %d: grains at rest (skipped) %.3f ms, all grains awake %.3f ms, saving x%.1f\n",
+        threads, 1e3 * rest, 1e3 * awake, awake / rest);
+    j["time_step"].push_back(
+        {{"threads", threads}, {"grains_at_rest_seconds", rest}, {"all_awake_seconds", awake}});
   }
   std::filesystem::create_directories(o.out);
   std::ofstream(o.out + "/bench_fem.json") << j.dump(2) << "\n";

@@ -1,5 +1,7 @@
 #include "stop_signals.hpp"
 
+#include "liggghts_dem.hpp"
+
 #include <csignal>
 
 namespace mesopen {
@@ -28,5 +30,13 @@ int stopSignal() { return stop_signal; }
 void setStopSignal(int signal) { stop_signal = signal; }
 
 std::string stopSignalName() { return stop_signal == SIGINT ? "SIGINT" : "SIGTERM"; }
+
+void stopIfAsked(const coupling::World &world, const std::string &phase) {
+  const double s = world.size > 1 ? world.max(stopSignal()) : stopSignal();
+  if (s != 0) {
+    setStopSignal(static_cast<int>(s));
+    throw Interrupted(stopSignalName() + " during the " + phase);
+  }
+}
 
 } // namespace mesopen

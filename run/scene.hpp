@@ -3,8 +3,10 @@
 // prints that table (docs/scene-keys.md is its copy).
 #pragma once
 
+#include "contact.hpp"
 #include "disks.hpp"
 #include "projectile.hpp"
+#include "solver.hpp"
 #include "spring_dashpot.hpp"
 #include "target.hpp"
 
@@ -27,39 +29,44 @@ inline constexpr Named<Representation> representation_names[] = {
 // What `mesopen run` does with the target and the projectile (table [run]).
 struct RunSpec {
   Representation representation = Representation::fe;
-  double band_half_width = 0.0;    // hybrid: meshed grains' centres within this of the axis [m];
-                                   // 0: one and a half projectile diameters
-  double band_depth = 0.0;         // hybrid: and no deeper than this below the tip at the start
-                                   // [m]; 0: the end depth plus band_half_width
-  double end_time = 1e-6;          // simulated time [s]
-  double velocity = 1000.0;        // projectile's initial speed, downward [m/s]
-  double spin = 0.0;               // projectile's initial spin about its centre of mass [rad/s]
-  bool grains = true;              // false: the projectile alone, in free flight
-  bool fix_edges = true;           // grain nodes on the box's left, right and bottom edges fixed
-  bool smooth_walls = false;       // frictionless walls: edge nodes held normal to their edge only
-  bool constant_velocity = false;  // the projectile's velocity held at (0, -velocity)
-  double safety = 0.9;             // time step over the stable step
-  double viscosity_linear = 0.5;   // artificial viscosity C_L (thesis Table 3.1)
-  double viscosity_quadratic = 4.0;
-  bool anti_locking = false;       // averaged nodal volume where plastic flow is on (see docs)
-  double erode_step_ratio = 0.01;  // an element whose stable step falls below this fraction of
-                                   // the shortest at the start is eroded; 0: never
-  double mass_scaling_step_ratio = 0.0; // an element whose stable step falls below this fraction
-                                   // of the shortest at the start gets mass; 0: never
-  std::int64_t series_interval = 1;  // steps between series samples
-  double end_depth = 0.0;          // stop when the depth reaches this many projectile lengths
-  double frame_interval = 1e-7;    // simulated time between frames [s]; 0: no frames
-  bool vtk = true;                 // frames also as VTK files for ParaView
+  double band_half_width = 0.0;   // hybrid: meshed grains' centres within this of the axis [m];
+                                  // 0: one and a half projectile diameters
+  double band_depth = 0.0;        // hybrid: and no deeper than this below the tip at the start
+                                  // [m]; 0: the end depth plus band_half_width
+  double end_time = 1e-6;         // simulated time [s]
+  double velocity = 1000.0;       // projectile's initial speed, downward [m/s]
+  double spin = 0.0;              // projectile's initial spin about its centre of mass [rad/s]
+  bool grains = true;             // false: the projectile alone, in free flight
+  bool fix_edges = true;          // grain nodes on the box's left, right and bottom edges fixed
+  bool smooth_walls = false;      // frictionless walls: edge nodes held normal to their edge only
+  bool constant_velocity = false; // the projectile's velocity held at (0, -velocity)
+  // The solver's keys, with the solver's defaults (fem::SolverSettings owns them).
+  double safety = fem::SolverSettings{}.safety; // time step over the stable step
+  double viscosity_linear = fem::SolverSettings{}.viscosity_linear; // artificial viscosity C_L
+  double viscosity_quadratic = fem::SolverSettings{}.viscosity_quadratic; // C_Q
+  bool anti_locking = fem::SolverSettings{}.anti_locking; // averaged nodal volume (plastic flow)
+  // an element whose stable step falls below this fraction of the shortest at the start is
+  // eroded; 0: never
+  double erode_step_ratio = fem::SolverSettings{}.erode_step_ratio;
+  // an element whose stable step falls below this fraction of the shortest at the start gets
+  // mass; 0: never
+  double mass_scaling_step_ratio = fem::SolverSettings{}.mass_scaling_step_ratio;
+  std::int64_t series_interval = 1; // steps between series samples
+  double end_depth = 0.0;           // stop when the depth reaches this many projectile lengths
+  double frame_interval = 1e-7;     // simulated time between frames [s]; 0: no frames
+  bool vtk = true;                  // frames also as VTK files for ParaView
   std::int64_t max_steps = 100000000;
 };
 
-// Contact between the bodies and with the box's walls (table [contact]; fem/contact.hpp).
+// Contact between the bodies and with the box's walls (table [contact]), with the contact's
+// defaults (fem::ContactSettings owns them: its one coefficient for every pair is the friction).
 struct ContactSpec {
   bool enabled = true;
-  double friction = 0.3;            // Coulomb mu between grains, and grains and walls
-  double projectile_friction = 0.3; // between the projectile and grains or walls
-  double stiffness = 0.5;           // penalty kappa: k = kappa m_eff / dt^2
-  double damping = 0.1;             // fraction of the contact spring's critical damping
+  // Coulomb mu between grains, and grains and walls
+  double friction = fem::ContactSettings{}.friction.front();
+  double projectile_friction = friction;               // between the projectile and grains or walls
+  double stiffness = fem::ContactSettings{}.stiffness; // penalty kappa: k = kappa m_eff / dt^2
+  double damping = fem::ContactSettings{}.damping;     // fraction of the spring's critical damping
 };
 
 // The disks' normal contact law in LIGGGHTS (liggghts-inputs/dem.in): linear (hooke/stiffness) or
@@ -88,9 +95,9 @@ struct DemSpec {
   double tangential_damping = coupling::quartz_grains.gt;   // g_t [N s/m per m]
   DiskSize disk_size = DiskSize::inscribed; // the disks' radii and places (targets/disks.hpp)
   NormalLaw normal_law = NormalLaw::hooke;  // the disks' normal contact law
-  double hertz_length = 8e-6;         // hertz: sqrt(r_eff d) where the law has stiffness k_n [m]
-  double rolling_friction = 0.0;      // LIGGGHTS epsd2 rolling resistance between disks; 0: none
-  double skin = 0.0;                  // neighbour skin [m]; 0: half the mean diameter
+  double hertz_length = 8e-6;    // hertz: sqrt(r_eff d) where the law has stiffness k_n [m]
+  double rolling_friction = 0.0; // LIGGGHTS epsd2 rolling resistance between disks; 0: none
+  double skin = 0.0;             // neighbour skin [m]; 0: half the mean diameter
   double step = 0.0; // the disks' step, a time window of many FE steps [s]; 0: their stable step
   // The preset's values for every key it names (the others are left as they are).
   void apply(DemPreset p);
@@ -103,26 +110,26 @@ enum class ModalBody { projectile, beam };
 enum class ModalSupport { free, clamped };
 enum class ModalPlane { strain, stress };
 inline constexpr Named<ModalBody> modal_body_names[] = {{"projectile", ModalBody::projectile},
-                                                         {"beam", ModalBody::beam}};
+                                                        {"beam", ModalBody::beam}};
 inline constexpr Named<ModalSupport> modal_support_names[] = {{"free", ModalSupport::free},
-                                                               {"clamped", ModalSupport::clamped}};
+                                                              {"clamped", ModalSupport::clamped}};
 inline constexpr Named<ModalPlane> modal_plane_names[] = {{"strain", ModalPlane::strain},
-                                                           {"stress", ModalPlane::stress}};
+                                                          {"stress", ModalPlane::stress}};
 
 struct ModalSpec {
   ModalBody body = ModalBody::projectile;
-  double length = 5.0;             // beam length, along x [m]
-  double height = 0.1;             // beam height, along y [m]
-  double mesh_size = 0.0;          // triangle edge [m]; 0: the projectile's, or height / 10
+  double length = 5.0;    // beam length, along x [m]
+  double height = 0.1;    // beam height, along y [m]
+  double mesh_size = 0.0; // triangle edge [m]; 0: the projectile's, or height / 10
   ModalSupport support = ModalSupport::free;
   ModalPlane plane = ModalPlane::strain;
-  std::int64_t modes = 10;         // elastic modes wanted
+  std::int64_t modes = 10; // elastic modes wanted
 };
 
 // A body group's material (tables [materials.projectile], [materials.grains]): a preset or a
 // type, and parameters by name.
 struct MaterialChoice {
-  std::string name;                // preset or type
+  std::string name; // preset or type
   std::map<std::string, double> parameters;
 };
 

@@ -1,0 +1,68 @@
+// A run's model and solvers, assembled from its scene: the target generated, the projectile placed
+// on it, the grains meshed or made LIGGGHTS's disks (run.representation), one model of the
+// projectile and the meshed grains, the solver with the contact and the coupling to the disks.
+#pragma once
+
+#include "contact.hpp"
+#include "coupling.hpp"
+#include "liggghts_dem.hpp"
+#include "model.hpp"
+#include "projectile.hpp"
+#include "scene.hpp"
+#include "solver.hpp"
+#include "target.hpp"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mesopen {
+
+// The scene's projectile placed on the target's grains (on the box's surface without a target).
+PlacedProjectile runProjectile(const Scene &scene, const Target *target);
+
+// Which grains are meshed (1) and which are disks (0): every one meshed (fe), none (dem), or those
+// whose centroids lie within the band around the projectile's path (hybrid).
+std::vector<char> meshedGrains(const Scene &scene, const Target &target, const PlacedProjectile &p);
+
+// One model of the projectile (body 0, "projectile") and the grains marked in `meshed`
+// ("grain-<g>", g the grain's number in the target; none without a target), with the scene's
+// materials, the projectile's initial velocity (0, -v) and spin, and the fixed box edges.
+fem::Model buildRunModel(const Scene &scene, const Target *target, const PlacedProjectile &p,
+                         const std::vector<char> &meshed);
+
+// The element work shared by the MPI ranks (fem::Sharing): all-gathers over MPI_COMM_WORLD.
+class MpiSharing final : public fem::Sharing {
+public:
+  explicit MpiSharing(const coupling::World &world) : rank_(world.rank), size_(world.size) {}
+  int rank() const override { return rank_; }
+  int size() const override { return size_; }
+  std::vector<double> allGather(const std::vector<double> &mine) const override;
+
+private:
+  int rank_, size_;
+};
+
+// Everything a run steps: the model, its solver, the contact between the FE bodies and, when some
+// grains are disks, LIGGGHTS and the coupling to it. It stays where it is made (the solver holds
+// the model).
+class RunAssembly {
+public:
+  // The target generated, the model built, dem.data written into `dir` (rank 0) and LIGGGHTS
+  // started there (liggghts.log) when there are disks, `liggghts_script` its input script. A
+  // signal to stop is looked for between these phases (stopIfAsked). Throws Interrupted,
+  // InputError (dem.step longer than the disks' stable step) or what the phases throw.
+  RunAssembly(const Scene &scene, const std::string &dir, const std::string &liggghts_script,
+              const coupling::World &world);
+  RunAssembly(const RunAssembly &) = delete;
+  RunAssembly &operator=(const RunAssembly &) = delete;
+
+  fem::Model model;
+  MpiSharing sharing;
+  std::unique_ptr<coupling::LiggghtsDem> dem;       // null: no disks
+  std::unique_ptr<coupling::FeDemCoupling> coupled; // null: no disks
+  std::unique_ptr<fem::Solver> solver;
+  std::unique_ptr<fem::Contact> contact; // null: contact.enabled = false
+};
+
+} // namespace mesopen

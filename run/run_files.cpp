@@ -1,0 +1,180 @@
+#include "run_files.hpp"
+
+#include "output.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+namespace mesopen {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The nodes held by the box's edges.
+std::size_t fixedNodes(const fem::Model &model) {
+  std::size_t n = 0;
+  for (const fem::VelocityConstraint &c : model.constraints)
+    if (c.name.starts_with("box "))
+      n += c.nodes.size();
+  return n;
+}
+
+std::string absoluteScenePath(const std::string &path) {
+  return fs::absolute(path).lexically_normal().string();
+}
+
+} // namespace
+
+bool takeRunDirectory(const Scene &scene, const std::string &dir) {
+  prepareOutputDirectory(dir, "run", {}); // made, or refused as another command's, before the lock
+  if (!lockForProcess(dir + "/.run.lock", false))
+    return false;
+  prepareOutputDirectory(dir, "run",
+                         {"summary.json", "run.h5", "run.h5.tmp", "vtk/run.pvd", "dem.data",
+                          "liggghts.log", "instability.json", "instability-*"});
+  std::error_code ec;
+  for (const auto &f : fs::directory_iterator(dir + "/vtk", ec))
+    if (f.path().filename().string().starts_with("frame_") ||
+        f.path().filename().string().starts_with("disks_"))
+      fs::remove(f.path(), ec);
+  if (scene.run.vtk && scene.run.frame_interval > 0)
+    prepareOutputDirectory(dir + "/vtk", "", {});
+  return true;
+}
+
+void writeRunAttributes(H5File &h5, const Scene &scene, const std::string &status) {
+  const RunSpec &run = scene.run;
+  h5.attribute("/", "format", std::string("mesopen-run"));
+  h5.attribute("/", "version", 1);
+  h5.attribute("/", "status", status);
+  h5.attribute("/", "seed", static_cast<std::uint64_t>(scene.target.seed));
+  for (auto [name, value] : {std::pair{"velocity", run.velocity},
+                             {"spin", run.spin},
+                             {"end_time", run.end_time},
+                             {"projectile_length", scene.projectile.length}})
+    h5.attribute("/", name, value);
+}
+
+nlohmann::json demFigures(const RunAssembly &run, const coupling::World &world) {
+  const coupling::FeDemCoupling &coupled = *run.coupled;
+  const coupling::DiskContactStatistics &c = coupled.contact().statistics();
+  return {{"disks", std::llround(world.sum(static_cast<double>(run.dem->particles().size())))},
+          {"fe_dem_contacts_last_step", std::llround(world.sum(static_cast<double>(c.contacts)))},
+          {"deepest_fe_dem_overlap_over_element_size", world.max(c.deepest)},
+          {"sudden_fe_dem_contacts", std::llround(world.sum(static_cast<double>(c.sudden)))},
+          {"work_on_disks", world.sum(c.work_on_disks)},
+          {"disks_kinetic_energy", world.sum(coupled.disks().kineticEnergy())},
+          {"windows", coupled.windows()},
+          {"window", coupled.window()},
+          {"seconds", coupled.seconds()}};
+}
+
+nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Series &series,
+                          const Frames &frames, const LoopResult &loop, double wall, int ranks,
+                          const nlohmann::json &dem) {
+  const fem::Model &model = run.model;
+  const fem::Solver &solver = *run.solver;
+  const fem::Energy &e = solver.energy();
+  nlohmann::json j;
+  j["command"] = "run";
+  j["scene"] = absoluteScenePath(scene.path);
+  j["seed"] = scene.target.seed;
+  j["status"] = runStatus(loop);
+  if (!loop.failure.empty())
+    j["failure"] = loop.failure;
+  j["run"] = {{"end_time", scene.run.end_time},
+              {"velocity", scene.run.velocity},
+              {"spin", scene.run.spin},
+              {"grains", scene.run.grains},
+              {"projectile_material", scene.projectile_material.name},
+              {"grain_material", scene.grain_material.name}};
+  j["model"] = {{"bodies", model.bodies.size()},
+                {"nodes", model.nodes.size()},
+                {"elements", model.elements.size()},
+                {"fixed_nodes", fixedNodes(model)}};
+  if (!loop.end.empty())
+    j["ended_by"] = loop.end;
+  j["steps"] = solver.steps();
+  j["time"] = solver.time();
+  j["threads"] = omp_get_max_threads();
+  j["wall_seconds"] = wall;
+  j["loop_seconds"] = loop.seconds;
+  j["steps_per_second"] = solver.steps() / std::max(loop.seconds, 1e-9);
+  j["solver_seconds"] = loop.solver_seconds;
+  j["element_steps_per_second"] = loop.element_steps / std::max(loop.solver_seconds, 1e-9);
+  // Bodies at rest are skipped: the element-steps computed, against every element every step.
+  j["element_steps"] = loop.element_steps;
+  j["active_element_share"] =
+      loop.element_steps /
+      std::max(1.0, static_cast<double>(model.elements.size()) * solver.steps());
+  j["ns_per_element_step"] = 1e9 * loop.solver_seconds / std::max(loop.element_steps, 1.0);
+  j["energy"] = {{"kinetic", e.kinetic},
+                 {"internal", e.internal},
+                 {"plastic", e.plastic},
+                 {"viscous", e.viscous},
+                 {"friction", e.friction},
+                 {"contact", e.contact},
+                 {"external", e.external},
+                 {"eroded", e.eroded},
+                 {"mass_scaling", e.mass_scaling},
+                 {"initial", e.initial},
+                 {"balance_error", e.balance_error}};
+  j["eroded_elements"] = solver.erodedElements();
+  j["collapsed_elements"] = solver.collapsedElements(); // of those, eroded for a collapsed step
+  if (scene.run.mass_scaling_step_ratio > 0.0) {
+    double mass = 0.0;
+    for (double m : model.nodes.mass)
+      mass += m;
+    j["mass_scaling"] = {
+        {"elements", solver.massScaledElements()},
+        {"added_mass", solver.addedMass()},
+        {"added_mass_share", solver.addedMass() / std::max(mass - solver.addedMass(), 1e-300)},
+        {"projectile_added_mass", solver.addedMass(0)}};
+  }
+  if (run.contact) {
+    const fem::ContactStatistics &c = run.contact->statistics();
+    j["contact"] = {{"seconds", c.seconds},
+                    {"share_of_steps", c.seconds / std::max(loop.solver_seconds, 1e-9)},
+                    {"deepest_penetration_over_element_size", c.max_depth},
+                    {"deep_node_steps", c.deep},
+                    {"sudden_contacts", c.sudden},
+                    {"last_step_pairs", c.pairs},
+                    {"pair_sides_skipped_as_clear",
+                     static_cast<double>(c.skipped) / std::max<double>(c.sides, 1.0)},
+                    {"pair_sides_hot_nodes_only",
+                     static_cast<double>(c.partial) / std::max<double>(c.sides, 1.0)},
+                    {"last_step_contacts", c.contacts}};
+  }
+  j["projectile"] = {{"depth", series.last("projectile/depth")},
+                     {"tilt", series.last("projectile/tilt")},
+                     {"vx", series.last("projectile/vx")},
+                     {"vy", series.last("projectile/vy")},
+                     {"rotational_momentum", series.last("projectile/rotational_momentum")}};
+  j["samples"] = series.size();
+  j["frames"] = frames.size();
+  j["files"] = {"run.h5", "summary.json"};
+  if (frames.vtk())
+    j["files"].push_back("vtk/run.pvd");
+  j["representation"] = nameOf(scene.run.representation, representation_names);
+  j["ranks"] = ranks;
+  if (!dem.is_null()) {
+    j["dem"] = dem;
+    j["files"].push_back("dem.data");
+    j["files"].push_back("liggghts.log");
+  }
+  return j;
+}
+
+void writeUnstartedSummary(const std::string &dir, const std::string &scene_path,
+                           const std::string &status, const std::string &failure) {
+  writeJson(dir + "/summary.json", {{"command", "run"},
+                                    {"scene", absoluteScenePath(scene_path)},
+                                    {"status", status},
+                                    {"failure", failure}});
+}
+
+} // namespace mesopen

@@ -1,0 +1,42 @@
+// A run's files beside run.h5's series and frames (run_output.hpp): its output directory taken and
+// cleared, run.h5's attributes, summary.json.
+#pragma once
+
+#include "h5file.hpp"
+#include "run_assembly.hpp"
+#include "run_output.hpp"
+#include "scene.hpp"
+#include "time_loop.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+
+namespace mesopen {
+
+// The output directory taken for a run and cleared of an earlier run's files (frames included).
+// Its lock, DIR/.run.lock, is held to the end of the process: a second run into the directory
+// would remove this one's run.h5.tmp and frames. False when another run holds it. Throws
+// InputError when the directory cannot be made or holds another command's output.
+bool takeRunDirectory(const Scene &scene, const std::string &dir);
+
+// The attributes of run.h5's root: format, version, status, seed, velocity, spin, end_time,
+// projectile_length.
+void writeRunAttributes(H5File &h5, const Scene &scene, const std::string &status);
+
+// The disks' figures over all ranks (every rank takes part): disks, contacts with the FE bodies,
+// work on the disks, windows.
+nlohmann::json demFigures(const RunAssembly &run, const coupling::World &world);
+
+// summary.json: what ran, how it ended, its figures and files; `dem` the disks' figures (null:
+// no disks), `ranks` the MPI ranks.
+nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Series &series,
+                          const Frames &frames, const LoopResult &loop, double wall, int ranks,
+                          const nlohmann::json &dem);
+
+// summary.json of a run that ended before its time loop (`status` "interrupted" or "failed"):
+// the scene, the status and why.
+void writeUnstartedSummary(const std::string &dir, const std::string &scene_path,
+                           const std::string &status, const std::string &failure);
+
+} // namespace mesopen

@@ -1,0 +1,94 @@
+#include "simulate.hpp"
+
+#include "h5file.hpp"
+#include "run_assembly.hpp"
+#include "run_files.hpp"
+#include "run_output.hpp"
+#include "stop_signals.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <optional>
+#include <sstream>
+
+namespace mesopen {
+
+void checkRunnable(const Scene &scene, const std::string &where) {
+  if (scene.run.grains && scene.target.mesh == MeshKind::none)
+    throw InputError(where + ": target.mesh = \"none\" leaves the grains without elements; "
+                             "allowed: \"quality\" or \"fan\" (or run.grains = false)");
+  if (!scene.run.grains && scene.run.representation != Representation::fe)
+    throw InputError(where + ": run.representation = \"dem\" or \"hybrid\" needs the "
+                             "grains; allowed with run.grains = false: \"fe\"");
+  if (!scene.projectile.enabled)
+    throw InputError(where + ": projectile.enabled = false; `mesopen run` needs the projectile");
+  // LIGGGHTS bins its neighbours by half the cut-off (largest disk diameter + skin) and exits
+  // when a bin exceeds 100 times an extent of the box: its width, height, or the 2D slab, the
+  // largest disk diameter (half the smallest grain's at least: inscribed disks are larger).
+  if (scene.run.grains && scene.run.representation != Representation::fe && scene.dem.skin > 0.0) {
+    const TargetSpec &t = scene.target;
+    const double extent = std::min({t.width, t.height, 0.5 * t.diameter_min});
+    const double largest = 0.99 * 200.0 * extent - t.diameter_max;
+    auto number = [](double v) {
+      std::ostringstream text;
+      text << v;
+      return text.str();
+    };
+    if (scene.dem.skin > largest)
+      throw InputError(
+          where + ": dem.skin = " + number(scene.dem.skin) +
+          " m is too large for LIGGGHTS's neighbour bins in this box; allowed: 0 < skin <= " +
+          number(std::max(largest, 0.0)) + " m (half of diameter + skin within 100 times " +
+          "the box's width, height or half the smallest grain diameter)");
+  }
+}
+
+RunReport simulate(const Scene &scene, const RunPlace &place, const coupling::World &world) {
+  const RunSpec &run = scene.run;
+  const bool writer = world.rank == 0; // the files are rank 0's
+  const std::string &dir = place.dir, h5_path = dir + "/run.h5";
+  catchStopSignals(true); // to the end of the time loop
+  RunAssembly assembly(scene, dir, place.liggghts_script, world);
+  const fem::Model &model = assembly.model;
+  const fem::Solver &solver = *assembly.solver;
+  stopIfAsked(world, "set-up");
+
+  std::optional<H5File> h5;
+  if (writer)
+    h5.emplace(H5File::create(h5_path + ".tmp"));
+  Series series(model);
+  // Every rank takes the frames (they gather the disks to rank 0); rank 0 writes them.
+  Frames frames(h5 ? &*h5 : nullptr, model, run.frame_interval,
+                run.vtk && writer ? dir + "/vtk" : std::string());
+  if (assembly.coupled)
+    frames.addDisks(assembly.coupled.get());
+  Progress progress(writer && place.progress, run.end_time,
+                    run.end_depth * scene.projectile.length);
+  RunReport report;
+  report.loop = timeLoop(scene, model, *assembly.solver, series, frames, progress);
+  catchStopSignals(false);
+  report.steps = solver.steps();
+  report.time = solver.time();
+  report.elements = model.elements.size();
+  report.bodies = model.bodies.size();
+  report.balance_error = solver.energy().balance_error;
+
+  // Whatever happened, the files hold everything computed so far and are whole.
+  if (writer) {
+    series.write(*h5);
+    writeRunAttributes(*h5, scene, runStatus(report.loop));
+    h5->close();
+  }
+  const nlohmann::json dem = assembly.coupled ? demFigures(assembly, world) : nlohmann::json();
+  if (!writer)
+    return report;
+  std::filesystem::rename(h5_path + ".tmp", h5_path);
+  frames.writeCollection();
+  report.wall = secondsSince(place.start);
+  report.vtk = frames.vtk();
+  writeJson(dir + "/summary.json",
+            runSummary(scene, assembly, series, frames, report.loop, report.wall, world.size, dem));
+  return report;
+}
+
+} // namespace mesopen
