@@ -22,7 +22,6 @@ constexpr double touching = 1e-6; // penetration (this fraction of an element) t
 constexpr double deep = 0.5;        // penetration beyond this fraction of an element counts as deep
 constexpr double check_depth = 0.05; // penetration from which a contact is checked by crossings
 constexpr double end_tie = 1e-9;    // a foot this close to a segment's end (relative) is at the end
-constexpr std::size_t max_cells = 1u << 22;
 constexpr double list_margin = 0.5;   // a pair's lists: margin / the smaller body's element size
 constexpr double search_margin = 1.0; // pairs of bodies: margin / the median element size
 constexpr std::size_t runs_per_thread = 4; // runs of pairs: a thread takes the next one free
@@ -52,8 +51,8 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
   n_materials_ = model.materials.size();
   for (const Body &body : model.bodies)
     material_.push_back(static_cast<std::uint16_t>(body.material));
-  for (int wall = 0; wall < 2; ++wall) // c = 2 zeta sqrt(kappa), kappa doubled at a wall (see hit)
-    damping_[wall] = 2.0 * s_.damping * std::sqrt(wall ? 2.0 * s_.stiffness : s_.stiffness);
+  for (int wall = 0; wall < 2; ++wall) // kappa doubled at a wall (see hit)
+    damping_[wall] = dampingCoefficient(s_.damping, wall ? 2.0 * s_.stiffness : s_.stiffness);
   if (s_.friction.size() == 1)
     s_.friction.assign(n_materials_ * n_materials_, s_.friction[0]);
   if (s_.friction.size() != n_materials_ * n_materials_)
@@ -100,7 +99,7 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
   for (std::size_t b = 0; b < n_bodies; ++b)
     if (model.at_rest[b] && node_begin_[b] < node_begin_[b + 1])
       resting.push_back(static_cast<std::uint32_t>(b));
-  rest_grid_.build(boxes_, resting, cell_);
+  gridBodies(rest_grid_, boxes_, resting);
   const std::size_t runs = runs_per_thread * static_cast<std::size_t>(omp_get_max_threads());
   run_hits_.resize(runs);
   for (Hits &hits : run_hits_)
@@ -552,47 +551,26 @@ MESOPEN_INLINE Contact::Box Contact::nearSegments(std::size_t body, const std::u
   return wide;
 }
 
-std::size_t Contact::Grid::ix(double x) const {
-  const double i = std::floor((x - x0) / cell);
-  return i <= 0.0 ? 0 : std::min(static_cast<std::size_t>(i), nx - 1);
-}
-std::size_t Contact::Grid::iy(double y) const {
-  const double j = std::floor((y - y0) / cell);
-  return j <= 0.0 ? 0 : std::min(static_cast<std::size_t>(j), ny - 1);
-}
-
-// Cell lists of the bodies `which` (counting sort: cell by cell, bodies in the given order).
-void Contact::Grid::build(const std::vector<Box> &boxes, const std::vector<std::uint32_t> &which,
-                          double cell_size) {
+// Cell lists of the bodies `which` over the rectangle their boxes cover (counting sort: cell by
+// cell, bodies in the given order).
+void Contact::gridBodies(CellGrid<> &grid, const std::vector<Box> &boxes,
+                         const std::vector<std::uint32_t> &which) const {
+  grid = {};
+  if (which.empty() || !(cell_ > 0.0))
+    return;
   double xa = HUGE_VAL, ya = HUGE_VAL, xb = -HUGE_VAL, yb = -HUGE_VAL;
   for (std::uint32_t b : which) {
     xa = std::min(xa, boxes[b].x0), xb = std::max(xb, boxes[b].x1);
     ya = std::min(ya, boxes[b].y0), yb = std::max(yb, boxes[b].y1);
   }
-  nx = ny = 0;
-  start.assign(1, 0);
-  bodies.clear();
-  if (which.empty() || !(cell_size > 0.0))
-    return;
-  x0 = xa, y0 = ya, cell = cell_size;
-  // A body flung far away must not make the grid huge: coarser cells then.
-  while (((xb - xa) / cell + 1) * ((yb - ya) / cell + 1) > static_cast<double>(max_cells))
-    cell *= 2.0;
-  nx = static_cast<std::size_t>((xb - xa) / cell) + 1;
-  ny = static_cast<std::size_t>((yb - ya) / cell) + 1;
-  start.assign(nx * ny + 1, 0);
-  for (std::uint32_t b : which)
-    for (std::size_t j = iy(boxes[b].y0); j <= iy(boxes[b].y1); ++j)
-      for (std::size_t i = ix(boxes[b].x0); i <= ix(boxes[b].x1); ++i)
-        ++start[j * nx + i + 1];
-  for (std::size_t c = 0; c < nx * ny; ++c)
-    start[c + 1] += start[c];
-  bodies.resize(start.back());
-  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-  for (std::uint32_t b : which)
-    for (std::size_t j = iy(boxes[b].y0); j <= iy(boxes[b].y1); ++j)
-      for (std::size_t i = ix(boxes[b].x0); i <= ix(boxes[b].x1); ++i)
-        bodies[fill[j * nx + i]++] = b;
+  grid.cover(xa, ya, xb - xa, yb - ya, cell_);
+  grid.fill(
+      which.size(),
+      [&](std::size_t k) {
+        const Box &box = boxes[which[k]];
+        return grid.cells(box.x0, box.y0, box.x1, box.y1);
+      },
+      [&](std::size_t k) { return which[k]; });
 }
 
 // Broad phase: the pairs of bodies whose boxes come closer than the search margin, at least one
@@ -623,15 +601,17 @@ void Contact::findPairs() {
     listed_[b] = 1;
   }
   auto add = [&](std::uint32_t a, std::uint32_t b) { pairs_.emplace_back(a, b); };
-  moving_grid_.build(wide, moving_, cell_);
-  const Grid &g = moving_grid_;
-  for (std::size_t c = 0; c < g.nx * g.ny; ++c)
-    for (std::size_t i = g.start[c]; i < g.start[c + 1]; ++i)
-      for (std::size_t j = i + 1; j < g.start[c + 1]; ++j) {
-        const Box &A = wide[g.bodies[i]], &B = wide[g.bodies[j]];
-        if (A.overlaps(B) && g.iy(std::max(A.y0, B.y0)) * g.nx + g.ix(std::max(A.x0, B.x0)) == c)
-          add(g.bodies[i], g.bodies[j]);
+  gridBodies(moving_grid_, wide, moving_);
+  const CellGrid<> &g = moving_grid_;
+  for (std::size_t c = 0; c < g.size(); ++c) {
+    const std::span<const std::uint32_t> in = g.cell(c);
+    for (std::size_t i = 0; i < in.size(); ++i)
+      for (std::size_t j = i + 1; j < in.size(); ++j) {
+        const Box &A = wide[in[i]], &B = wide[in[j]];
+        if (A.overlaps(B) && g.cellOf(std::max(A.x0, B.x0), std::max(A.y0, B.y0)) == c)
+          add(in[i], in[j]);
       }
+  }
   for (std::uint32_t a : moving_)
     restNeighbours(a, search_margin_, [&](std::uint32_t b) { return !listed_[b]; }, add);
   auto earlier = [](const Pair &p, const Pair &q) { return std::tie(p.a, p.b) < std::tie(q.a, q.b); };
@@ -689,16 +669,16 @@ void Contact::addPairsOfWoken(const Model &model) {
 // that `wanted` accepts, each once: add(a, b).
 template <class Wanted, class Add>
 void Contact::restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add add) const {
-  const Grid &r = rest_grid_;
-  if (r.nx == 0)
+  const CellGrid<> &r = rest_grid_;
+  if (r.size() == 0)
     return;
   const Box A = boxes_[a].widened(margin);
-  for (std::size_t j = r.iy(A.y0); j <= r.iy(A.y1); ++j)
-    for (std::size_t i = r.ix(A.x0); i <= r.ix(A.x1); ++i)
-      for (std::size_t k = r.start[j * r.nx + i]; k < r.start[j * r.nx + i + 1]; ++k) {
-        const std::uint32_t b = r.bodies[k];
+  const CellRange cells = r.cells(A.x0, A.y0, A.x1, A.y1);
+  for (std::size_t j = cells.j0; j <= cells.j1; ++j)
+    for (std::size_t i = cells.i0; i <= cells.i1; ++i)
+      for (const std::uint32_t b : r.cell(j * r.columns() + i)) {
         const Box &B = boxes_[b];
-        if (b != a && A.overlaps(B) && r.iy(std::max(A.y0, B.y0)) == j && r.ix(std::max(A.x0, B.x0)) == i && wanted(b))
+        if (b != a && A.overlaps(B) && r.cellOf(std::max(A.x0, B.x0), std::max(A.y0, B.y0)) == j * r.columns() + i && wanted(b))
           add(a, b);
       }
 }
@@ -923,11 +903,11 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt,
   if (k1 != no_node) {
     const std::uint32_t s1 = nodes_[k1], s2 = nodes_[k2];
     const double m_seg = w1 * nd.mass[s1] + w2 * nd.mass[s2];
-    m_eff = m_eff * m_seg / (m_eff + m_seg);
+    m_eff = reducedMass(m_eff, m_seg);
     vx -= w1 * nd.vx[s1] + w2 * nd.vx[s2];
     vy -= w1 * nd.vy[s1] + w2 * nd.vy[s2];
   }
-  const double vn = vx * nx + vy * ny; // > 0: separating
+  const double vn = normalVelocity(vx, vy, nx, ny); // > 0: separating
   // Found deeper than its approach reaches from the depth its node was pushed at the step before
   // (approachReach), the node was not reached by approach: B's boundary folded over it, or a new
   // closest segment took over in a dented body. Pushed out at once it would leave at depth / dt;
@@ -939,11 +919,11 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt,
   // twice the stiffness (kappa 1 by default, the one-step constraint).
   const bool wall = k1 == no_node;
   const double kappa = wall ? 2.0 * s_.stiffness : s_.stiffness, c = damping_[wall];
-  const double fn = std::max(0.0, m_eff / dt * (kappa * (depth - touching * h) / dt - c * vn));
-  const double tx = vx - vn * nx, ty = vy - vn * ny, slip = std::sqrt(tx * tx + ty * ty);
-  const double ft = slip > 0.0 ? std::min(mu * fn, m_eff * slip / dt) / slip : 0.0;
-  const double fx = fn * nx - ft * tx, fy = fn * ny - ft * ty, friction_x = -ft * tx,
-               friction_y = -ft * ty;
+  // (the first `touching` h of the depth is free)
+  const ContactForce f_c =
+      contactForce(m_eff, m_eff, depth - touching * h, vx, vy, vn, nx, ny, kappa, c, mu, dt);
+  const double fx = f_c.fx, fy = f_c.fy, friction_x = -f_c.ft * f_c.tx,
+               friction_y = -f_c.ft * f_c.ty;
   hits.loads[block_[A]].push_back({p, A, fx, fy, friction_x, friction_y, depth});
   if (k1 != no_node) {
     std::vector<Load> &loads = hits.loads[block_[B]];

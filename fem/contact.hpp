@@ -6,7 +6,7 @@
 //   - narrow phase, node to segment both ways: a boundary node of one body inside the other is
 //     pushed out through the closest boundary segment (depth d, outward normal n), and the reaction
 //     goes to the segment's two nodes by the linear weights of the contact point;
-//   - normal force: a penalty tied to the nodal masses and the step, with damping on approach,
+//   - the law (fem/contact_law.hpp, shared with FE-DEM contact): a normal force, a penalty tied to the nodal masses and the step, with damping on approach,
 //       f_n = max(0, m_eff / dt (kappa d / dt + 2 zeta sqrt(kappa) v_approach)),
 //       m_eff = m_node m_seg / (m_node + m_seg)
 //     kappa = 1, zeta = 1/2 would be f_n = m_eff (d + v_approach dt) / dt^2, the force that closes
@@ -47,6 +47,8 @@
 // node and no clear node due is skipped.
 #pragma once
 
+#include "cell_grid.hpp"
+#include "contact_law.hpp"
 #include "solver.hpp"
 
 #include <algorithm>
@@ -55,16 +57,6 @@
 #include <vector>
 
 namespace mesopen::fem {
-
-// A contact may deepen in a step by its approach, twice (-2 v_n dt, v_n > 0 separating) for a
-// margin, or by 0.005 of an element h, over the depth it was pushed at the step before; found
-// deeper, the node was not reached by approach, and the excess is allowed for and let go over
-// release_steps steps (Contact::hit; the FE-DEM contact does the same).
-constexpr double release_steps = 200.0;
-inline double approachReach(double pushed, double h, double vn, double dt) {
-  constexpr double step_margin = 0.005;
-  return pushed + std::max(step_margin * h, -2.0 * vn * dt);
-}
 
 struct ContactSettings {
   // Coulomb coefficient per pair of materials (Model::materials indices), n x n row-major; a
@@ -140,16 +132,6 @@ private:
     double until[2] = {};
     std::uint32_t hot[2] = {};
   };
-  // Bodies in a uniform grid of cells (cell lists), for the broad phase.
-  struct Grid {
-    double x0 = 0, y0 = 0, cell = 0;
-    std::size_t nx = 0, ny = 0;
-    std::vector<std::uint32_t> start, bodies;
-    std::size_t ix(double x) const;
-    std::size_t iy(double y) const;
-    void build(const std::vector<Box> &boxes, const std::vector<std::uint32_t> &which, double cell);
-  };
-
   void takeBoundaries(const Model &model);
   void allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &before);
   void allow(std::uint32_t node, double depth);
@@ -157,6 +139,9 @@ private:
   void addHits(Model &model);
   void addBlock(Model &model, std::size_t k);
   void findPairs();
+  // Bodies `which` in the cells their boxes meet, in cells of cell_ (the broad phase).
+  void gridBodies(CellGrid<> &grid, const std::vector<Box> &boxes,
+                  const std::vector<std::uint32_t> &which) const;
   void addPairsOfWoken(const Model &model);
   template <class Wanted, class Add>
   void restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add add) const;
@@ -260,7 +245,7 @@ private:
   std::vector<std::uint32_t> woken_;    // bodies moving since this step
   std::vector<std::uint32_t> moving_;   // bodies not at rest, this step
   double cell_ = 0.0;
-  Grid rest_grid_, moving_grid_;
+  CellGrid<> rest_grid_, moving_grid_;
   double search_margin_ = 0.0;
   std::vector<Pair> pairs_;
   // The pairs in runs (a few per thread, taken in turn by free threads): run r holds pairs_

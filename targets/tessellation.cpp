@@ -1,6 +1,6 @@
 #include "tessellation.hpp"
 
-#include "cell_grid.hpp"
+#include "point_grid.hpp"
 #include "polygon.hpp"
 
 #include <CGAL/Delaunay_triangulation_2.h>
@@ -398,14 +398,14 @@ std::vector<std::uint32_t> overlappingGrains(const Cells<Delaunay> &c, const Sit
     if (c.alive[g] && ringOf(c, g, ring))
       for (auto f : ring.face)
         poly[g].push_back({c.vpx[f->info().vp], c.vpy[f->info().vp]});
-  CellGrid grid(spec.width, spec.height, spec.diameter_max);
-  grid.fill(s.x.data(), s.y.data(), s.r.data(), 0, static_cast<std::uint32_t>(s.grains));
+  PointGrid grid = pointGrid(spec.width, spec.height, spec.diameter_max);
+  binPoints(grid, s.x.data(), s.y.data(), s.r.data(), 0, static_cast<std::uint32_t>(s.grains));
   const double tolerance = 1e-9 * spec.meanDiameter();
   std::vector<std::uint32_t> bad;
   for (std::uint32_t g = 0; g < s.grains; ++g) {
     if (poly[g].empty())
       continue;
-    grid.forNear(s.x[g], s.y[g], 2.0 * spec.diameter_max, [&](const CellGrid::Item &item) {
+    grid.forNear(s.x[g], s.y[g], 2.0 * spec.diameter_max, [&](const GridPoint &item) {
       const std::uint32_t h = item.index;
       if (h <= g || poly[h].empty())
         return;
