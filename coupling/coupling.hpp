@@ -55,7 +55,6 @@ public:
   Particles disks() const;
   std::uint64_t windows() const { return window_; } // ended
   double window() const { return planned_; }
-  std::size_t nearDisks() const { return motion_.moved.size(); } // moved step by step in this window
   double seconds() const { return seconds_; } // in the coupling: the FE-DEM contact, the DEM steps
   const std::vector<Data> &data() const { return data_; }
 

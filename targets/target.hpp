@@ -71,7 +71,6 @@ struct Sites {
   std::vector<double> x, y, r;
   std::size_t grains = 0;
   std::size_t size() const { return x.size(); }
-  bool isVoid(std::size_t i) const { return i >= grains; }
 };
 
 // Convex grain polygons, counter-clockwise, stored flat: grain g has the vertices
