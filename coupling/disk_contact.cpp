@@ -39,8 +39,8 @@ void DiskContact::boundaryChanged(const fem::Model &model) {
 
 // The closest point of the body's boundary to (cx, cy) among the segments within `reach` (the
 // disk's radius: the closest of all when it is that near; distance infinite when none is), of
-// those in `near` (offsets into the body's boundary: every segment within reach among them), and the
-// side: at a segment's inside by its outward normal (the tangent turned right: boundaries run
+// those in `near` (offsets into the body's boundary: every segment within reach among them), and
+// the side: at a segment's inside by its outward normal (the tangent turned right: boundaries run
 // counter-clockwise), at a vertex by the vertex's pseudo-normal, the sum of its two segments'
 // normals. A disk wholly inside a body (its centre more than its radius behind the boundary) is
 // not seen: the penalty keeps overlaps to a few percent of a radius.
@@ -84,7 +84,8 @@ DiskContact::Closest DiskContact::closest(const fem::Model &model, std::size_t b
     for (const std::uint32_t e : near) { // the other edge at the vertex is within reach too
       if (e == best_edge || edges[e + (best_t == 0.0 ? 1 : 0)] != vertex)
         continue;
-      const double ox = nd.x[edges[e + 1]] - nd.x[edges[e]], oy = nd.y[edges[e + 1]] - nd.y[edges[e]];
+      const double ox = nd.x[edges[e + 1]] - nd.x[edges[e]],
+                   oy = nd.y[edges[e + 1]] - nd.y[edges[e]];
       const double ol = std::sqrt(ox * ox + oy * oy);
       if (ol > 0.0)
         mx += oy / ol, my -= ox / ol;
@@ -125,8 +126,8 @@ void DiskContact::EdgeGrid::build(const fem::Model &model, std::size_t body, con
   cells.fill(
       n,
       [&](std::size_t k) {
-        const double ax = nd.x[edges[2 * k]], ay = nd.y[edges[2 * k]],
-                     bx = nd.x[edges[2 * k + 1]], by = nd.y[edges[2 * k + 1]];
+        const double ax = nd.x[edges[2 * k]], ay = nd.y[edges[2 * k]], bx = nd.x[edges[2 * k + 1]],
+                     by = nd.y[edges[2 * k + 1]];
         return cells.cells(std::min(ax, bx) - slack, std::min(ay, by) - slack,
                            std::max(ax, bx) + slack, std::max(ay, by) + slack);
       },
@@ -185,13 +186,14 @@ double DiskContact::fastest(const fem::Model &model) const {
     if (!model.at_rest[b]) {
       const auto &edges = model.bodies[b].boundary;
       for (std::size_t e = 0; e < edges.size(); e += 2)
-        fastest2 = std::max(fastest2, nd.vx[edges[e]] * nd.vx[edges[e]] + nd.vy[edges[e]] * nd.vy[edges[e]]);
+        fastest2 = std::max(fastest2,
+                            nd.vx[edges[e]] * nd.vx[edges[e]] + nd.vy[edges[e]] * nd.vy[edges[e]]);
     }
   return std::sqrt(fastest2);
 }
 
-void DiskContact::addForces(const fem::Model &model, const Particles &disks,
-                            ParticleForces &forces, std::vector<Reaction> &reactions, double dt) {
+void DiskContact::addForces(const fem::Model &model, const Particles &disks, ParticleForces &forces,
+                            std::vector<Reaction> &reactions, double dt) {
   const fem::Nodes &nd = model.nodes;
   const std::size_t n = disks.size();
   stats_.contacts = 0;

@@ -14,8 +14,8 @@ namespace mesopen::fem {
 namespace {
 using narrow::no_node;
 constexpr double touching = 1e-6; // penetration (this fraction of an element) taken as touching
-constexpr double deep = 0.5;        // penetration beyond this fraction of an element counts as deep
-constexpr double check_depth = 0.05; // penetration from which a contact is checked by crossings
+constexpr double deep = 0.5;      // penetration beyond this fraction of an element counts as deep
+constexpr double check_depth = 0.05;  // penetration from which a contact is checked by crossings
 constexpr double list_margin = 0.5;   // a pair's lists: margin / the smaller body's element size
 constexpr double search_margin = 1.0; // pairs of bodies: margin / the median element size
 constexpr std::size_t runs_per_thread = 4; // runs of pairs: a thread takes the next one free
@@ -133,7 +133,7 @@ void Contact::boundaryChanged(const Model &model, const std::vector<std::uint32_
     measure(model, b);
   for (std::uint32_t C : bodies)
     allowOverlaps(C, std::vector<std::uint32_t>(before.begin() + before_begin[C],
-                                                 before.begin() + before_begin[C + 1]));
+                                                before.begin() + before_begin[C + 1]));
   run_pairs_.clear();
 }
 
@@ -149,12 +149,14 @@ void Contact::allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &bef
     const Box region = boxes_[C].overlap(boxes_[B]);
     for (std::size_t k = node_begin_[B]; k < node_begin_[B + 1]; ++k)
       if (region.contains(points_[k].x, points_[k].y))
-        if (const double d = penetration(C, points_[k].x, points_[k].y, scratch); d > check_depth * size_[C])
+        if (const double d = penetration(C, points_[k].x, points_[k].y, scratch);
+            d > check_depth * size_[C])
           allow(nodes_[k], d);
     for (std::size_t k = node_begin_[C]; k < node_begin_[C + 1]; ++k)
       if (region.contains(points_[k].x, points_[k].y) &&
           !std::binary_search(before.begin(), before.end(), nodes_[k]))
-        if (const double d = penetration(B, points_[k].x, points_[k].y, scratch); d > check_depth * size_[B])
+        if (const double d = penetration(B, points_[k].x, points_[k].y, scratch);
+            d > check_depth * size_[B])
           allow(nodes_[k], d);
   }
 }
@@ -406,8 +408,8 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region,
 
 // (see narrow::nearSegments; the reach: see touch)
 MESOPEN_INLINE Contact::Box Contact::nearSegments(std::size_t body, const std::uint32_t *ends,
-                                                 const std::uint32_t *ends_end, const Box &region,
-                                                 Scratch &scratch) const {
+                                                  const std::uint32_t *ends_end, const Box &region,
+                                                  Scratch &scratch) const {
   const Box wide = region.widened(check_depth * size_[body]);
   narrow::nearSegments(points_.data(), ends, ends_end, wide, scratch.near);
   return wide;
@@ -421,15 +423,15 @@ MESOPEN_INLINE Contact::Box Contact::nearSegments(std::size_t body, const std::u
 // body's travel): it is clear until the pair's travel `travel` now plus g. g is,
 // for a node outside the overlap, its distance to B's box; for one in it, its distance to the
 // closest near segment, or to the edge of the region the near segments cover if that is less.
-// The other nodes (in contact, touching, or by a vertex whose other segment is not near) are hot: they are looked at
-// every step. So all nodes are looked at when `travel` reaches `until` (the least travel up to
-// which every node last found clear stays clear), else the `n_hot` nodes in `hot` (positions in
-// `nodes`) alone; both are updated.
+// The other nodes (in contact, touching, or by a vertex whose other segment is not near) are hot:
+// they are looked at every step. So all nodes are looked at when `travel` reaches `until` (the
+// least travel up to which every node last found clear stays clear), else the `n_hot` nodes in
+// `hot` (positions in `nodes`) alone; both are updated.
 MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_t B,
-                                  const std::uint32_t *nodes, const std::uint32_t *nodes_end,
-                                  const std::uint32_t *ends, const std::uint32_t *ends_end,
-                                  double travel, double &until, std::uint32_t *hot,
-                                  std::uint32_t &n_hot, Hits &hits, Scratch &scratch) const {
+                                   const std::uint32_t *nodes, const std::uint32_t *nodes_end,
+                                   const std::uint32_t *ends, const std::uint32_t *ends_end,
+                                   double travel, double &until, std::uint32_t *hot,
+                                   std::uint32_t &n_hot, Hits &hits, Scratch &scratch) const {
   // A node inside B is in the overlap of the two boxes: the listed nodes there, if any, are
   // checked against the segments within `reach` of the overlap (a node behind one of them by less
   // than `reach` finds its closest segment among them; deeper contacts are checked by the crossing
@@ -480,10 +482,10 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
     // w2: the weight of the segment's end, set if the node meets a vertex, else along / length
     double depth = 0.0, nx = 0.0, ny = 0.0, w2 = -1.0;
     using narrow::At;
-    const At at = narrow::atInside(near, c)
-                      ? At::segment
-                      : narrow::atVertex(near, points_.data(), pinched_.data(), c, px, py, depth,
-                                         nx, ny, w2);
+    const At at =
+        narrow::atInside(near, c)
+            ? At::segment
+            : narrow::atVertex(near, points_.data(), pinched_.data(), c, px, py, depth, nx, ny, w2);
     if (at == At::unknown) { // beyond a segment's end, the other segment there not near
       hot[n_hot++] = i;
       continue;
@@ -491,8 +493,8 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
     // Outside B, the node is as far from it as from the closest point found, or from the edge
     // of the region the near segments cover (the segments beyond lie beyond it).
     auto outside = [&] {
-      const double edge = std::min(std::min(px - wide.x0, wide.x1 - px),
-                                   std::min(py - wide.y0, wide.y1 - py));
+      const double edge =
+          std::min(std::min(px - wide.x0, wide.x1 - px), std::min(py - wide.y0, wide.y1 - py));
       until = std::min(until, travel + std::min(std::sqrt(c.distance), edge));
     };
     const narrow::Segment s = near[c.segment];
@@ -517,8 +519,7 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
       continue; // an overlap erosion laid bare, still opening
     hits.found.push_back({static_cast<std::uint32_t>(A), k, static_cast<std::uint32_t>(B),
                           near.ends[2 * c.segment], near.ends[2 * c.segment + 1],
-                          w2 < 0.0 ? c.along / s.length : w2, nx, ny, depth,
-                          h, mu});
+                          w2 < 0.0 ? c.along / s.length : w2, nx, ny, depth, h, mu});
   }
 }
 
@@ -545,8 +546,9 @@ void Contact::walls(const Model &model, double dt, Hits &hits) const {
                                        {right, x - s_.wall_right, -1.0, 0.0},
                                        {bottom, s_.wall_bottom - y, 0.0, 1.0}})
         if (on && depth > touching * h)
-          hit(model, {b, static_cast<std::uint32_t>(k), no_node, no_node, no_node, 0.0, nx, ny,
-                      depth, h, s_.wall_friction},
+          hit(model,
+              {b, static_cast<std::uint32_t>(k), no_node, no_node, no_node, 0.0, nx, ny, depth, h,
+               s_.wall_friction},
               dt, hits);
     }
   }
@@ -580,8 +582,7 @@ void Contact::prefetchHit(const Model &model, const Found &f) const {
 
 // The force of a contact (the first `touching` h of the depth is free), relative velocities at
 // mid-step; the reaction goes to the segment's nodes by weights 1 - w2, w2.
-MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt,
-                                Hits &hits) const {
+MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, Hits &hits) const {
   const auto [A, k, B, k1, k2, w2, nx, ny, found_depth, h, mu] = f;
   double depth = found_depth;
   const Nodes &nd = model.nodes;

@@ -194,7 +194,7 @@ private:
   std::vector<std::size_t> node_begin_,
       segment_begin_;                // per body, into nodes_ and segment_ends_ / 2
   std::vector<std::uint32_t> nodes_; // boundary nodes, body by body
-  std::vector<Point> points_; // per boundary node (as nodes_): its position this step
+  std::vector<Point> points_;        // per boundary node (as nodes_): its position this step
   std::vector<std::uint32_t>
       segment_ends_;                  // boundary edges (ccw), their nodes as indices into nodes_
   std::vector<std::uint8_t> pinched_; // per boundary node: not the start of exactly one edge

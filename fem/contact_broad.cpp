@@ -93,8 +93,11 @@ void Contact::findPairs() {
       }
   }
   for (std::uint32_t a : moving_)
-    restNeighbours(a, search_margin_, [&](std::uint32_t b) { return !listed_[b]; }, add);
-  auto earlier = [](const Pair &p, const Pair &q) { return std::tie(p.a, p.b) < std::tie(q.a, q.b); };
+    restNeighbours(
+        a, search_margin_, [&](std::uint32_t b) { return !listed_[b]; }, add);
+  auto earlier = [](const Pair &p, const Pair &q) {
+    return std::tie(p.a, p.b) < std::tie(q.a, q.b);
+  };
   std::sort(pairs_.begin(), pairs_.end(), earlier);
   const std::size_t runs = arenas_.size();
   run_pairs_.resize(runs + 1);
@@ -123,7 +126,8 @@ void Contact::findPairs() {
       std::vector<std::uint32_t> &arena = arenas_[r];
       pair = kept;
       pair.begin = static_cast<std::uint32_t>(arena.size());
-      arena.insert(arena.end(), from.begin() + kept.begin, from.begin() + kept.begin + kept.capacity);
+      arena.insert(arena.end(), from.begin() + kept.begin,
+                   from.begin() + kept.begin + kept.capacity);
     }
 }
 
@@ -137,9 +141,10 @@ void Contact::addPairsOfWoken(const Model &model) {
   if (woken_.empty())
     return;
   for (std::uint32_t a : woken_)
-    restNeighbours(a, search_margin_,
-                   [&](std::uint32_t b) { return !listed_[b] && (model.at_rest[b] || a < b); },
-                   [&](std::uint32_t a, std::uint32_t b) { pairs_.emplace_back(a, b); });
+    restNeighbours(
+        a, search_margin_,
+        [&](std::uint32_t b) { return !listed_[b] && (model.at_rest[b] || a < b); },
+        [&](std::uint32_t a, std::uint32_t b) { pairs_.emplace_back(a, b); });
   for (std::uint32_t a : woken_)
     listed_[a] = 1;
   run_pairs_.back() = pairs_.size();
@@ -158,7 +163,9 @@ void Contact::restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add 
     for (std::size_t i = cells.i0; i <= cells.i1; ++i)
       for (const std::uint32_t b : r.cell(j * r.columns() + i)) {
         const Box &B = boxes_[b];
-        if (b != a && A.overlaps(B) && r.cellOf(std::max(A.x0, B.x0), std::max(A.y0, B.y0)) == j * r.columns() + i && wanted(b))
+        if (b != a && A.overlaps(B) &&
+            r.cellOf(std::max(A.x0, B.x0), std::max(A.y0, B.y0)) == j * r.columns() + i &&
+            wanted(b))
           add(a, b);
       }
 }

@@ -56,9 +56,9 @@ struct ContactForce {
 // The law above: normal direction (nx, ny) (unit, pointing from the other side to this one),
 // relative velocity (vx, vy) of this side to the other with its normal part vn, depth d, penalty
 // kappa, damping c, friction coefficient mu, step dt.
-inline ContactForce contactForce(double m_n, double m_t, double d, double vx, double vy,
-                                 double vn, double nx, double ny, double kappa, double c,
-                                 double mu, double dt) {
+inline ContactForce contactForce(double m_n, double m_t, double d, double vx, double vy, double vn,
+                                 double nx, double ny, double kappa, double c, double mu,
+                                 double dt) {
   const double fn = std::max(0.0, m_n / dt * (kappa * d / dt - c * vn));
   const double tx = vx - vn * nx, ty = vy - vn * ny, slip = std::sqrt(tx * tx + ty * ty);
   const double ft = slip > 0.0 ? std::min(mu * fn, m_t * slip / dt) / slip : 0.0;

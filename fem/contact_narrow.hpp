@@ -226,8 +226,8 @@ enum class At { segment, vertex, unknown }; // see atVertex
 // At::unknown: c's foot is beyond V and the other segment is not near. `points` are the boundary
 // nodes' positions, `pinched` per boundary node whether it is not the start of exactly one segment.
 MESOPEN_INLINE At atVertex(const Near &near, const Point *points, const std::uint8_t *pinched,
-                           Closest &c, double px, double py, double &depth, double &nx,
-                           double &ny, double &w2) {
+                           Closest &c, double px, double py, double &depth, double &nx, double &ny,
+                           double &w2) {
   const double length = near.length[c.segment];
   const bool at_start = c.along < 0.5 * length;
   const std::uint32_t vertex = near.ends[2 * c.segment + (at_start ? 0 : 1)];

@@ -69,7 +69,8 @@ public:
       forCells(cellsOf(k), [&](std::size_t c) { items_[fill_[c]++] = item(k); });
   }
   // Points 0..n-1 at (x(k), y(k)), one cell each, as item(k).
-  template <class X, class Y, class MakeItem> void fillPoints(std::size_t n, X x, Y y, MakeItem item) {
+  template <class X, class Y, class MakeItem>
+  void fillPoints(std::size_t n, X x, Y y, MakeItem item) {
     fill(
         n,
         [&](std::size_t k) {

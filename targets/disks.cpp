@@ -1,7 +1,7 @@
 #include "disks.hpp"
 
-#include "point_grid.hpp"
 #include "measures.hpp"
+#include "point_grid.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -136,10 +136,12 @@ Disks grainDisks(const Polygons &grains, double density, const DiskBounds &bound
     width = std::max(width, f.centroid_x[g]), height = std::max(height, f.centroid_y[g]);
   }
   // Neighbours within three of the largest equal-area radii: two disks farther apart than two
-  // cannot overlap, and an elongated polygon reaches at most about 1.5 of its own from its centroid.
+  // cannot overlap, and an elongated polygon reaches at most about 1.5 of its own from its
+  // centroid.
   const double reach = 3.0 * r_max;
   PointGrid grid = pointGrid(std::max(width, 1e-12), std::max(height, 1e-12), reach);
-  binPoints(grid, f.centroid_x.data(), f.centroid_y.data(), equal.data(), 0, static_cast<std::uint32_t>(n));
+  binPoints(grid, f.centroid_x.data(), f.centroid_y.data(), equal.data(), 0,
+            static_cast<std::uint32_t>(n));
   std::vector<double> x = f.centroid_x, y = f.centroid_y;
   if (bounds.size == DiskSize::equal_area && bounds.width > 0.0 && bounds.height > 0.0) {
     relaxApart(x, y, equal, is_disk, bounds.width, bounds.height, grains, grid, reach,

@@ -45,7 +45,8 @@ bool same(double a, double b) {
 
 void expectSame(const Closest &fast, const Closest &reference) {
   EXPECT_EQ(fast.segment, reference.segment);
-  EXPECT_TRUE(same(fast.distance, reference.distance)) << fast.distance << " " << reference.distance;
+  EXPECT_TRUE(same(fast.distance, reference.distance))
+      << fast.distance << " " << reference.distance;
   EXPECT_TRUE(same(fast.g, reference.g));
   EXPECT_TRUE(same(fast.along, reference.along));
   EXPECT_EQ(fast.corner, reference.corner);
