@@ -12,7 +12,8 @@
 //     are integrated by velocity Verlet on the FE steps from the FE-DEM contact forces
 //     (disk_contact.hpp), the same forces whose reactions go to the FE nodes in that step. Forces
 //     and reactions act over the same FE steps: momentum is kept to round-off.
-//   - The FE step nearest to P ends the window: the DEM participant takes (dx, dv) (Particle-Motion)
+//   - The FE step nearest to P ends the window: the DEM participant takes (dx, dv)
+//   (Particle-Motion)
 //     and its own step of the window's length D.
 // Only the disks that can come within reach of an FE body during the window are moved step by
 // step (the near disks): chosen at the window's start, and again whenever the FE bodies leave the
@@ -49,7 +50,6 @@ public:
   Particles disks() const;
   std::uint64_t windows() const { return window_; } // ended
   double window() const { return planned_; }
-  std::size_t nearDisks() const { return motion_.moved.size(); } // moved step by step in this window
   double seconds() const { return seconds_; } // in the coupling: the FE-DEM contact, the DEM steps
   const ExchangeLedger &exchanges() const { return exchanges_; }
 
@@ -67,14 +67,15 @@ private:
 
   DemParticipant &dem_;
   DiskContact contact_;
-  double planned_;              // the window asked for
-  double length_ = 0.0;         // this one's planned length P: whole FE steps
-  bool open_ = false;           // a window under way
-  double elapsed_ = 0.0;        // its time so far
-  std::uint64_t window_ = 0;    // windows ended
+  double planned_;           // the window asked for
+  double length_ = 0.0;      // this one's planned length P: whole FE steps
+  bool open_ = false;        // a window under way
+  double elapsed_ = 0.0;     // its time so far
+  std::uint64_t window_ = 0; // windows ended
   double seconds_ = 0.0;
-  double r_max_ = 0.0;          // the largest disk, over all ranks
-  DiskContact::Region allowed_{}; // where the FE bodies may go before the near disks are chosen anew
+  double r_max_ = 0.0; // the largest disk, over all ranks
+  DiskContact::Region
+      allowed_{}; // where the FE bodies may go before the near disks are chosen anew
   // The near disks (motion_.moved: indices into the participant's particles), their motion beyond
   // the slow path and the last FE-DEM forces on them, and their state now for the contact.
   std::vector<char> is_near_, meets_;

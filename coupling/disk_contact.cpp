@@ -1,6 +1,6 @@
 #include "disk_contact.hpp"
 
-#include "contact.hpp"
+#include "contact_law.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +11,6 @@
 namespace mesopen::coupling {
 
 namespace {
-constexpr std::size_t max_cells = 1u << 22;
 double sq(double x) { return x * x; }
 } // namespace
 
@@ -40,8 +39,8 @@ void DiskContact::boundaryChanged(const fem::Model &model) {
 
 // The closest point of the body's boundary to (cx, cy) among the segments within `reach` (the
 // disk's radius: the closest of all when it is that near; distance infinite when none is), of
-// those in `near` (offsets into the body's boundary: every segment within reach among them), and the
-// side: at a segment's inside by its outward normal (the tangent turned right: boundaries run
+// those in `near` (offsets into the body's boundary: every segment within reach among them), and
+// the side: at a segment's inside by its outward normal (the tangent turned right: boundaries run
 // counter-clockwise), at a vertex by the vertex's pseudo-normal, the sum of its two segments'
 // normals. A disk wholly inside a body (its centre more than its radius behind the boundary) is
 // not seen: the penalty keeps overlaps to a few percent of a radius.
@@ -85,7 +84,8 @@ DiskContact::Closest DiskContact::closest(const fem::Model &model, std::size_t b
     for (const std::uint32_t e : near) { // the other edge at the vertex is within reach too
       if (e == best_edge || edges[e + (best_t == 0.0 ? 1 : 0)] != vertex)
         continue;
-      const double ox = nd.x[edges[e + 1]] - nd.x[edges[e]], oy = nd.y[edges[e + 1]] - nd.y[edges[e]];
+      const double ox = nd.x[edges[e + 1]] - nd.x[edges[e]],
+                   oy = nd.y[edges[e + 1]] - nd.y[edges[e]];
       const double ol = std::sqrt(ox * ox + oy * oy);
       if (ol > 0.0)
         mx += oy / ol, my -= ox / ol;
@@ -115,52 +115,24 @@ void DiskContact::EdgeGrid::build(const fem::Model &model, std::size_t body, con
   const auto &edges = model.bodies[body].boundary;
   const std::size_t n = edges.size() / 2;
   // cells of a few segments' length, or the disks' size if larger
-  cell = std::max(cell_size, 4.0 * std::sqrt((box.x1 - box.x0) * (box.y1 - box.y0) / n));
-  inverse = 1.0 / cell;
+  const double cell =
+      std::max(cell_size, 4.0 * std::sqrt((box.x1 - box.x0) * (box.y1 - box.y0) / n));
   slack = 0.25 * cell;
-  x0 = box.x0 - slack, y0 = box.y0 - slack;
-  nx = static_cast<std::size_t>((box.x1 - box.x0 + 2.0 * slack) / cell) + 1;
-  ny = static_cast<std::size_t>((box.y1 - box.y0 + 2.0 * slack) / cell) + 1;
-  start.assign(nx * ny + 1, 0);
+  cells.cover(box.x0 - slack, box.y0 - slack, box.x1 - box.x0 + 2.0 * slack,
+              box.y1 - box.y0 + 2.0 * slack, cell);
   built_x.resize(n), built_y.resize(n);
   for (std::size_t e = 0; e < edges.size(); e += 2)
     built_x[e / 2] = nd.x[edges[e]], built_y[e / 2] = nd.y[edges[e]];
-  auto span = [&](std::size_t e, auto visit) {
-    const double ax = nd.x[edges[e]], ay = nd.y[edges[e]], bx = nd.x[edges[e + 1]],
-                 by = nd.y[edges[e + 1]];
-    const std::size_t i0 = ix(std::min(ax, bx) - slack), i1 = ix(std::max(ax, bx) + slack);
-    const std::size_t j0 = iy(std::min(ay, by) - slack), j1 = iy(std::max(ay, by) + slack);
-    for (std::size_t j = j0; j <= j1; ++j)
-      for (std::size_t i = i0; i <= i1; ++i)
-        visit(j * nx + i);
-  };
-  for (std::size_t e = 0; e < edges.size(); e += 2)
-    span(e, [&](std::size_t c) { ++start[c + 1]; });
-  for (std::size_t c = 0; c < nx * ny; ++c)
-    start[c + 1] += start[c];
-  items.resize(start.back());
-  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-  for (std::size_t e = 0; e < edges.size(); e += 2)
-    span(e, [&](std::size_t c) { items[fill[c]++] = static_cast<std::uint32_t>(e); });
+  cells.fill(
+      n,
+      [&](std::size_t k) {
+        const double ax = nd.x[edges[2 * k]], ay = nd.y[edges[2 * k]], bx = nd.x[edges[2 * k + 1]],
+                     by = nd.y[edges[2 * k + 1]];
+        return cells.cells(std::min(ax, bx) - slack, std::min(ay, by) - slack,
+                           std::max(ax, bx) + slack, std::max(ay, by) + slack);
+      },
+      [&](std::size_t k) { return static_cast<std::uint32_t>(2 * k); });
   valid = true;
-}
-
-std::size_t DiskContact::EdgeGrid::ix(double x) const {
-  const double i = (x - x0) * inverse;
-  return i <= 0.0 ? 0 : std::min(static_cast<std::size_t>(i), nx - 1);
-}
-std::size_t DiskContact::EdgeGrid::iy(double y) const {
-  const double j = (y - y0) * inverse;
-  return j <= 0.0 ? 0 : std::min(static_cast<std::size_t>(j), ny - 1);
-}
-
-// The segments in the cells the rectangle meets (a segment may come more than once).
-void DiskContact::EdgeGrid::nearBox(double xa, double ya, double xb, double yb,
-                                    std::vector<std::uint32_t> &out) const {
-  out.clear();
-  for (std::size_t j = iy(ya); j <= iy(yb); ++j)
-    for (std::size_t i = ix(xa); i <= ix(xb); ++i)
-      out.insert(out.end(), items.begin() + start[j * nx + i], items.begin() + start[j * nx + i + 1]);
 }
 
 void DiskContact::apply(fem::Model &model, const std::vector<Reaction> &reactions) {
@@ -214,13 +186,14 @@ double DiskContact::fastest(const fem::Model &model) const {
     if (!model.at_rest[b]) {
       const auto &edges = model.bodies[b].boundary;
       for (std::size_t e = 0; e < edges.size(); e += 2)
-        fastest2 = std::max(fastest2, nd.vx[edges[e]] * nd.vx[edges[e]] + nd.vy[edges[e]] * nd.vy[edges[e]]);
+        fastest2 = std::max(fastest2,
+                            nd.vx[edges[e]] * nd.vx[edges[e]] + nd.vy[edges[e]] * nd.vy[edges[e]]);
     }
   return std::sqrt(fastest2);
 }
 
-void DiskContact::addForces(const fem::Model &model, const Particles &disks,
-                            ParticleForces &forces, std::vector<Reaction> &reactions, double dt) {
+void DiskContact::addForces(const fem::Model &model, const Particles &disks, ParticleForces &forces,
+                            std::vector<Reaction> &reactions, double dt) {
   const fem::Nodes &nd = model.nodes;
   const std::size_t n = disks.size();
   stats_.contacts = 0;
@@ -246,51 +219,29 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
            disks.y[i] <= region.y1;
   };
   // Those disks in a grid of cells as wide as the largest disk.
-  const double x0 = region.x0, y0 = region.y0;
-  double cell = std::max(2.0 * r_max, 1e-12);
-  std::size_t gx = 0, gy = 0;
-  for (;; cell *= 2.0) {
-    gx = static_cast<std::size_t>((region.x1 - x0) / cell) + 1;
-    gy = static_cast<std::size_t>((region.y1 - y0) / cell) + 1;
-    if (gx * gy <= max_cells)
-      break;
-  }
-  auto cellOf = [&](std::size_t i) {
-    const auto ix = std::min(gx - 1, static_cast<std::size_t>((disks.x[i] - x0) / cell));
-    const auto iy = std::min(gy - 1, static_cast<std::size_t>((disks.y[i] - y0) / cell));
-    return iy * gx + ix;
-  };
-  cell_start_.assign(gx * gy + 1, 0);
+  in_region_.clear();
   for (std::size_t i = 0; i < n; ++i)
     if (inRegion(i))
-      ++cell_start_[cellOf(i) + 1];
-  for (std::size_t c = 0; c < gx * gy; ++c)
-    cell_start_[c + 1] += cell_start_[c];
-  cell_disks_.resize(cell_start_.back());
-  {
-    std::vector<std::size_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-    for (std::size_t i = 0; i < n; ++i)
-      if (inRegion(i))
-        cell_disks_[fill[cellOf(i)]++] = static_cast<std::uint32_t>(i);
-  }
+      in_region_.push_back(static_cast<std::uint32_t>(i));
+  disk_grid_.cover(region.x0, region.y0, region.x1 - region.x0, region.y1 - region.y0,
+                   std::max(2.0 * r_max, 1e-12));
+  disk_grid_.fillPoints(
+      in_region_.size(), [&](std::size_t k) { return disks.x[in_region_[k]]; },
+      [&](std::size_t k) { return disks.y[in_region_[k]]; },
+      [&](std::size_t k) { return in_region_[k]; });
 
-  const double kappa = 2.0 * s_.stiffness, zeta_c = 2.0 * s_.damping * std::sqrt(kappa);
+  const double kappa = 2.0 * s_.stiffness, c_damping = fem::dampingCoefficient(s_.damping, kappa);
   for (std::size_t kb = 0; kb < fe_bodies_.size(); ++kb) {
     const std::uint32_t b = fe_bodies_[kb];
     const Box &box = boxes_[kb];
     const std::size_t n_edges = model.bodies[b].boundary.size() / 2;
     bool binned = false; // its segments, binned when a disk first comes near (many) or listed (few)
-    const auto ix0 = static_cast<std::size_t>(std::max(0.0, (box.x0 - r_max - x0) / cell));
-    const auto iy0 = static_cast<std::size_t>(std::max(0.0, (box.y0 - r_max - y0) / cell));
-    const auto ix1 = std::min(gx - 1, static_cast<std::size_t>(std::max(0.0, (box.x1 + r_max - x0) / cell)));
-    const auto iy1 = std::min(gy - 1, static_cast<std::size_t>(std::max(0.0, (box.y1 + r_max - y0) / cell)));
-    for (std::size_t iy = iy0; iy <= iy1; ++iy)
-      for (std::size_t ix = ix0; ix <= ix1; ++ix)
-        for (std::size_t k = cell_start_[iy * gx + ix]; k < cell_start_[iy * gx + ix + 1]; ++k) {
-          const std::uint32_t i = cell_disks_[k];
+    disk_grid_.forEach(
+        disk_grid_.cells(box.x0 - r_max, box.y0 - r_max, box.x1 + r_max, box.y1 + r_max),
+        [&](const std::uint32_t i) {
           const double cx = disks.x[i], cy = disks.y[i], r = disks.radius[i];
           if (cx + r < box.x0 || cx - r > box.x1 || cy + r < box.y0 || cy - r > box.y1)
-            continue;
+            return;
           if (!binned) {
             binned = true;
             if (n_edges > 64) {
@@ -300,25 +251,29 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
               for (std::uint32_t e = 0, j = 0; j < n_edges; ++j, e += 2)
                 j == 0 ? near_edges_.assign(1, e) : near_edges_.push_back(e);
           }
-          if (n_edges > 64)
-            grids_[kb].nearBox(cx - r, cy - r, cx + r, cy + r, near_edges_);
+          if (n_edges > 64) { // the segments in the cells the disk's box meets
+            const CellGrid<> &g = grids_[kb].cells;
+            near_edges_.clear();
+            g.forEach(g.cells(cx - r, cy - r, cx + r, cy + r),
+                      [&](std::uint32_t e) { near_edges_.push_back(e); });
+          }
           const Closest c = closest(model, b, cx, cy, r, near_edges_);
           const double found = r - c.distance; // c.distance < 0: the centre inside
           if (!(found > 0.0))
-            continue;
+            return;
           // relative velocity of the disk's contact point to the boundary point
           const double w1 = 1.0 - c.w, w2 = c.w;
           const double om = disks.omega[i];
           const double vx = disks.vx[i] + om * r * c.ny - (w1 * nd.vx[c.s1] + w2 * nd.vx[c.s2]);
           const double vy = disks.vy[i] - om * r * c.nx - (w1 * nd.vy[c.s1] + w2 * nd.vy[c.s2]);
-          const double vn = vx * c.nx + vy * c.ny; // > 0: separating
+          const double vn = fem::normalVelocity(vx, vy, c.nx, c.ny); // > 0: separating
           // A depth no step's approach makes (a boundary that erosion laid bare over the disk, a
           // dented body) is allowed for and let go over release_steps steps, as in FE-FE contact
           // (fem::approachReach).
           Held &held = held_[disks.id.empty() ? static_cast<std::int64_t>(i) : disks.id[i]];
           double depth = found - held.allowance;
           if (!(depth > 0.0))
-            continue;
+            return;
           const double reach = fem::approachReach(held.last, size_[b], vn, dt);
           if (depth > reach) {
             held.allowance += depth - reach, held.rate = held.allowance / fem::release_steps;
@@ -326,11 +281,11 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
           }
           held.now = std::max(held.now, depth);
           const double m = disks.mass[i], m_seg = w1 * nd.mass[c.s1] + w2 * nd.mass[c.s2];
-          const double m_eff = m * m_seg / (m + m_seg), m_t = (m / 3.0) * m_seg / (m / 3.0 + m_seg);
-          const double fn = std::max(0.0, m_eff / dt * (kappa * depth / dt - zeta_c * vn));
-          const double tx = vx - vn * c.nx, ty = vy - vn * c.ny, slip = std::sqrt(tx * tx + ty * ty);
-          const double ft = slip > 0.0 ? std::min(s_.friction[b] * fn, m_t * slip / dt) / slip : 0.0;
-          const double fx = fn * c.nx - ft * tx, fy = fn * c.ny - ft * ty;
+          // the disk's tangential inertia with its spin: 1/m + r^2/I = 3/m
+          const double m_eff = fem::reducedMass(m, m_seg), m_t = fem::reducedMass(m / 3.0, m_seg);
+          const fem::ContactForce f_c = fem::contactForce(m_eff, m_t, depth, vx, vy, vn, c.nx, c.ny,
+                                                          kappa, c_damping, s_.friction[b], dt);
+          const double fx = f_c.fx, fy = f_c.fy, ft = f_c.ft, tx = f_c.tx, ty = f_c.ty;
           const double torque = -r * (c.nx * fy - c.ny * fx);
           forces.fx[i] += fx, forces.fy[i] += fy, forces.torque[i] += torque;
           reactions.push_back({c.s1, b, -w1 * fx, -w1 * fy, w1 * ft * tx, w1 * ft * ty});
@@ -338,7 +293,7 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks,
           stats_.work_on_disks += dt * (fx * disks.vx[i] + fy * disks.vy[i] + torque * om);
           stats_.deepest = std::max(stats_.deepest, found / size_[b]);
           ++stats_.contacts;
-        }
+        });
   }
 }
 

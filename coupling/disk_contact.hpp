@@ -1,5 +1,5 @@
 // Contact between the FE bodies' boundaries and DEM disks, with the law of FE-FE contact
-// (fem/contact.hpp): a penalty tied to the masses and the step, damping on approach, Coulomb
+// (fem/contact_law.hpp): a penalty tied to the masses and the step, damping on approach, Coulomb
 // friction capped at the force that stops the slip in one step.
 //   A disk of centre c, radius r against a body: q the closest point of the body's boundary to c,
 //   on segment (s1, s2) at weight w of s2; n the unit normal from the body to the disk; overlap
@@ -17,6 +17,7 @@
 // FE-FE contact (fem/contact.hpp).
 #pragma once
 
+#include "cell_grid.hpp"
 #include "dem.hpp"
 #include "model.hpp"
 
@@ -27,16 +28,16 @@
 namespace mesopen::coupling {
 
 struct DiskContactSettings {
-  double stiffness = 0.5; // kappa of FE-FE contact
-  double damping = 0.1;   // zeta of FE-FE contact
+  double stiffness = 0.5;       // kappa of FE-FE contact
+  double damping = 0.1;         // zeta of FE-FE contact
   std::vector<double> friction; // mu per FE body
 };
 
 struct DiskContactStatistics {
-  std::size_t contacts = 0;     // of the last call
-  double deepest = 0.0;         // the largest overlap over the FE element size, over the run
-  double work_on_disks = 0.0;   // the forces' work on the disks [J/m], over the run
-  std::size_t sudden = 0;       // over the run: contacts found deeper than a step's approach
+  std::size_t contacts = 0;   // of the last call
+  double deepest = 0.0;       // the largest overlap over the FE element size, over the run
+  double work_on_disks = 0.0; // the forces' work on the disks [J/m], over the run
+  std::size_t sudden = 0;     // over the run: contacts found deeper than a step's approach
 };
 
 class DiskContact {
@@ -69,8 +70,8 @@ private:
     double x0, y0, x1, y1;
   };
   struct Closest {
-    std::uint32_t s1, s2;   // the segment's nodes
-    double w = 0.0;         // weight of s2
+    std::uint32_t s1, s2;                      // the segment's nodes
+    double w = 0.0;                            // weight of s2
     double distance = 0.0, nx = 0.0, ny = 0.0; // |c - q|, unit normal out of the body
   };
   Closest closest(const fem::Model &model, std::size_t body, double cx, double cy, double reach,
@@ -80,27 +81,23 @@ private:
   // `slack` meets: the grid holds while no node of the body moved by `slack` since it was built
   // (measure checks, from the positions then).
   struct EdgeGrid {
-    double x0 = 0, y0 = 0, cell = 1, inverse = 1, slack = 0;
-    std::size_t nx = 1, ny = 1;
-    std::vector<std::uint32_t> start, items; // per cell: offsets into Body::boundary
-    std::vector<double> built_x, built_y;    // per segment: its first node when built
+    CellGrid<> cells; // per cell: offsets into Body::boundary
+    double slack = 0;
+    std::vector<double> built_x, built_y; // per segment: its first node when built
     bool valid = false;
     void build(const fem::Model &model, std::size_t body, const Box &box, double cell_size);
-    std::size_t ix(double x) const;
-    std::size_t iy(double y) const;
-    void nearBox(double xa, double ya, double xb, double yb, std::vector<std::uint32_t> &out) const;
   };
-  std::vector<EdgeGrid> grids_;                // per FE body with many segments
+  std::vector<EdgeGrid> grids_; // per FE body with many segments
   std::vector<std::uint32_t> near_edges_;
   DiskContactSettings s_;
-  std::vector<double> size_;                   // per body: longest boundary edge [m]
-  std::vector<std::uint32_t> fe_bodies_;       // bodies with a boundary
-  std::vector<Box> boxes_;                     // theirs, this step
-  Region region_{};                            // the last measure, with its reach
+  std::vector<double> size_;             // per body: longest boundary edge [m]
+  std::vector<std::uint32_t> fe_bodies_; // bodies with a boundary
+  std::vector<Box> boxes_;               // theirs, this step
+  Region region_{};                      // the last measure, with its reach
   double reach_ = 0.0;
-  bool measured_ = false;                      // the boxes measured for the next addForces
-  std::vector<std::size_t> cell_start_;        // grid of disks: first disk of each cell
-  std::vector<std::uint32_t> cell_disks_;
+  bool measured_ = false;                // the boxes measured for the next addForces
+  std::vector<std::uint32_t> in_region_; // the disks that may touch a body
+  CellGrid<> disk_grid_;                 // those, in cells of the largest disk's size
   DiskContactStatistics stats_;
   // Per disk (by id, or place when the disks have no ids) in contact or with an allowance: the
   // depth it was pushed at in the last step and in this one, a depth allowed for and its release

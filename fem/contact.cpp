@@ -3,12 +3,7 @@
 
 #include <omp.h>
 
-#if defined(__AVX512F__)
-#include <immintrin.h>
-#endif
-
 #include <algorithm>
-#include <bit>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -17,43 +12,25 @@
 namespace mesopen::fem {
 
 namespace {
-constexpr std::uint32_t no_node = 0xffffffffu;
+using narrow::no_node;
 constexpr double touching = 1e-6; // penetration (this fraction of an element) taken as touching
-constexpr double deep = 0.5;        // penetration beyond this fraction of an element counts as deep
-constexpr double check_depth = 0.05; // penetration from which a contact is checked by crossings
-constexpr double end_tie = 1e-9;    // a foot this close to a segment's end (relative) is at the end
-constexpr std::size_t max_cells = 1u << 22;
+constexpr double deep = 0.5;      // penetration beyond this fraction of an element counts as deep
+constexpr double check_depth = 0.05;  // penetration from which a contact is checked by crossings
 constexpr double list_margin = 0.5;   // a pair's lists: margin / the smaller body's element size
 constexpr double search_margin = 1.0; // pairs of bodies: margin / the median element size
 constexpr std::size_t runs_per_thread = 4; // runs of pairs: a thread takes the next one free
 constexpr std::size_t owner_blocks = 16;   // blocks of bodies, each adding its nodes' forces
 constexpr std::size_t prefetch_ahead = 8;  // contacts and loads ahead whose nodes are fetched
-// The narrow phase's steps for a pair side, a node and a contact (touch, nearSegments, closest,
-// hit) are inlined into the loop over the pairs: called out of line, each call passed its results
-// through memory and the loop waited on them. Run 6 to 0.4 length on one thread, the two ways
-// taken at alternate steps of one run: up to 12 % less time in the loop over the pairs (none when
-// the machine is fast and the loop waits on memory alone).
-#define MESOPEN_INLINE [[gnu::always_inline]] inline
 
 double sq(double x) { return x * x; }
 } // namespace
-
-bool Contact::Box::overlaps(const Box &o) const {
-  return x0 <= o.x1 && o.x0 <= x1 && y0 <= o.y1 && o.y0 <= y1;
-}
-Contact::Box Contact::Box::widened(double margin) const {
-  return {x0 - margin, y0 - margin, x1 + margin, y1 + margin};
-}
-Contact::Box Contact::Box::overlap(const Box &o) const {
-  return {std::max(x0, o.x0), std::max(y0, o.y0), std::min(x1, o.x1), std::min(y1, o.y1)};
-}
 
 Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(settings)) {
   n_materials_ = model.materials.size();
   for (const Body &body : model.bodies)
     material_.push_back(static_cast<std::uint16_t>(body.material));
-  for (int wall = 0; wall < 2; ++wall) // c = 2 zeta sqrt(kappa), kappa doubled at a wall (see hit)
-    damping_[wall] = 2.0 * s_.damping * std::sqrt(wall ? 2.0 * s_.stiffness : s_.stiffness);
+  for (int wall = 0; wall < 2; ++wall) // kappa doubled at a wall (see hit)
+    damping_[wall] = dampingCoefficient(s_.damping, wall ? 2.0 * s_.stiffness : s_.stiffness);
   if (s_.friction.size() == 1)
     s_.friction.assign(n_materials_ * n_materials_, s_.friction[0]);
   if (s_.friction.size() != n_materials_ * n_materials_)
@@ -100,7 +77,7 @@ Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(se
   for (std::size_t b = 0; b < n_bodies; ++b)
     if (model.at_rest[b] && node_begin_[b] < node_begin_[b + 1])
       resting.push_back(static_cast<std::uint32_t>(b));
-  rest_grid_.build(boxes_, resting, cell_);
+  gridBodies(rest_grid_, boxes_, resting);
   const std::size_t runs = runs_per_thread * static_cast<std::size_t>(omp_get_max_threads());
   run_hits_.resize(runs);
   for (Hits &hits : run_hits_)
@@ -156,7 +133,7 @@ void Contact::boundaryChanged(const Model &model, const std::vector<std::uint32_
     measure(model, b);
   for (std::uint32_t C : bodies)
     allowOverlaps(C, std::vector<std::uint32_t>(before.begin() + before_begin[C],
-                                                 before.begin() + before_begin[C + 1]));
+                                                before.begin() + before_begin[C + 1]));
   run_pairs_.clear();
 }
 
@@ -172,12 +149,14 @@ void Contact::allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &bef
     const Box region = boxes_[C].overlap(boxes_[B]);
     for (std::size_t k = node_begin_[B]; k < node_begin_[B + 1]; ++k)
       if (region.contains(points_[k].x, points_[k].y))
-        if (const double d = penetration(C, points_[k].x, points_[k].y, scratch); d > check_depth * size_[C])
+        if (const double d = penetration(C, points_[k].x, points_[k].y, scratch);
+            d > check_depth * size_[C])
           allow(nodes_[k], d);
     for (std::size_t k = node_begin_[C]; k < node_begin_[C + 1]; ++k)
       if (region.contains(points_[k].x, points_[k].y) &&
           !std::binary_search(before.begin(), before.end(), nodes_[k]))
-        if (const double d = penetration(B, points_[k].x, points_[k].y, scratch); d > check_depth * size_[B])
+        if (const double d = penetration(B, points_[k].x, points_[k].y, scratch);
+            d > check_depth * size_[B])
           allow(nodes_[k], d);
   }
 }
@@ -203,7 +182,7 @@ double Contact::penetration(std::size_t B, double px, double py, Scratch &scratc
   // every segment of B lies in its box
   nearSegments(B, segment_ends_.data() + 2 * segment_begin_[B],
                segment_ends_.data() + 2 * segment_begin_[B + 1], boxes_[B], scratch);
-  return std::sqrt(closest(scratch.near, px, py, nullptr).distance);
+  return std::sqrt(narrow::closest(scratch.near, px, py, nullptr).distance);
 }
 
 void Contact::addForces(Model &model, double, double dt) {
@@ -244,12 +223,8 @@ void Contact::addForces(Model &model, double, double dt) {
       Hits &hits = run_hits_[r];
       hits.clear();
       for (std::size_t i = run_pairs_[r]; i < run_pairs_[r + 1]; ++i) {
-        if (i + prefetch_ahead < run_pairs_[r + 1]) { // the lists of a pair ahead, scattered
-          const Pair &ahead = pairs_[i + prefetch_ahead];
-          __builtin_prefetch(&boxes_[ahead.b]);
-          __builtin_prefetch(arena.data() + ahead.begin);
-          __builtin_prefetch(arena.data() + ahead.begin + ahead.end[3]);
-        }
+        if (i + prefetch_ahead < run_pairs_[r + 1])
+          prefetchPair(pairs_[i + prefetch_ahead], arena);
         Pair &pair = pairs_[i];
         if (!boxes_[pair.a].overlaps(boxes_[pair.b]))
           continue;
@@ -358,11 +333,8 @@ void Contact::addBlock(Model &model, std::size_t k) {
   for (const Hits &hits : run_hits_)
     for (std::size_t i = 0, n = hits.loads[k].size(); i < n; ++i) {
       const Load &l = hits.loads[k][i];
-      if (i + prefetch_ahead < n) {
-        const std::uint32_t ahead = hits.loads[k][i + prefetch_ahead].node;
-        __builtin_prefetch(&nd.external[ahead], 1);
-        __builtin_prefetch(&nd.is_loaded[ahead], 1);
-      }
+      if (i + prefetch_ahead < n)
+        prefetchLoad(nd, hits.loads[k][i + prefetch_ahead]);
       if (l.depth > 0.0 && l.depth > pushed_[l.node]) { // (a reaction is pushed at 0)
         if (pushed_[l.node] == 0.0)
           block_pushed_[k].push_back(l.node);
@@ -372,24 +344,6 @@ void Contact::addBlock(Model &model, std::size_t k) {
       if (l.body != woken) // the loads of a body come together
         model.wake(l.body), woken = l.body;
     }
-}
-
-// A body's boundary node positions and its bounding box now, and how far its nodes
-// moved since the last call (the largest distance, added to travel_).
-void Contact::measure(const Model &model, std::size_t b) {
-  const Nodes &nd = model.nodes;
-  Box box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-  double moved2 = 0.0;
-  for (std::size_t k = node_begin_[b]; k < node_begin_[b + 1]; ++k) {
-    const std::uint32_t a = nodes_[k];
-    const double x = nd.x[a], y = nd.y[a];
-    moved2 = std::max(moved2, sq(x - points_[k].x) + sq(y - points_[k].y));
-    points_[k] = {x, y};
-    box.x0 = std::min(box.x0, x), box.x1 = std::max(box.x1, x);
-    box.y0 = std::min(box.y0, y), box.y1 = std::max(box.y1, y);
-  }
-  boxes_[b] = box;
-  travel_[b] += std::sqrt(moved2);
 }
 
 // A pair's lists, taken in the overlap of the two boxes widened by the margin: the nodes of each
@@ -436,7 +390,7 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region,
     const double px = points_[k].x, py = points_[k].y;
     if (!region.contains(px, py))
       continue;
-    const Closest c = closest(near, px, py, distance.data());
+    const narrow::Closest c = narrow::closest(near, px, py, distance.data());
     const double clearance = std::sqrt(c.distance);
     if (clearance >= margin && c.g >= 0.0)
       continue;
@@ -452,255 +406,13 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region,
   return nodes_end;
 }
 
-// The lanes block by block: the squared distances to the block's segments at once (no branch,
-// vectorized), then the first of the smallest if it is closer than those before. With AVX-512 the
-// smallest and the lanes holding it are taken by a vector reduction and one comparison: GCC makes
-// the plain loops a chain of eight scalar minimums and eight comparisons, which took 9 % of the
-// contact's time (run 6 on one thread).
-MESOPEN_INLINE Contact::Closest Contact::closest(const Near &near, double px, double py,
-                                                double *distances) const {
-  constexpr std::size_t L = Near::lanes;
-  Closest c;
-  for (std::size_t base = 0; base < near.size; base += L) {
-    alignas(64) double d[L];
-    double t[L], g[L];
-    for (std::size_t j = 0; j < L; ++j) {
-      const Segment::Foot f = near[base + j].foot(px, py);
-      d[j] = f.distance, t[j] = f.t, g[j] = f.g;
-    }
-    if (distances)
-      std::copy(d, d + L, distances + base);
-    // the smallest, and the lanes that hold it (one vector's reduction and comparison if the
-    // lanes fill one)
-#if defined(__AVX512F__)
-    static_assert(L == 8);
-    const __m256d four = _mm256_min_pd(_mm256_load_pd(d), _mm256_load_pd(d + 4));
-    const __m128d two = _mm_min_pd(_mm256_castpd256_pd128(four), _mm256_extractf128_pd(four, 1));
-    const double smallest = std::min(_mm_cvtsd_f64(two), _mm_cvtsd_f64(_mm_unpackhi_pd(two, two)));
-#else
-    double smallest = std::numeric_limits<double>::infinity();
-    for (std::size_t j = 0; j < L; ++j)
-      smallest = std::min(smallest, d[j]);
-#endif
-    if (smallest < c.distance) {
-#if defined(__AVX512F__)
-      const unsigned at = _mm512_cmp_pd_mask(_mm512_load_pd(d), _mm512_set1_pd(smallest), _CMP_EQ_OQ);
-#else
-      unsigned at = 0;
-      for (std::size_t j = 0; j < L; ++j)
-        at |= static_cast<unsigned>(d[j] == smallest) << j;
-#endif
-      const auto j = static_cast<std::uint32_t>(std::countr_zero(at));
-      // beyond an end (Segment::foot's excess > 0)
-      c = {static_cast<std::uint32_t>(base + j), d[j], g[j], t[j],
-           static_cast<bool>((t[j] < 0.0) | (t[j] > near.length[base + j]))};
-    }
-  }
-  return c;
-}
-
-// Of body `body`'s segments given by their ends, those of nonzero length whose boxes come within
-// its reach (see touch) of the rectangle: into scratch.near, in the given order. The ends of those
-// whose boxes come within reach are gathered first, side by side (a list of a whole boundary, as
-// a pair's lists are taken, has most of its segments far: run 6, the loop over the pairs 6-9 %
-// faster than with every listed segment in a lane), then the geometry of all is computed in one
-// pass (vectorized). Returns the rectangle widened by that reach: a segment not taken lies wholly
-// outside it.
+// (see narrow::nearSegments; the reach: see touch)
 MESOPEN_INLINE Contact::Box Contact::nearSegments(std::size_t body, const std::uint32_t *ends,
-                                                 const std::uint32_t *ends_end, const Box &region,
-                                                 Scratch &scratch) const {
-  constexpr std::size_t L = Near::lanes;
+                                                  const std::uint32_t *ends_end, const Box &region,
+                                                  Scratch &scratch) const {
   const Box wide = region.widened(check_depth * size_[body]);
-  Near &near = scratch.near;
-  const std::size_t listed = static_cast<std::size_t>(ends_end - ends) / 2;
-  const std::size_t room = (listed + L - 1) / L * L;
-  if (near.ax.size() < room) {
-    for (auto *v : {&near.ax, &near.ay, &near.tx, &near.ty, &near.length, &near.nx, &near.ny})
-      v->resize(room);
-    near.ends.resize(2 * room);
-  }
-  // The start in (ax, ay), the end in (tx, ty) for now.
-  double *ax = near.ax.data(), *ay = near.ay.data(), *tx = near.tx.data(), *ty = near.ty.data(),
-         *length = near.length.data(), *nx = near.nx.data(), *ny = near.ny.data();
-  // (each written where the next near one goes, and counted if its box comes within reach)
-  std::size_t m = 0;
-  for (std::size_t i = 0; i < listed; ++i) {
-    const Point &a = points_[ends[2 * i]], &b = points_[ends[2 * i + 1]];
-    ax[m] = a.x, ay[m] = a.y, tx[m] = b.x, ty[m] = b.y;
-    near.ends[2 * m] = ends[2 * i], near.ends[2 * m + 1] = ends[2 * i + 1];
-    m += (wide.x0 <= std::max(a.x, b.x)) & (std::min(a.x, b.x) <= wide.x1) &
-         (wide.y0 <= std::max(a.y, b.y)) & (std::min(a.y, b.y) <= wide.y1);
-  }
-  const std::size_t size = (m + L - 1) / L * L;
-  for (std::size_t i = m; i < size; ++i) {
-    ax[i] = ay[i] = tx[i] = ty[i] = 0.0;
-    near.ends[2 * i] = near.ends[2 * i + 1] = no_node;
-  }
-  std::size_t count = 0;
-#pragma omp simd reduction(+ : count)
-  for (std::size_t i = 0; i < size; ++i) {
-    const double x0 = ax[i], y0 = ay[i], x1 = tx[i], y1 = ty[i], dx = x1 - x0, dy = y1 - y0;
-    const double l = std::sqrt(dx * dx + dy * dy), inv = l > 0.0 ? 1.0 / l : 0.0;
-    const bool in = l > 0.0; // (padding: l = 0)
-    // outward normal: the tangent turned right (the boundary runs counter-clockwise)
-    ax[i] = in ? x0 : Near::far, ay[i] = in ? y0 : 0.0;
-    tx[i] = in ? dx * inv : 1.0, ty[i] = in ? dy * inv : 0.0, length[i] = in ? l : 0.0;
-    nx[i] = in ? dy * inv : 0.0, ny[i] = in ? -dx * inv : -1.0;
-    count += in;
-  }
-  near.size = size, near.count = count;
+  narrow::nearSegments(points_.data(), ends, ends_end, wide, scratch.near);
   return wide;
-}
-
-std::size_t Contact::Grid::ix(double x) const {
-  const double i = std::floor((x - x0) / cell);
-  return i <= 0.0 ? 0 : std::min(static_cast<std::size_t>(i), nx - 1);
-}
-std::size_t Contact::Grid::iy(double y) const {
-  const double j = std::floor((y - y0) / cell);
-  return j <= 0.0 ? 0 : std::min(static_cast<std::size_t>(j), ny - 1);
-}
-
-// Cell lists of the bodies `which` (counting sort: cell by cell, bodies in the given order).
-void Contact::Grid::build(const std::vector<Box> &boxes, const std::vector<std::uint32_t> &which,
-                          double cell_size) {
-  double xa = HUGE_VAL, ya = HUGE_VAL, xb = -HUGE_VAL, yb = -HUGE_VAL;
-  for (std::uint32_t b : which) {
-    xa = std::min(xa, boxes[b].x0), xb = std::max(xb, boxes[b].x1);
-    ya = std::min(ya, boxes[b].y0), yb = std::max(yb, boxes[b].y1);
-  }
-  nx = ny = 0;
-  start.assign(1, 0);
-  bodies.clear();
-  if (which.empty() || !(cell_size > 0.0))
-    return;
-  x0 = xa, y0 = ya, cell = cell_size;
-  // A body flung far away must not make the grid huge: coarser cells then.
-  while (((xb - xa) / cell + 1) * ((yb - ya) / cell + 1) > static_cast<double>(max_cells))
-    cell *= 2.0;
-  nx = static_cast<std::size_t>((xb - xa) / cell) + 1;
-  ny = static_cast<std::size_t>((yb - ya) / cell) + 1;
-  start.assign(nx * ny + 1, 0);
-  for (std::uint32_t b : which)
-    for (std::size_t j = iy(boxes[b].y0); j <= iy(boxes[b].y1); ++j)
-      for (std::size_t i = ix(boxes[b].x0); i <= ix(boxes[b].x1); ++i)
-        ++start[j * nx + i + 1];
-  for (std::size_t c = 0; c < nx * ny; ++c)
-    start[c + 1] += start[c];
-  bodies.resize(start.back());
-  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-  for (std::uint32_t b : which)
-    for (std::size_t j = iy(boxes[b].y0); j <= iy(boxes[b].y1); ++j)
-      for (std::size_t i = ix(boxes[b].x0); i <= ix(boxes[b].x1); ++i)
-        bodies[fill[j * nx + i]++] = b;
-}
-
-// Broad phase: the pairs of bodies whose boxes come closer than the search margin, at least one
-// of them moving, in the order of their numbers; each pair found once, in the cell that holds
-// the lower-left corner of the overlap. Moving bodies meet each other in a grid of their boxes
-// widened by half the margin, built here; the bodies at rest in the grid built at the start.
-// The runs of pairs are shared evenly among the threads. A pair found before keeps its lists (they
-// hold what they must while its two bodies move less than their margin, whatever the search), the
-// others' are taken when first needed; after a change of the boundaries all are taken anew.
-void Contact::findPairs() {
-  ++stats_.searches;
-  std::vector<Pair> before;
-  std::vector<std::vector<std::uint32_t>> arenas_before(arenas_.size());
-  std::vector<std::uint32_t> run_before; // per pair before: its run
-  if (!run_pairs_.empty()) {
-    before.swap(pairs_);
-    for (std::size_t r = 0; r < arenas_.size(); ++r) {
-      arenas_before[r].swap(arenas_[r]);
-      run_before.insert(run_before.end(), run_pairs_[r + 1] - run_pairs_[r],
-                        static_cast<std::uint32_t>(r));
-    }
-  }
-  pairs_.clear();
-  std::vector<Box> wide(boxes_.size());
-  for (std::uint32_t b : moving_) {
-    wide[b] = boxes_[b].widened(0.5 * search_margin_);
-    travel_searched_[b] = travel_[b];
-    listed_[b] = 1;
-  }
-  auto add = [&](std::uint32_t a, std::uint32_t b) { pairs_.emplace_back(a, b); };
-  moving_grid_.build(wide, moving_, cell_);
-  const Grid &g = moving_grid_;
-  for (std::size_t c = 0; c < g.nx * g.ny; ++c)
-    for (std::size_t i = g.start[c]; i < g.start[c + 1]; ++i)
-      for (std::size_t j = i + 1; j < g.start[c + 1]; ++j) {
-        const Box &A = wide[g.bodies[i]], &B = wide[g.bodies[j]];
-        if (A.overlaps(B) && g.iy(std::max(A.y0, B.y0)) * g.nx + g.ix(std::max(A.x0, B.x0)) == c)
-          add(g.bodies[i], g.bodies[j]);
-      }
-  for (std::uint32_t a : moving_)
-    restNeighbours(a, search_margin_, [&](std::uint32_t b) { return !listed_[b]; }, add);
-  auto earlier = [](const Pair &p, const Pair &q) { return std::tie(p.a, p.b) < std::tie(q.a, q.b); };
-  std::sort(pairs_.begin(), pairs_.end(), earlier);
-  const std::size_t runs = arenas_.size();
-  run_pairs_.resize(runs + 1);
-  for (std::size_t r = 0; r <= runs; ++r)
-    run_pairs_[r] = pairs_.size() * r / runs;
-  for (auto &arena : arenas_)
-    arena.clear();
-  // The pairs before in the order of the new ones (those the bodies that woke added come last),
-  // matched; each listed one's lists and hot nodes into its new run's arena.
-  std::vector<std::uint32_t> order(before.size());
-  for (std::uint32_t j = 0; j < order.size(); ++j)
-    order[j] = j;
-  std::sort(order.begin(), order.end(),
-            [&](std::uint32_t i, std::uint32_t j) { return earlier(before[i], before[j]); });
-  auto old = order.begin();
-  for (std::size_t r = 0; r < runs; ++r)
-    for (std::size_t i = run_pairs_[r]; i < run_pairs_[r + 1]; ++i) {
-      Pair &pair = pairs_[i];
-      while (old != order.end() && earlier(before[*old], pair))
-        ++old;
-      if (old == order.end() || before[*old].a != pair.a || before[*old].b != pair.b ||
-          before[*old].capacity == 0)
-        continue;
-      const Pair &kept = before[*old];
-      const std::vector<std::uint32_t> &from = arenas_before[run_before[*old]];
-      std::vector<std::uint32_t> &arena = arenas_[r];
-      pair = kept;
-      pair.begin = static_cast<std::uint32_t>(arena.size());
-      arena.insert(arena.end(), from.begin() + kept.begin, from.begin() + kept.begin + kept.capacity);
-    }
-}
-
-// The pairs of the bodies that woke since the last step with the bodies at rest (or woken now):
-// they were not searched while both rested. Added to the last run of pairs.
-void Contact::addPairsOfWoken(const Model &model) {
-  woken_.clear();
-  for (std::uint32_t b : moving_)
-    if (!listed_[b])
-      woken_.push_back(b);
-  if (woken_.empty())
-    return;
-  for (std::uint32_t a : woken_)
-    restNeighbours(a, search_margin_,
-                   [&](std::uint32_t b) { return !listed_[b] && (model.at_rest[b] || a < b); },
-                   [&](std::uint32_t a, std::uint32_t b) { pairs_.emplace_back(a, b); });
-  for (std::uint32_t a : woken_)
-    listed_[a] = 1;
-  run_pairs_.back() = pairs_.size();
-}
-
-// The bodies of the grid of bodies at rest whose boxes come closer to body a's than `margin` and
-// that `wanted` accepts, each once: add(a, b).
-template <class Wanted, class Add>
-void Contact::restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add add) const {
-  const Grid &r = rest_grid_;
-  if (r.nx == 0)
-    return;
-  const Box A = boxes_[a].widened(margin);
-  for (std::size_t j = r.iy(A.y0); j <= r.iy(A.y1); ++j)
-    for (std::size_t i = r.ix(A.x0); i <= r.ix(A.x1); ++i)
-      for (std::size_t k = r.start[j * r.nx + i]; k < r.start[j * r.nx + i + 1]; ++k) {
-        const std::uint32_t b = r.bodies[k];
-        const Box &B = boxes_[b];
-        if (b != a && A.overlaps(B) && r.iy(std::max(A.y0, B.y0)) == j && r.ix(std::max(A.x0, B.x0)) == i && wanted(b))
-          add(a, b);
-      }
 }
 
 // The boundary nodes of body A that are inside body B, among A's `nodes` and B's `segments` (from
@@ -711,15 +423,15 @@ void Contact::restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add 
 // body's travel): it is clear until the pair's travel `travel` now plus g. g is,
 // for a node outside the overlap, its distance to B's box; for one in it, its distance to the
 // closest near segment, or to the edge of the region the near segments cover if that is less.
-// The other nodes (in contact, touching, or by a vertex whose other segment is not near) are hot: they are looked at
-// every step. So all nodes are looked at when `travel` reaches `until` (the least travel up to
-// which every node last found clear stays clear), else the `n_hot` nodes in `hot` (positions in
-// `nodes`) alone; both are updated.
+// The other nodes (in contact, touching, or by a vertex whose other segment is not near) are hot:
+// they are looked at every step. So all nodes are looked at when `travel` reaches `until` (the
+// least travel up to which every node last found clear stays clear), else the `n_hot` nodes in
+// `hot` (positions in `nodes`) alone; both are updated.
 MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_t B,
-                                  const std::uint32_t *nodes, const std::uint32_t *nodes_end,
-                                  const std::uint32_t *ends, const std::uint32_t *ends_end,
-                                  double travel, double &until, std::uint32_t *hot,
-                                  std::uint32_t &n_hot, Hits &hits, Scratch &scratch) const {
+                                   const std::uint32_t *nodes, const std::uint32_t *nodes_end,
+                                   const std::uint32_t *ends, const std::uint32_t *ends_end,
+                                   double travel, double &until, std::uint32_t *hot,
+                                   std::uint32_t &n_hot, Hits &hits, Scratch &scratch) const {
   // A node inside B is in the overlap of the two boxes: the listed nodes there, if any, are
   // checked against the segments within `reach` of the overlap (a node behind one of them by less
   // than `reach` finds its closest segment among them; deeper contacts are checked by the crossing
@@ -762,14 +474,18 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
     const double px = points_[k].x, py = points_[k].y;
     // The closest point of B's boundary: on a segment's inside (the node is in contact when behind
     // it) or a vertex (when behind its vertex normal; see atVertex).
-    Closest c = closest(near, px, py, nullptr);
+    narrow::Closest c = narrow::closest(near, px, py, nullptr);
     if (c.segment == no_node) {
       hot[n_hot++] = i;
       continue;
     }
     // w2: the weight of the segment's end, set if the node meets a vertex, else along / length
     double depth = 0.0, nx = 0.0, ny = 0.0, w2 = -1.0;
-    const At at = atInside(near, c) ? At::segment : atVertex(near, c, px, py, depth, nx, ny, w2);
+    using narrow::At;
+    const At at =
+        narrow::atInside(near, c)
+            ? At::segment
+            : narrow::atVertex(near, points_.data(), pinched_.data(), c, px, py, depth, nx, ny, w2);
     if (at == At::unknown) { // beyond a segment's end, the other segment there not near
       hot[n_hot++] = i;
       continue;
@@ -777,11 +493,11 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
     // Outside B, the node is as far from it as from the closest point found, or from the edge
     // of the region the near segments cover (the segments beyond lie beyond it).
     auto outside = [&] {
-      const double edge = std::min(std::min(px - wide.x0, wide.x1 - px),
-                                   std::min(py - wide.y0, wide.y1 - py));
+      const double edge =
+          std::min(std::min(px - wide.x0, wide.x1 - px), std::min(py - wide.y0, wide.y1 - py));
       until = std::min(until, travel + std::min(std::sqrt(c.distance), edge));
     };
-    const Segment s = near[c.segment];
+    const narrow::Segment s = near[c.segment];
     if (at == At::segment)
       depth = -c.g, nx = s.nx, ny = s.ny;
     if (depth < 0.0) { // in front of the closest segment or vertex
@@ -803,74 +519,13 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
       continue; // an overlap erosion laid bare, still opening
     hits.found.push_back({static_cast<std::uint32_t>(A), k, static_cast<std::uint32_t>(B),
                           near.ends[2 * c.segment], near.ends[2 * c.segment + 1],
-                          w2 < 0.0 ? c.along / s.length : w2, nx, ny, depth,
-                          h, mu});
+                          w2 < 0.0 ? c.along / s.length : w2, nx, ny, depth, h, mu});
   }
 }
 
-// Whether the foot of the closest point falls inside segment c, away from both of its ends (beyond
-// round-off; no branch on which end is nearer, which would be taken at random). Most contacts are
-// there (run 6: 93 %), and touch asks this before it calls atVertex for the others.
-bool Contact::atInside(const Near &near, const Closest &c) {
-  const double length = near.length[c.segment];
-  return (c.along > end_tie * length) & (c.along < (1.0 - end_tie) * length);
-}
-
-// The closest point when the foot on the closest segment c falls at one of its ends V (within
-// `end_tie` of it, or beyond): V itself if the foot on the other segment at V falls at V or beyond it
-// too, else the inside of that other segment (as close as c or closer: round-off chose c), which
-// c then becomes (At::segment). At V, the node is behind B's boundary by its depth along V's
-// normal, the mean of the two segments' normals (At::vertex; depth < 0: in front), and the
-// reaction goes to V alone. The pseudo-normal decides inside or outside exactly for every point
-// whose closest point is V (Baerentzen & Aanaes 2005, IEEE TVCG 11(3), in 2D), where the side of
-// either segment's line can fail (a node in a dent on the line of one of its segments beyond V is
-// at g = 0 from it). The choice depends on the two feet alone, not on which of two segments as
-// close round-off took first: the two passes of a mirror-symmetric impact, whose lists run in
-// opposite orders, agree (a node meeting a node of a conforming face is at V of both).
-// At::unknown: c's foot is beyond V and the other segment is not near.
-Contact::At Contact::atVertex(const Near &near, Closest &c, double px, double py, double &depth,
-                              double &nx, double &ny, double &w2) const {
-  const double length = near.length[c.segment];
-  const bool at_start = c.along < 0.5 * length;
-  const std::uint32_t vertex = near.ends[2 * c.segment + (at_start ? 0 : 1)];
-  // The other segment at V: the one V ends (at_start) or starts, found where the lists keep it,
-  // next to c in the boundary's order, unless V is pinched (then the first of them, by a search).
-  const std::uint32_t beside = at_start ? c.segment - 1 : c.segment + 1;
-  const bool next_to = !pinched_[vertex] && beside < near.size && near.in(beside) &&
-                       near.ends[2 * beside + (at_start ? 1 : 0)] == vertex;
-  for (std::uint32_t j = next_to ? beside : 0; j < near.size; ++j) {
-    if (j == c.segment || !near.in(j) || near.ends[2 * j + (at_start ? 1 : 0)] != vertex)
-      continue;
-    const Segment o = near[j];
-    const Segment::Foot f = o.foot(px, py);
-    if (at_start ? f.t < (1.0 - end_tie) * o.length : f.t > end_tie * o.length) {
-      c = {j, f.distance, f.g, f.t, false};
-      return At::segment;
-    }
-    const Segment s = near[c.segment];
-    const double mx = s.nx + o.nx, my = s.ny + o.ny, norm = std::sqrt(mx * mx + my * my);
-    if (!(norm > 0.0)) // the two segments fold back onto each other
-      break;
-    nx = mx / norm, ny = my / norm;
-    depth = -((px - points_[vertex].x) * nx + (py - points_[vertex].y) * ny);
-    w2 = at_start ? 0.0 : 1.0;
-    c.distance = sq(px - points_[vertex].x) + sq(py - points_[vertex].y);
-    return At::vertex;
-  }
-  return c.corner ? At::unknown : At::segment;
-}
-
-// Whether (px, py) lies inside body B's boundary polygon: the number of boundary segments a ray
-// in +x crosses is odd.
 bool Contact::inside(std::size_t B, double px, double py) const {
-  bool in = false;
-  for (std::size_t k = segment_begin_[B]; k < segment_begin_[B + 1]; ++k) {
-    const std::uint32_t a = segment_ends_[2 * k], b = segment_ends_[2 * k + 1];
-    const double ax = points_[a].x, ay = points_[a].y, bx = points_[b].x, by = points_[b].y;
-    if ((ay > py) != (by > py) && px < ax + (py - ay) * (bx - ax) / (by - ay))
-      in = !in;
-  }
-  return in;
+  return narrow::inside(points_.data(), segment_ends_.data() + 2 * segment_begin_[B],
+                        segment_ends_.data() + 2 * segment_begin_[B + 1], px, py);
 }
 
 // The rigid walls: a boundary node of a moving body beyond a wall is pushed back along its normal.
@@ -891,11 +546,26 @@ void Contact::walls(const Model &model, double dt, Hits &hits) const {
                                        {right, x - s_.wall_right, -1.0, 0.0},
                                        {bottom, s_.wall_bottom - y, 0.0, 1.0}})
         if (on && depth > touching * h)
-          hit(model, {b, static_cast<std::uint32_t>(k), no_node, no_node, no_node, 0.0, nx, ny,
-                      depth, h, s_.wall_friction},
+          hit(model,
+              {b, static_cast<std::uint32_t>(k), no_node, no_node, no_node, 0.0, nx, ny, depth, h,
+               s_.wall_friction},
               dt, hits);
     }
   }
+}
+
+// Prefetching (a fast path: without it the results are the same). The lists of a pair ahead, its
+// second body's box (scattered in memory).
+void Contact::prefetchPair(const Pair &pair, const std::vector<std::uint32_t> &arena) const {
+  __builtin_prefetch(&boxes_[pair.b]);
+  __builtin_prefetch(arena.data() + pair.begin);
+  __builtin_prefetch(arena.data() + pair.begin + pair.end[3]);
+}
+
+// The nodal sums a load ahead adds to.
+void Contact::prefetchLoad(const Nodes &nd, const Load &load) {
+  __builtin_prefetch(&nd.external[load.node], 1);
+  __builtin_prefetch(&nd.is_loaded[load.node], 1);
 }
 
 // The nodal data a contact's force reads (scattered: one line per node and array), fetched ahead.
@@ -912,8 +582,7 @@ void Contact::prefetchHit(const Model &model, const Found &f) const {
 
 // The force of a contact (the first `touching` h of the depth is free), relative velocities at
 // mid-step; the reaction goes to the segment's nodes by weights 1 - w2, w2.
-MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt,
-                                Hits &hits) const {
+MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, Hits &hits) const {
   const auto [A, k, B, k1, k2, w2, nx, ny, found_depth, h, mu] = f;
   double depth = found_depth;
   const Nodes &nd = model.nodes;
@@ -923,11 +592,11 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt,
   if (k1 != no_node) {
     const std::uint32_t s1 = nodes_[k1], s2 = nodes_[k2];
     const double m_seg = w1 * nd.mass[s1] + w2 * nd.mass[s2];
-    m_eff = m_eff * m_seg / (m_eff + m_seg);
+    m_eff = reducedMass(m_eff, m_seg);
     vx -= w1 * nd.vx[s1] + w2 * nd.vx[s2];
     vy -= w1 * nd.vy[s1] + w2 * nd.vy[s2];
   }
-  const double vn = vx * nx + vy * ny; // > 0: separating
+  const double vn = normalVelocity(vx, vy, nx, ny); // > 0: separating
   // Found deeper than its approach reaches from the depth its node was pushed at the step before
   // (approachReach), the node was not reached by approach: B's boundary folded over it, or a new
   // closest segment took over in a dented body. Pushed out at once it would leave at depth / dt;
@@ -939,11 +608,11 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt,
   // twice the stiffness (kappa 1 by default, the one-step constraint).
   const bool wall = k1 == no_node;
   const double kappa = wall ? 2.0 * s_.stiffness : s_.stiffness, c = damping_[wall];
-  const double fn = std::max(0.0, m_eff / dt * (kappa * (depth - touching * h) / dt - c * vn));
-  const double tx = vx - vn * nx, ty = vy - vn * ny, slip = std::sqrt(tx * tx + ty * ty);
-  const double ft = slip > 0.0 ? std::min(mu * fn, m_eff * slip / dt) / slip : 0.0;
-  const double fx = fn * nx - ft * tx, fy = fn * ny - ft * ty, friction_x = -ft * tx,
-               friction_y = -ft * ty;
+  // (the first `touching` h of the depth is free)
+  const ContactForce f_c =
+      contactForce(m_eff, m_eff, depth - touching * h, vx, vy, vn, nx, ny, kappa, c, mu, dt);
+  const double fx = f_c.fx, fy = f_c.fy, friction_x = -f_c.ft * f_c.tx,
+               friction_y = -f_c.ft * f_c.ty;
   hits.loads[block_[A]].push_back({p, A, fx, fy, friction_x, friction_y, depth});
   if (k1 != no_node) {
     std::vector<Load> &loads = hits.loads[block_[B]];

@@ -1,12 +1,14 @@
 // Frictional contact between bodies and with the rigid walls of the box (thesis section 3).
-// Every step, at x(n+1):
-//   - broad phase: the bodies' bounding boxes in a uniform grid give the pairs of bodies whose
-//   boxes
-//     overlap (at least one of them moving);
-//   - narrow phase, node to segment both ways: a boundary node of one body inside the other is
-//     pushed out through the closest boundary segment (depth d, outward normal n), and the reaction
-//     goes to the segment's two nodes by the linear weights of the contact point;
-//   - normal force: a penalty tied to the nodal masses and the step, with damping on approach,
+// Every step, at x(n+1), in three pieces:
+//   - broad phase (contact_broad.cpp): the bodies' bounding boxes in a cell grid
+//     (grid/cell_grid.hpp) give the pairs of bodies whose boxes overlap (at least one of them
+//     moving);
+//   - narrow phase (contact_narrow.hpp), node to segment both ways: a boundary node of one body
+//     inside the other is pushed out through the closest boundary segment (depth d, outward normal
+//     n), and the reaction goes to the segment's two nodes by the linear weights of the contact
+//     point;
+//   - the law (contact_law.hpp, shared with FE-DEM contact): a normal force, a penalty tied to
+//     the nodal masses and the step, with damping on approach,
 //       f_n = max(0, m_eff / dt (kappa d / dt + 2 zeta sqrt(kappa) v_approach)),
 //       m_eff = m_node m_seg / (m_node + m_seg)
 //     kappa = 1, zeta = 1/2 would be f_n = m_eff (d + v_approach dt) / dt^2, the force that closes
@@ -47,6 +49,9 @@
 // node and no clear node due is skipped.
 #pragma once
 
+#include "cell_grid.hpp"
+#include "contact_law.hpp"
+#include "contact_narrow.hpp"
 #include "solver.hpp"
 
 #include <algorithm>
@@ -55,16 +60,6 @@
 #include <vector>
 
 namespace mesopen::fem {
-
-// A contact may deepen in a step by its approach, twice (-2 v_n dt, v_n > 0 separating) for a
-// margin, or by 0.005 of an element h, over the depth it was pushed at the step before; found
-// deeper, the node was not reached by approach, and the excess is allowed for and let go over
-// release_steps steps (Contact::hit; the FE-DEM contact does the same).
-constexpr double release_steps = 200.0;
-inline double approachReach(double pushed, double h, double vn, double dt) {
-  constexpr double step_margin = 0.005;
-  return pushed + std::max(step_margin * h, -2.0 * vn * dt);
-}
 
 struct ContactSettings {
   // Coulomb coefficient per pair of materials (Model::materials indices), n x n row-major; a
@@ -103,27 +98,9 @@ public:
   const ContactStatistics &statistics() const { return stats_; }
 
 private:
-  struct Box {
-    double x0, y0, x1, y1;
-    bool overlaps(const Box &other) const;
-    bool contains(double x, double y) const { return x >= x0 && x <= x1 && y >= y0 && y <= y1; }
-    Box widened(double margin) const;
-    Box overlap(const Box &other) const; // the intersection (empty if x0 > x1 or y0 > y1)
-  };
-  struct Segment {
-    double ax, ay, tx, ty, length, nx, ny; // start, unit tangent, length, outward normal
-    // Where a point lies against it: position along it from the start, signed distance from its
-    // line (negative behind it), how far beyond its ends, squared distance to it.
-    struct Foot {
-      double t, g, excess, distance;
-    };
-    Foot foot(double px, double py) const {
-      const double dx = px - ax, dy = py - ay;
-      const double t = dx * tx + dy * ty, g = dx * nx + dy * ny;
-      const double excess = std::max(std::max(-t, t - length), 0.0); // before or beyond
-      return {t, g, excess, excess * excess + g * g};
-    }
-  };
+  using Box = narrow::Box;
+  using Point = narrow::Point;
+  using Near = narrow::Near;
   // A pair of bodies (a, b) whose boxes widened by the margin overlapped, and what it looks at:
   // a's boundary nodes (indices into nodes_), b's segments (their two nodes, as indices into
   // nodes_), b's nodes, a's segments, near the boxes' overlap; in its run's arena from `begin`.
@@ -140,33 +117,23 @@ private:
     double until[2] = {};
     std::uint32_t hot[2] = {};
   };
-  // Bodies in a uniform grid of cells (cell lists), for the broad phase.
-  struct Grid {
-    double x0 = 0, y0 = 0, cell = 0;
-    std::size_t nx = 0, ny = 0;
-    std::vector<std::uint32_t> start, bodies;
-    std::size_t ix(double x) const;
-    std::size_t iy(double y) const;
-    void build(const std::vector<Box> &boxes, const std::vector<std::uint32_t> &which, double cell);
-  };
-
   void takeBoundaries(const Model &model);
   void allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &before);
   void allow(std::uint32_t node, double depth);
-  void measure(const Model &model, std::size_t body);
   void addHits(Model &model);
   void addBlock(Model &model, std::size_t k);
+
+  // Broad phase (contact_broad.cpp).
+  void measure(const Model &model, std::size_t body);
   void findPairs();
+  // Bodies `which` in the cells their boxes meet, in cells of cell_.
+  void gridBodies(CellGrid<> &grid, const std::vector<Box> &boxes,
+                  const std::vector<std::uint32_t> &which) const;
   void addPairsOfWoken(const Model &model);
   template <class Wanted, class Add>
   void restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add add) const;
-  // The closest segment of a list to a point: its index (no_node: none), squared distance, signed
-  // distance from its line (negative behind it), position along it, whether a corner is closest.
-  struct Closest {
-    std::uint32_t segment = 0xffffffffu;
-    double distance = std::numeric_limits<double>::infinity(), g = 0.0, along = 0.0;
-    bool corner = false;
-  };
+
+  // Narrow phase (on the geometry of contact_narrow.hpp) and forces (the law of contact_law.hpp).
   // A contact force on a node (or a segment's node's share of the reaction), with its frictional
   // part; `body` is the node's; the depth the node was pushed at (0 for a reaction).
   struct Load {
@@ -192,21 +159,6 @@ private:
     double depth = 0.0;
     void clear();
   };
-  // Segments near a region, for the search of the closest one to a point: their geometry (see
-  // Segment) as arrays, their two nodes (indices into nodes_), in blocks of `lanes` searched at
-  // once. A lane without a near segment (not near, of zero length, padding) lies far away (`far`)
-  // and is never the closest.
-  struct Near {
-    static constexpr std::size_t lanes = 8;
-    static constexpr double far = 1e300;
-    std::size_t size = 0, count = 0; // lanes (a multiple of `lanes`), near segments among them
-    std::vector<double> ax, ay, tx, ty, length, nx, ny;
-    std::vector<std::uint32_t> ends;
-    Segment operator[](std::size_t i) const {
-      return {ax[i], ay[i], tx[i], ty[i], length[i], nx[i], ny[i]};
-    }
-    bool in(std::size_t i) const { return length[i] > 0.0; } // a near segment
-  };
   // A thread's working lists: segments near a node set, distances.
   struct Scratch {
     Near near;
@@ -214,9 +166,8 @@ private:
     std::vector<double> distance;
     std::vector<char> keep;
   };
-  // The near segment closest to (px, py), the first of equals; with `distances`, every lane's
-  // squared distance goes there.
-  Closest closest(const Near &near, double px, double py, double *distances) const;
+  // The segments of `body` given by their ends that come within its reach (check_depth of an
+  // element) of `region`, into scratch.near; returns the region widened by that reach.
   Box nearSegments(std::size_t body, const std::uint32_t *ends, const std::uint32_t *ends_end,
                    const Box &region, Scratch &scratch) const;
   void refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &scratch) const;
@@ -227,14 +178,14 @@ private:
              const std::uint32_t *nodes_end, const std::uint32_t *ends,
              const std::uint32_t *ends_end, double travel, double &until, std::uint32_t *hot,
              std::uint32_t &n_hot, Hits &hits, Scratch &scratch) const;
-  enum class At { segment, vertex, unknown }; // see atVertex
-  static bool atInside(const Near &near, const Closest &c);
-  At atVertex(const Near &near, Closest &c, double px, double py, double &depth, double &nx,
-              double &ny, double &w2) const;
+  // Whether (px, py) lies inside body B's boundary polygon.
   bool inside(std::size_t B, double px, double py) const;
   void walls(const Model &model, double dt, Hits &hits) const;
   void hit(const Model &model, const Found &f, double dt, Hits &hits) const;
+  // Prefetching ahead in the loops over the pairs, the contacts and the loads.
+  void prefetchPair(const Pair &pair, const std::vector<std::uint32_t> &arena) const;
   void prefetchHit(const Model &model, const Found &f) const;
+  static void prefetchLoad(const Nodes &nd, const Load &load);
 
   ContactSettings s_;
   double damping_[2] = {}; // the damping coefficient c of hit, between bodies and at a wall
@@ -243,12 +194,7 @@ private:
   std::vector<std::size_t> node_begin_,
       segment_begin_;                // per body, into nodes_ and segment_ends_ / 2
   std::vector<std::uint32_t> nodes_; // boundary nodes, body by body
-  // A boundary node's position this step, the two coordinates side by side: the narrow phase reads
-  // them at scattered nodes.
-  struct alignas(16) Point {
-    double x, y;
-  };
-  std::vector<Point> points_; // per boundary node (as nodes_)
+  std::vector<Point> points_;        // per boundary node (as nodes_): its position this step
   std::vector<std::uint32_t>
       segment_ends_;                  // boundary edges (ccw), their nodes as indices into nodes_
   std::vector<std::uint8_t> pinched_; // per boundary node: not the start of exactly one edge
@@ -260,7 +206,7 @@ private:
   std::vector<std::uint32_t> woken_;    // bodies moving since this step
   std::vector<std::uint32_t> moving_;   // bodies not at rest, this step
   double cell_ = 0.0;
-  Grid rest_grid_, moving_grid_;
+  CellGrid<> rest_grid_, moving_grid_;
   double search_margin_ = 0.0;
   std::vector<Pair> pairs_;
   // The pairs in runs (a few per thread, taken in turn by free threads): run r holds pairs_

@@ -1,7 +1,7 @@
 #include "disks.hpp"
 
-#include "cell_grid.hpp"
 #include "measures.hpp"
+#include "point_grid.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -44,7 +44,7 @@ Nearest nearestOnPolygon(const Polygons &polygons, std::size_t g, double px, dou
 // centroids).
 void relaxApart(std::vector<double> &x, std::vector<double> &y, const std::vector<double> &r,
                 const std::vector<char> &is_disk, double width, double height,
-                const Polygons &grains, const CellGrid &grain_grid, double grain_reach,
+                const Polygons &grains, const PointGrid &grain_grid, double grain_reach,
                 const Polygons &bodies, int sweeps) {
   const std::size_t n = x.size();
   double r_max = 0.0, r_mean = 0.0, disks = 0.0;
@@ -63,9 +63,9 @@ void relaxApart(std::vector<double> &x, std::vector<double> &y, const std::vecto
   }
   constexpr double push = 0.8;
   const bool any_meshed = std::find(is_disk.begin(), is_disk.end(), 0) != is_disk.end();
-  CellGrid grid(width, height, 2.0 * r_max);
+  PointGrid grid = pointGrid(width, height, 2.0 * r_max);
   for (int sweep = 0; sweep < sweeps; ++sweep) {
-    grid.fill(x.data(), y.data(), r.data(), 0, static_cast<std::uint32_t>(n));
+    binPoints(grid, x.data(), y.data(), r.data(), 0, static_cast<std::uint32_t>(n));
     double worst = 0.0;
 #pragma omp parallel for reduction(max : worst) schedule(static)
     for (long k = 0; k < static_cast<long>(n); ++k) {
@@ -73,7 +73,7 @@ void relaxApart(std::vector<double> &x, std::vector<double> &y, const std::vecto
       dx[i] = dy[i] = 0.0;
       if (!is_disk[i])
         continue;
-      grid.forNear(x[i], y[i], 2.0 * r_max, [&](const CellGrid::Item &o) {
+      grid.forNear(x[i], y[i], 2.0 * r_max, [&](const GridPoint &o) {
         if (o.index == i || !is_disk[o.index])
           return;
         const double ex = x[i] - o.x, ey = y[i] - o.y, d = std::hypot(ex, ey);
@@ -104,7 +104,7 @@ void relaxApart(std::vector<double> &x, std::vector<double> &y, const std::vecto
         dy[i] += sign * overlap * (y[i] - c.y) / c.distance;
       };
       if (any_meshed)
-        grain_grid.forNear(x[i], y[i], grain_reach + r[i], [&](const CellGrid::Item &o) {
+        grain_grid.forNear(x[i], y[i], grain_reach + r[i], [&](const GridPoint &o) {
           if (!is_disk[o.index])
             pushOut(grains, o.index);
         });
@@ -136,27 +136,29 @@ Disks grainDisks(const Polygons &grains, double density, const DiskBounds &bound
     width = std::max(width, f.centroid_x[g]), height = std::max(height, f.centroid_y[g]);
   }
   // Neighbours within three of the largest equal-area radii: two disks farther apart than two
-  // cannot overlap, and an elongated polygon reaches at most about 1.5 of its own from its centroid.
+  // cannot overlap, and an elongated polygon reaches at most about 1.5 of its own from its
+  // centroid.
   const double reach = 3.0 * r_max;
-  CellGrid grid(std::max(width, 1e-12), std::max(height, 1e-12), reach);
-  grid.fill(f.centroid_x.data(), f.centroid_y.data(), equal.data(), 0, static_cast<std::uint32_t>(n));
+  PointGrid grid = pointGrid(std::max(width, 1e-12), std::max(height, 1e-12), reach);
+  binPoints(grid, f.centroid_x.data(), f.centroid_y.data(), equal.data(), 0,
+            static_cast<std::uint32_t>(n));
   std::vector<double> x = f.centroid_x, y = f.centroid_y;
   if (bounds.size == DiskSize::equal_area && bounds.width > 0.0 && bounds.height > 0.0) {
     relaxApart(x, y, equal, is_disk, bounds.width, bounds.height, grains, grid, reach,
                bounds.bodies, bounds.sweeps);
   }
   // What relaxing left (or, without it, every overlap) is taken off the radii.
-  CellGrid placed(std::max(width, 1e-12), std::max(height, 1e-12), reach);
-  placed.fill(x.data(), y.data(), equal.data(), 0, static_cast<std::uint32_t>(n));
+  PointGrid placed = pointGrid(std::max(width, 1e-12), std::max(height, 1e-12), reach);
+  binPoints(placed, x.data(), y.data(), equal.data(), 0, static_cast<std::uint32_t>(n));
   for (std::size_t g = 0; g < n; ++g) {
     if (!is_disk[g])
       continue;
-    placed.forNear(x[g], y[g], reach, [&](const CellGrid::Item &o) {
+    placed.forNear(x[g], y[g], reach, [&](const GridPoint &o) {
       if (o.index != g && is_disk[o.index])
         radius[g] =
             std::min(radius[g], std::hypot(o.x - x[g], o.y - y[g]) * equal[g] / (equal[g] + o.r));
     });
-    grid.forNear(x[g], y[g], reach, [&](const CellGrid::Item &o) {
+    grid.forNear(x[g], y[g], reach, [&](const GridPoint &o) {
       if (!is_disk[o.index]) {
         const Nearest c = nearestOnPolygon(grains, o.index, x[g], y[g]);
         radius[g] = std::min(radius[g], c.inside ? 0.0 : c.distance);

@@ -1,6 +1,6 @@
 #include "sites.hpp"
 
-#include "cell_grid.hpp"
+#include "point_grid.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,8 @@ namespace mesopen {
 
 std::size_t grainCount(const TargetSpec &spec) {
   const double d = spec.meanDiameter();
-  return static_cast<std::size_t>(std::llround(spec.area() * (1.0 - spec.porosity) / (M_PI * d * d / 4.0)));
+  return static_cast<std::size_t>(
+      std::llround(spec.area() * (1.0 - spec.porosity) / (M_PI * d * d / 4.0)));
 }
 
 std::vector<double> grainDiameters(const TargetSpec &spec, Random &random) {
@@ -27,13 +28,13 @@ namespace {
 // Renumber grains and voids separately in the row-by-row order of a grid: neighbours in
 // space become neighbours in memory.
 void sortSpatially(Sites &s, double width, double height, double cell) {
-  CellGrid grid(width, height, cell);
+  PointGrid grid = pointGrid(width, height, cell);
   std::vector<std::uint32_t> order;
   order.reserve(s.size());
-  grid.fill(s.x.data(), s.y.data(), s.r.data(), 0, static_cast<std::uint32_t>(s.grains));
+  binPoints(grid, s.x.data(), s.y.data(), s.r.data(), 0, static_cast<std::uint32_t>(s.grains));
   for (const auto &item : grid.items())
     order.push_back(item.index);
-  grid.fill(s.x.data(), s.y.data(), s.r.data(), static_cast<std::uint32_t>(s.grains),
+  binPoints(grid, s.x.data(), s.y.data(), s.r.data(), static_cast<std::uint32_t>(s.grains),
             static_cast<std::uint32_t>(s.size()));
   for (const auto &item : grid.items())
     order.push_back(item.index);
@@ -60,8 +61,8 @@ Sites initialSites(const TargetSpec &spec, double void_scale) {
     grain_area += M_PI * d * d / 4.0;
   const double void_d = spec.void_ratio * spec.meanDiameter();
   const double free_area = std::max(0.0, spec.area() - grain_area);
-  const std::size_t v =
-      static_cast<std::size_t>(std::llround(void_scale * free_area / (M_PI * void_d * void_d / 4.0)));
+  const std::size_t v = static_cast<std::size_t>(
+      std::llround(void_scale * free_area / (M_PI * void_d * void_d / 4.0)));
 
   Sites s;
   s.grains = n;
@@ -125,8 +126,8 @@ struct Conflicts {
 // Conflict vectors of all sites (thesis 4.2.1): the sum over overlapping sites j of G_ij times
 // the unit vector from j to i, and the same against each wall through the site's mirror image.
 // Each site gathers its own sum, so the pass is parallel and its result independent of threads.
-void conflicts(const Sites &s, const TargetSpec &spec, const CellGrid &grains, const CellGrid &voids,
-               double r_grain_max, double r_void, Conflicts &c) {
+void conflicts(const Sites &s, const TargetSpec &spec, const PointGrid &grains,
+               const PointGrid &voids, double r_grain_max, double r_void, Conflicts &c) {
   const std::size_t n = s.size();
   const double *x = s.x.data(), *y = s.y.data(), *r = s.r.data();
   const double w = spec.width, h = spec.height;
@@ -136,7 +137,7 @@ void conflicts(const Sites &s, const TargetSpec &spec, const CellGrid &grains, c
     const double xi = x[i], yi = y[i], ri = r[i];
     // The site meets itself once, in the grid of its own kind: d = 0, G = 1, no direction;
     // its energy share of 1/2 is taken off below.
-    auto pair = [&](const CellGrid::Item &j) {
+    auto pair = [&](const GridPoint &j) {
       const double ex = xi - j.x, ey = yi - j.y, reach = ri + j.r;
       const double d2 = ex * ex + ey * ey;
       if (d2 >= reach * reach)
@@ -184,17 +185,17 @@ PlacementReport relaxSites(Sites &s, const TargetSpec &spec,
   const std::size_t n = s.size();
   const double r_grain_max = 0.5 * spec.diameter_max;
   const double r_void = 0.5 * spec.void_ratio * spec.meanDiameter();
-  CellGrid grains(spec.width, spec.height, r_grain_max);
-  CellGrid voids(spec.width, spec.height, 2.0 * r_void);
+  PointGrid grains = pointGrid(spec.width, spec.height, r_grain_max);
+  PointGrid voids = pointGrid(spec.width, spec.height, 2.0 * r_void);
   Conflicts c{std::vector<double>(n), std::vector<double>(n), std::vector<double>(n)};
 
   const double step0 = spec.step_scale * spec.meanDiameter();
   double step = step0;
   PlacementReport report;
   for (int it = 0;; ++it) {
-    grains.fill(s.x.data(), s.y.data(), s.r.data(), 0, static_cast<std::uint32_t>(s.grains));
-    voids.fill(s.x.data(), s.y.data(), s.r.data(), static_cast<std::uint32_t>(s.grains),
-               static_cast<std::uint32_t>(n));
+    binPoints(grains, s.x.data(), s.y.data(), s.r.data(), 0, static_cast<std::uint32_t>(s.grains));
+    binPoints(voids, s.x.data(), s.y.data(), s.r.data(), static_cast<std::uint32_t>(s.grains),
+              static_cast<std::uint32_t>(n));
     conflicts(s, spec, grains, voids, r_grain_max, r_void, c);
     // Serial sums keep the result the same for any number of threads.
     double energy = 0.0, largest = 0.0;
@@ -206,7 +207,8 @@ PlacementReport relaxSites(Sites &s, const TargetSpec &spec,
     const std::size_t k = report.energy.size();
     if (k >= 2 && energy > report.energy[k - 2])
       step *= spec.step_decay;
-    const bool flat = k > 20 && std::abs(report.energy[k - 21] - energy) < 1e-4 * report.energy[k - 21];
+    const bool flat =
+        k > 20 && std::abs(report.energy[k - 21] - energy) < 1e-4 * report.energy[k - 21];
     if (largest == 0.0 || step < 0.01 * step0 || flat) {
       report.converged = true;
       break;
@@ -230,11 +232,11 @@ PlacementReport relaxSites(Sites &s, const TargetSpec &spec,
 double overlapEnergy(const Sites &s, const TargetSpec &spec) {
   const double r_grain_max = 0.5 * spec.diameter_max;
   const double r_void = 0.5 * spec.void_ratio * spec.meanDiameter();
-  CellGrid grains(spec.width, spec.height, r_grain_max);
-  CellGrid voids(spec.width, spec.height, 2.0 * r_void);
-  grains.fill(s.x.data(), s.y.data(), s.r.data(), 0, static_cast<std::uint32_t>(s.grains));
-  voids.fill(s.x.data(), s.y.data(), s.r.data(), static_cast<std::uint32_t>(s.grains),
-             static_cast<std::uint32_t>(s.size()));
+  PointGrid grains = pointGrid(spec.width, spec.height, r_grain_max);
+  PointGrid voids = pointGrid(spec.width, spec.height, 2.0 * r_void);
+  binPoints(grains, s.x.data(), s.y.data(), s.r.data(), 0, static_cast<std::uint32_t>(s.grains));
+  binPoints(voids, s.x.data(), s.y.data(), s.r.data(), static_cast<std::uint32_t>(s.grains),
+            static_cast<std::uint32_t>(s.size()));
   Conflicts c{std::vector<double>(s.size()), std::vector<double>(s.size()),
               std::vector<double>(s.size())};
   conflicts(s, spec, grains, voids, r_grain_max, r_void, c);

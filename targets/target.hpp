@@ -10,9 +10,9 @@
 
 namespace mesopen {
 
-enum class Placement { regular, clustered };      // thesis section 4.2.5
-enum class Tessellation { voronoi, power };       // thesis Voronoi + Eq. 4.4, or Laguerre
-enum class MeshKind { none, fan, quality };       // thesis section 4.2.3
+enum class Placement { regular, clustered }; // thesis section 4.2.5
+enum class Tessellation { voronoi, power };  // thesis Voronoi + Eq. 4.4, or Laguerre
+enum class MeshKind { none, fan, quality };  // thesis section 4.2.3
 
 // The names of the choices, as scenes and output files spell them.
 template <class Enum> struct Named {
@@ -43,12 +43,12 @@ std::optional<Enum> valueOf(std::string_view name, const Named<Enum> (&names)[N]
 
 // What the generator is asked for. Defaults are the scene's defaults (run/scene.cpp lists them).
 struct TargetSpec {
-  double width = 7.076e-3;   // box W [m]
-  double height = 3.538e-3;  // box H [m]
+  double width = 7.076e-3;  // box W [m]
+  double height = 3.538e-3; // box H [m]
   double diameter_min = 42e-6;
-  double diameter_max = 78e-6;    // equal to diameter_min for a uniform grain size
-  double porosity = 0.30;         // requested (A_T - A_G) / A_T
-  double void_ratio = 0.25;       // void-site diameter / mean grain diameter
+  double diameter_max = 78e-6; // equal to diameter_min for a uniform grain size
+  double porosity = 0.30;      // requested (A_T - A_G) / A_T
+  double void_ratio = 0.25;    // void-site diameter / mean grain diameter
   Placement placement = Placement::regular;
   std::uint64_t seed = 1;
   double step_scale = 1.0;        // placement step / mean diameter (docs/targets.md, study 1)
@@ -58,9 +58,9 @@ struct TargetSpec {
   bool calibrate_porosity = true; // tune the void cells' size to the requested porosity
   Tessellation tessellation = Tessellation::power;
   MeshKind mesh = MeshKind::quality;
-  double mesh_size = 10e-6;       // target triangle edge and shortest polygon edge [m]
-  double min_angle = 20.7;        // smallest triangle angle of the quality mesh [deg]
-  double density = 2648.5;        // grain density for target.data [kg/m^3] (quartz, Table 3.3)
+  double mesh_size = 10e-6; // target triangle edge and shortest polygon edge [m]
+  double min_angle = 20.7;  // smallest triangle angle of the quality mesh [deg]
+  double density = 2648.5;  // grain density for target.data [kg/m^3] (quartz, Table 3.3)
 
   double meanDiameter() const { return 0.5 * (diameter_min + diameter_max); }
   double area() const { return width * height; }
@@ -71,7 +71,6 @@ struct Sites {
   std::vector<double> x, y, r;
   std::size_t grains = 0;
   std::size_t size() const { return x.size(); }
-  bool isVoid(std::size_t i) const { return i >= grains; }
 };
 
 // Convex grain polygons, counter-clockwise, stored flat: grain g has the vertices
@@ -99,10 +98,10 @@ struct Meshes {
 // A finished target with the figures of its validation (thesis section 4.2.4).
 struct Target {
   TargetSpec spec;
-  Sites sites;                          // after placement, before tessellation
-  Polygons grains;                      // convex grains inside the box
+  Sites sites;                           // after placement, before tessellation
+  Polygons grains;                       // convex grains inside the box
   std::vector<std::uint32_t> grain_site; // site each grain grew from
-  Meshes mesh;                          // per-grain meshes (empty when mesh = none)
+  Meshes mesh;                           // per-grain meshes (empty when mesh = none)
 };
 
 } // namespace mesopen

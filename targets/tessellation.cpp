@@ -1,6 +1,6 @@
 #include "tessellation.hpp"
 
-#include "cell_grid.hpp"
+#include "point_grid.hpp"
 #include "polygon.hpp"
 
 #include <CGAL/Delaunay_triangulation_2.h>
@@ -28,8 +28,9 @@ struct FaceInfo {
 using DVb = CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, K>;
 using DFb = CGAL::Triangulation_face_base_with_info_2<FaceInfo, K>;
 using Delaunay = CGAL::Delaunay_triangulation_2<K, CGAL::Triangulation_data_structure_2<DVb, DFb>>;
-using RVb = CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, K,
-                                                        CGAL::Regular_triangulation_vertex_base_2<K>>;
+using RVb =
+    CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, K,
+                                                CGAL::Regular_triangulation_vertex_base_2<K>>;
 using RFb = CGAL::Triangulation_face_base_with_info_2<FaceInfo, K,
                                                       CGAL::Regular_triangulation_face_base_2<K>>;
 using Regular = CGAL::Regular_triangulation_2<K, CGAL::Triangulation_data_structure_2<RVb, RFb>>;
@@ -40,7 +41,7 @@ struct Images {
   std::vector<double> x, y;
   std::vector<std::uint32_t> site;
   std::vector<std::uint8_t> real;
-  std::vector<std::uint32_t> first;  // per site: its images are [first, first + count)
+  std::vector<std::uint32_t> first; // per site: its images are [first, first + count)
   std::vector<std::uint8_t> count;
 
   void add(const Sites &s, std::uint32_t i, double w, double h, double reach) {
@@ -51,7 +52,8 @@ struct Images {
     first[i] = static_cast<std::uint32_t>(x.size());
     const double xs = s.x[i], ys = s.y[i];
     const double mx[3] = {xs, -xs, 2.0 * w - xs}, my[3] = {ys, -ys, 2.0 * h - ys};
-    const bool nx[3] = {true, xs < reach, w - xs < reach}, ny[3] = {true, ys < reach, h - ys < reach};
+    const bool nx[3] = {true, xs < reach, w - xs < reach},
+               ny[3] = {true, ys < reach, h - ys < reach};
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b)
         if (nx[a] && ny[b]) {
@@ -114,9 +116,11 @@ template <class Tri> struct Cells {
   Images images;
   std::vector<typename Tri::Vertex_handle> handle; // per image (null when hidden or removed)
   std::vector<double> vpx, vpy;
-  std::vector<std::uint8_t> alive;                 // per site
-  double void_factor = 1.0;                        // void radii are scaled by this
-  double radius(const Sites &s, std::uint32_t i) const { return i < s.grains ? s.r[i] : void_factor * s.r[i]; }
+  std::vector<std::uint8_t> alive; // per site
+  double void_factor = 1.0;        // void radii are scaled by this
+  double radius(const Sites &s, std::uint32_t i) const {
+    return i < s.grains ? s.r[i] : void_factor * s.r[i];
+  }
 };
 
 std::uint32_t commonVertex(auto f, auto g, auto v) {
@@ -179,9 +183,11 @@ void computeVoronoiPoints(Cells<Delaunay> &c, const Sites &s, const TargetSpec &
     if (!f->info().restored) {
       double px[3], py[3], r[3];
       for (int i = 0; i < 3; ++i)
-        px[i] = c.images.x[im[i]], py[i] = c.images.y[im[i]], r[i] = c.radius(s, c.images.site[im[i]]);
+        px[i] = c.images.x[im[i]], py[i] = c.images.y[im[i]],
+        r[i] = c.radius(s, c.images.site[im[i]]);
       // Two images of one site: their bisector is a wall, and the point stays on it.
-      const std::uint32_t s0 = c.images.site[im[0]], s1 = c.images.site[im[1]], s2 = c.images.site[im[2]];
+      const std::uint32_t s0 = c.images.site[im[0]], s1 = c.images.site[im[1]],
+                          s2 = c.images.site[im[2]];
       if (s0 == s1 && s1 == s2) {
         p = {std::round(p.x / w) * w, std::round(p.y / h) * h}; // a corner
       } else if (s0 == s1 || s1 == s2 || s0 == s2) {
@@ -240,7 +246,8 @@ template <class Tri> void removeSite(Cells<Tri> &c, std::uint32_t site) {
 void insertSite(Cells<Delaunay> &c, const Sites &s, std::uint32_t site, double w, double h,
                 double reach) {
   c.images.add(s, site, w, h, reach);
-  for (std::uint32_t k = c.images.first[site]; k < c.images.first[site] + c.images.count[site]; ++k) {
+  for (std::uint32_t k = c.images.first[site]; k < c.images.first[site] + c.images.count[site];
+       ++k) {
     auto v = c.tri.insert(K::Point_2(c.images.x[k], c.images.y[k]));
     v->info() = k;
     c.handle.push_back(v);
@@ -269,9 +276,11 @@ std::size_t repair(Cells<Delaunay> &c, Sites &s, const TargetSpec &spec, int pas
     const double gx = s.x[g], gy = s.y[g];
     for (std::size_t k = 0; k < n; ++k) {
       const std::uint32_t t = ring.across[k];
-      const double ax = c.vpx[vp(k)], ay = c.vpy[vp(k)], bx = c.vpx[vp(k + 1)], by = c.vpy[vp(k + 1)];
+      const double ax = c.vpx[vp(k)], ay = c.vpy[vp(k)], bx = c.vpx[vp(k + 1)],
+                   by = c.vpy[vp(k + 1)];
       const double tx = c.images.x[t] - gx, ty = c.images.y[t] - gy;
-      if (cross(tx, ty, bx - ax, by - ay) >= -1e-12 * std::hypot(tx, ty) * std::hypot(bx - ax, by - ay))
+      if (cross(tx, ty, bx - ax, by - ay) >=
+          -1e-12 * std::hypot(tx, ty) * std::hypot(bx - ax, by - ay))
         continue;
       bad = true;
       const std::uint32_t ts = c.images.site[t];
@@ -398,14 +407,14 @@ std::vector<std::uint32_t> overlappingGrains(const Cells<Delaunay> &c, const Sit
     if (c.alive[g] && ringOf(c, g, ring))
       for (auto f : ring.face)
         poly[g].push_back({c.vpx[f->info().vp], c.vpy[f->info().vp]});
-  CellGrid grid(spec.width, spec.height, spec.diameter_max);
-  grid.fill(s.x.data(), s.y.data(), s.r.data(), 0, static_cast<std::uint32_t>(s.grains));
+  PointGrid grid = pointGrid(spec.width, spec.height, spec.diameter_max);
+  binPoints(grid, s.x.data(), s.y.data(), s.r.data(), 0, static_cast<std::uint32_t>(s.grains));
   const double tolerance = 1e-9 * spec.meanDiameter();
   std::vector<std::uint32_t> bad;
   for (std::uint32_t g = 0; g < s.grains; ++g) {
     if (poly[g].empty())
       continue;
-    grid.forNear(s.x[g], s.y[g], 2.0 * spec.diameter_max, [&](const CellGrid::Item &item) {
+    grid.forNear(s.x[g], s.y[g], 2.0 * spec.diameter_max, [&](const GridPoint &item) {
       const std::uint32_t h = item.index;
       if (h <= g || poly[h].empty())
         return;
@@ -551,7 +560,8 @@ void mergeShortEdges(Planar &p, double w, double h_box, double h, TessellationRe
       const std::size_t n = trial.size() - first;
       tx.clear(), ty.clear();
       for (std::size_t k = first; k < trial.size(); ++k)
-        tx.push_back(trial[k] == a ? mx : p.x[trial[k]]), ty.push_back(trial[k] == a ? my : p.y[trial[k]]);
+        tx.push_back(trial[k] == a ? mx : p.x[trial[k]]),
+            ty.push_back(trial[k] == a ? my : p.y[trial[k]]);
       // An edge of round-off length always goes; otherwise the grains must stay convex but for
       // a slight dent (see max_dent_turn).
       ok = n >= 3 && signedArea(tx.data(), ty.data(), n) > 0.0 &&
@@ -604,8 +614,9 @@ std::vector<std::uint32_t> compactSites(Sites &s, const std::vector<std::uint8_t
   return index;
 }
 
-template <class Tri, class MakePoint> void build(Cells<Tri> &c, const Sites &s, const TargetSpec &spec,
-                                                 MakePoint make_point, TessellationReport &report) {
+template <class Tri, class MakePoint>
+void build(Cells<Tri> &c, const Sites &s, const TargetSpec &spec, MakePoint make_point,
+           TessellationReport &report) {
   const double reach = 2.0 * spec.diameter_max;
   c.alive.assign(s.size(), 1);
   for (std::uint32_t i = 0; i < s.size(); ++i)
@@ -616,7 +627,8 @@ template <class Tri, class MakePoint> void build(Cells<Tri> &c, const Sites &s, 
     points.emplace_back(make_point(k), k);
   const auto t0 = std::chrono::steady_clock::now();
   c.tri.insert(points.begin(), points.end());
-  report.delaunay_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  report.delaunay_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   c.handle.assign(c.images.x.size(), typename Tri::Vertex_handle());
   for (auto v = c.tri.finite_vertices_begin(); v != c.tri.finite_vertices_end(); ++v)
     c.handle[v->info()] = v;
@@ -631,7 +643,9 @@ Polygons tessellate(Sites &s, const TargetSpec &spec, double void_factor,
   if (spec.tessellation == Tessellation::voronoi) {
     Cells<Delaunay> c;
     c.void_factor = void_factor;
-    build(c, s, spec, [&](std::uint32_t k) { return K::Point_2(c.images.x[k], c.images.y[k]); }, report);
+    build(
+        c, s, spec, [&](std::uint32_t k) { return K::Point_2(c.images.x[k], c.images.y[k]); },
+        report);
     for (int pass = 0;; ++pass) {
       computeVoronoiPoints(c, s, spec);
       report.passes = pass + 1;
@@ -648,19 +662,21 @@ Polygons tessellate(Sites &s, const TargetSpec &spec, double void_factor,
             if (!f->info().restored)
               f->info().restored = true, ++report.restored_points;
       if (pass > 40)
-        throw std::runtime_error("tessellation: grain cells still overlap or are concave after 40 passes");
+        throw std::runtime_error(
+            "tessellation: grain cells still overlap or are concave after 40 passes");
     }
     planar = collectGrains(c, s, report);
     alive = c.alive;
   } else {
     Cells<Regular> c;
     c.void_factor = void_factor;
-    build(c, s, spec,
-          [&](std::uint32_t k) {
-            const double r = c.radius(s, c.images.site[k]);
-            return K::Weighted_point_2(K::Point_2(c.images.x[k], c.images.y[k]), r * r);
-          },
-          report);
+    build(
+        c, s, spec,
+        [&](std::uint32_t k) {
+          const double r = c.radius(s, c.images.site[k]);
+          return K::Weighted_point_2(K::Point_2(c.images.x[k], c.images.y[k]), r * r);
+        },
+        report);
     computePowerPoints(c, spec);
     planar = collectGrains(c, s, report);
     alive = c.alive;

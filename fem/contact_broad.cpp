@@ -1,0 +1,173 @@
+// The broad phase of FE-FE contact (fem/contact.hpp): the bodies' boxes, their cell grids, the
+// pairs of bodies whose boxes come within the search margin.
+#include "contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <span>
+#include <tuple>
+
+namespace mesopen::fem {
+
+namespace {
+double sq(double x) { return x * x; }
+} // namespace
+
+// A body's boundary node positions and its bounding box now, and how far its nodes
+// moved since the last call (the largest distance, added to travel_).
+void Contact::measure(const Model &model, std::size_t b) {
+  const Nodes &nd = model.nodes;
+  Box box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  double moved2 = 0.0;
+  for (std::size_t k = node_begin_[b]; k < node_begin_[b + 1]; ++k) {
+    const std::uint32_t a = nodes_[k];
+    const double x = nd.x[a], y = nd.y[a];
+    moved2 = std::max(moved2, sq(x - points_[k].x) + sq(y - points_[k].y));
+    points_[k] = {x, y};
+    box.x0 = std::min(box.x0, x), box.x1 = std::max(box.x1, x);
+    box.y0 = std::min(box.y0, y), box.y1 = std::max(box.y1, y);
+  }
+  boxes_[b] = box;
+  travel_[b] += std::sqrt(moved2);
+}
+
+// Cell lists of the bodies `which` over the rectangle their boxes cover (counting sort: cell by
+// cell, bodies in the given order).
+void Contact::gridBodies(CellGrid<> &grid, const std::vector<Box> &boxes,
+                         const std::vector<std::uint32_t> &which) const {
+  grid = {};
+  if (which.empty() || !(cell_ > 0.0))
+    return;
+  double xa = HUGE_VAL, ya = HUGE_VAL, xb = -HUGE_VAL, yb = -HUGE_VAL;
+  for (std::uint32_t b : which) {
+    xa = std::min(xa, boxes[b].x0), xb = std::max(xb, boxes[b].x1);
+    ya = std::min(ya, boxes[b].y0), yb = std::max(yb, boxes[b].y1);
+  }
+  grid.cover(xa, ya, xb - xa, yb - ya, cell_);
+  grid.fill(
+      which.size(),
+      [&](std::size_t k) {
+        const Box &box = boxes[which[k]];
+        return grid.cells(box.x0, box.y0, box.x1, box.y1);
+      },
+      [&](std::size_t k) { return which[k]; });
+}
+
+// Broad phase: the pairs of bodies whose boxes come closer than the search margin, at least one
+// of them moving, in the order of their numbers; each pair found once, in the cell that holds
+// the lower-left corner of the overlap. Moving bodies meet each other in a grid of their boxes
+// widened by half the margin, built here; the bodies at rest in the grid built at the start.
+// The runs of pairs are shared evenly among the threads. A pair found before keeps its lists (they
+// hold what they must while its two bodies move less than their margin, whatever the search), the
+// others' are taken when first needed; after a change of the boundaries all are taken anew.
+void Contact::findPairs() {
+  ++stats_.searches;
+  std::vector<Pair> before;
+  std::vector<std::vector<std::uint32_t>> arenas_before(arenas_.size());
+  std::vector<std::uint32_t> run_before; // per pair before: its run
+  if (!run_pairs_.empty()) {
+    before.swap(pairs_);
+    for (std::size_t r = 0; r < arenas_.size(); ++r) {
+      arenas_before[r].swap(arenas_[r]);
+      run_before.insert(run_before.end(), run_pairs_[r + 1] - run_pairs_[r],
+                        static_cast<std::uint32_t>(r));
+    }
+  }
+  pairs_.clear();
+  std::vector<Box> wide(boxes_.size());
+  for (std::uint32_t b : moving_) {
+    wide[b] = boxes_[b].widened(0.5 * search_margin_);
+    travel_searched_[b] = travel_[b];
+    listed_[b] = 1;
+  }
+  auto add = [&](std::uint32_t a, std::uint32_t b) { pairs_.emplace_back(a, b); };
+  gridBodies(moving_grid_, wide, moving_);
+  const CellGrid<> &g = moving_grid_;
+  for (std::size_t c = 0; c < g.size(); ++c) {
+    const std::span<const std::uint32_t> in = g.cell(c);
+    for (std::size_t i = 0; i < in.size(); ++i)
+      for (std::size_t j = i + 1; j < in.size(); ++j) {
+        const Box &A = wide[in[i]], &B = wide[in[j]];
+        if (A.overlaps(B) && g.cellOf(std::max(A.x0, B.x0), std::max(A.y0, B.y0)) == c)
+          add(in[i], in[j]);
+      }
+  }
+  for (std::uint32_t a : moving_)
+    restNeighbours(
+        a, search_margin_, [&](std::uint32_t b) { return !listed_[b]; }, add);
+  auto earlier = [](const Pair &p, const Pair &q) {
+    return std::tie(p.a, p.b) < std::tie(q.a, q.b);
+  };
+  std::sort(pairs_.begin(), pairs_.end(), earlier);
+  const std::size_t runs = arenas_.size();
+  run_pairs_.resize(runs + 1);
+  for (std::size_t r = 0; r <= runs; ++r)
+    run_pairs_[r] = pairs_.size() * r / runs;
+  for (auto &arena : arenas_)
+    arena.clear();
+  // The pairs before in the order of the new ones (those the bodies that woke added come last),
+  // matched; each listed one's lists and hot nodes into its new run's arena.
+  std::vector<std::uint32_t> order(before.size());
+  for (std::uint32_t j = 0; j < order.size(); ++j)
+    order[j] = j;
+  std::sort(order.begin(), order.end(),
+            [&](std::uint32_t i, std::uint32_t j) { return earlier(before[i], before[j]); });
+  auto old = order.begin();
+  for (std::size_t r = 0; r < runs; ++r)
+    for (std::size_t i = run_pairs_[r]; i < run_pairs_[r + 1]; ++i) {
+      Pair &pair = pairs_[i];
+      while (old != order.end() && earlier(before[*old], pair))
+        ++old;
+      if (old == order.end() || before[*old].a != pair.a || before[*old].b != pair.b ||
+          before[*old].capacity == 0)
+        continue;
+      const Pair &kept = before[*old];
+      const std::vector<std::uint32_t> &from = arenas_before[run_before[*old]];
+      std::vector<std::uint32_t> &arena = arenas_[r];
+      pair = kept;
+      pair.begin = static_cast<std::uint32_t>(arena.size());
+      arena.insert(arena.end(), from.begin() + kept.begin,
+                   from.begin() + kept.begin + kept.capacity);
+    }
+}
+
+// The pairs of the bodies that woke since the last step with the bodies at rest (or woken now):
+// they were not searched while both rested. Added to the last run of pairs.
+void Contact::addPairsOfWoken(const Model &model) {
+  woken_.clear();
+  for (std::uint32_t b : moving_)
+    if (!listed_[b])
+      woken_.push_back(b);
+  if (woken_.empty())
+    return;
+  for (std::uint32_t a : woken_)
+    restNeighbours(
+        a, search_margin_,
+        [&](std::uint32_t b) { return !listed_[b] && (model.at_rest[b] || a < b); },
+        [&](std::uint32_t a, std::uint32_t b) { pairs_.emplace_back(a, b); });
+  for (std::uint32_t a : woken_)
+    listed_[a] = 1;
+  run_pairs_.back() = pairs_.size();
+}
+
+// The bodies of the grid of bodies at rest whose boxes come closer to body a's than `margin` and
+// that `wanted` accepts, each once: add(a, b).
+template <class Wanted, class Add>
+void Contact::restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add add) const {
+  const CellGrid<> &r = rest_grid_;
+  if (r.size() == 0)
+    return;
+  const Box A = boxes_[a].widened(margin);
+  const CellRange cells = r.cells(A.x0, A.y0, A.x1, A.y1);
+  for (std::size_t j = cells.j0; j <= cells.j1; ++j)
+    for (std::size_t i = cells.i0; i <= cells.i1; ++i)
+      for (const std::uint32_t b : r.cell(j * r.columns() + i)) {
+        const Box &B = boxes_[b];
+        if (b != a && A.overlaps(B) &&
+            r.cellOf(std::max(A.x0, B.x0), std::max(A.y0, B.y0)) == j * r.columns() + i &&
+            wanted(b))
+          add(a, b);
+      }
+}
+
+} // namespace mesopen::fem
