@@ -83,8 +83,15 @@ std::vector<fem::VelocityConstraint> boxEdges(const fem::Model &model, const Tar
 
 PlacedProjectile runProjectile(const Scene &scene, const Target *target) {
   const Polygons no_grains;
+  const double degree = M_PI / 180.0;
   return placeProjectile(scene.projectile, scene.target.mesh_size, scene.target,
-                         target ? target->grains : no_grains);
+                         target ? target->grains : no_grains,
+                         {(scene.run.yaw + scene.run.obliquity) * degree, scene.run.offset});
+}
+
+std::array<double, 2> runVelocity(const RunSpec &run) {
+  const double obliquity = run.obliquity * (M_PI / 180.0);
+  return {run.velocity * std::sin(obliquity), -run.velocity * std::cos(obliquity)};
 }
 
 std::vector<char> meshedGrains(const Scene &scene, const Target &target,
@@ -111,9 +118,15 @@ std::vector<char> meshedGrains(const Scene &scene, const Target &target,
                            : HUGE_VAL;
   const double bottom = *std::min_element(p.mesh.y.begin(), p.mesh.y.end()) - depth;
   const GrainFigures f = grainFigures(target.grains);
+  // The distance from the path: the line through the tip along the velocity (sin, -cos of the
+  // obliquity).
+  const double obliquity = scene.run.obliquity * (M_PI / 180.0);
+  const double c = std::cos(obliquity), s = std::sin(obliquity);
   std::vector<char> meshed(n);
-  for (std::size_t g = 0; g < n; ++g)
-    meshed[g] = std::abs(f.centroid_x[g] - p.offset_x) <= half && f.centroid_y[g] >= bottom;
+  for (std::size_t g = 0; g < n; ++g) {
+    const double off_path = (f.centroid_x[g] - p.offset_x) * c + (f.centroid_y[g] - p.offset_y) * s;
+    meshed[g] = std::abs(off_path) <= half && f.centroid_y[g] >= bottom;
+  }
   return meshed;
 }
 
@@ -137,9 +150,10 @@ fem::Model buildRunModel(const Scene &scene, const Target *target, const PlacedP
   if (target && scene.run.fix_edges)
     for (fem::VelocityConstraint &c : boxEdges(model, scene.target, scene.run.smooth_walls))
       model.constraints.push_back(std::move(c));
-  fem::setBodyVelocity(model, 0, 0.0, -scene.run.velocity, scene.run.spin);
+  const auto [vx, vy] = runVelocity(scene.run);
+  fem::setBodyVelocity(model, 0, vx, vy, scene.run.spin);
   if (scene.run.constant_velocity) {
-    fem::VelocityConstraint driven{"projectile driven", {}, true, true, 0.0, -scene.run.velocity};
+    fem::VelocityConstraint driven{"projectile driven", {}, true, true, vx, vy};
     for (std::size_t a = model.bodies[0].node_begin; a < model.bodies[0].node_end; ++a)
       driven.nodes.push_back(static_cast<std::uint32_t>(a));
     model.constraints.push_back(std::move(driven));

@@ -12,14 +12,19 @@
 #include "solver.hpp"
 #include "target.hpp"
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
 
 namespace mesopen {
 
-// The scene's projectile placed on the target's grains (on the box's surface without a target).
+// The scene's projectile placed on the target's grains (on the box's surface without a target),
+// turned by run.yaw + run.obliquity about its tip and moved by run.offset.
 PlacedProjectile runProjectile(const Scene &scene, const Target *target);
+
+// The projectile's initial velocity: run.velocity along (sin, -cos) of run.obliquity [m/s].
+std::array<double, 2> runVelocity(const RunSpec &run);
 
 // Which grains are meshed (1) and which are disks (0): every one meshed (fe), none (dem), or those
 // whose centroids lie within the band around the projectile's path (hybrid).
@@ -27,7 +32,7 @@ std::vector<char> meshedGrains(const Scene &scene, const Target &target, const P
 
 // One model of the projectile (body 0, "projectile") and the grains marked in `meshed`
 // ("grain-<g>", g the grain's number in the target; none without a target), with the scene's
-// materials, the projectile's initial velocity (0, -v) and spin, and the fixed box edges.
+// materials, the projectile's initial velocity (runVelocity) and spin, and the fixed box edges.
 fem::Model buildRunModel(const Scene &scene, const Target *target, const PlacedProjectile &p,
                          const std::vector<char> &meshed);
 

@@ -57,6 +57,11 @@ void writeRunAttributes(H5File &h5, const Scene &scene, const std::string &statu
                              {"end_time", run.end_time},
                              {"projectile_length", scene.projectile.length}})
     h5.attribute("/", name, value);
+  // The impact's attitude, where it is not head-on (absent: 0).
+  for (auto [name, value] :
+       {std::pair{"obliquity", run.obliquity}, {"yaw", run.yaw}, {"offset", run.offset}})
+    if (value != 0.0)
+      h5.attribute("/", name, value);
 }
 
 nlohmann::json demFigures(const RunAssembly &run, const coupling::World &world) {
@@ -89,6 +94,9 @@ nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Seri
   j["run"] = {{"end_time", scene.run.end_time},
               {"velocity", scene.run.velocity},
               {"spin", scene.run.spin},
+              {"obliquity", scene.run.obliquity},
+              {"yaw", scene.run.yaw},
+              {"offset", scene.run.offset},
               {"grains", scene.run.grains},
               {"projectile_material", scene.projectile_material.name},
               {"grain_material", scene.grain_material.name}};

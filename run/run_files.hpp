@@ -21,7 +21,7 @@ namespace mesopen {
 bool takeRunDirectory(const Scene &scene, const std::string &dir);
 
 // The attributes of run.h5's root: format, version, status, seed, velocity, spin, end_time,
-// projectile_length.
+// projectile_length, and obliquity, yaw and offset when not 0.
 void writeRunAttributes(H5File &h5, const Scene &scene, const std::string &status);
 
 // The disks' figures over all ranks (every rank takes part): disks, contacts with the FE bodies,

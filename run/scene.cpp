@@ -260,6 +260,15 @@ const std::vector<Key> &keys() {
              "projectile's initial speed, downward (thesis: 500-1500)"),
         real("run", "spin", r, &R::spin, "rad/s", -1e9, false, 1e9,
              "projectile's initial spin about its centre of mass (counter-clockwise positive)"),
+        real("run", "obliquity", r, &R::obliquity, "deg", -80, false, 80,
+             "the velocity's angle to the target's normal (straight down), counter-clockwise "
+             "positive: velocity (sin, -cos) of it times run.velocity"),
+        real("run", "yaw", r, &R::yaw, "deg", -80, false, 80,
+             "angle of attack: the projectile axis's angle to its velocity, counter-clockwise "
+             "positive; the projectile turned about its tip, placed touching the grains"),
+        real("run", "offset", r, &R::offset, "m", -1, false, 1,
+             "the tip's lateral position from the box's middle (the projectile stays inside the "
+             "box)"),
         boolean("run", "grains", r, &R::grains, "include the grains; false: the projectile alone"),
         boolean("run", "fix_edges", r, &R::fix_edges,
                 "fix the grain nodes on the box's left, right and bottom edges"),
@@ -421,6 +430,13 @@ void checkTogether(const Scene &s) {
           show(m.length * m.height / (0.43 * size * size)) +
           " triangles for the beam; allowed: at most 5e6");
   }
+  if (s.projectile.enabled &&
+      std::abs(s.run.offset) + 0.5 * s.projectile.length / s.projectile.length_over_diameter >
+          0.5 * s.target.width)
+    bad("run.offset = " + show(s.run.offset) + " puts the projectile (diameter " +
+        show(s.projectile.length / s.projectile.length_over_diameter) +
+        " m) past the box's side; allowed: |offset| <= " +
+        show(0.5 * s.target.width - 0.5 * s.projectile.length / s.projectile.length_over_diameter));
   if (s.run.constant_velocity && s.run.spin != 0.0)
     bad("run.spin = " + show(s.run.spin) +
         " with run.constant_velocity = true (a velocity held "

@@ -36,6 +36,9 @@ struct RunSpec {
   double end_time = 1e-6;         // simulated time [s]
   double velocity = 1000.0;       // projectile's initial speed, downward [m/s]
   double spin = 0.0;              // projectile's initial spin about its centre of mass [rad/s]
+  double obliquity = 0.0; // the velocity's angle to the target's normal (straight down), CCW [deg]
+  double yaw = 0.0;       // the axis's angle to the velocity (angle of attack), CCW [deg]
+  double offset = 0.0;    // the tip's lateral position from the box's middle [m]
   bool grains = true;             // false: the projectile alone, in free flight
   bool fix_edges = true;          // grain nodes on the box's left, right and bottom edges fixed
   bool smooth_walls = false;      // frictionless walls: edge nodes held normal to their edge only

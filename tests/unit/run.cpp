@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
@@ -110,6 +111,9 @@ TEST(Run, BadInputNamesTheKey) {
       {"[dem]\nstiffness = 0\n", "dem.stiffness"},
       {"[dem]\ndamping = -1\n", "dem.damping"},
       {"[run]\nrepresentation = \"dem\"\ngrains = false\n", "run.representation"},
+      {"[run]\noffset = 3.4e-3\n", "run.offset"},
+      {"[run]\nyaw = 85\n", "run.yaw"},
+      {"[run]\nobliquity = -90\n", "run.obliquity"},
   };
   for (const auto &[text, key] : cases) {
     const auto r = runScene(dir, text);
@@ -241,6 +245,59 @@ TEST(Run, SignalDuringTheSetUpEndsInterrupted) {
     for (const char *file : {"out/run.h5", "out/run.h5.tmp", "out/target.h5"})
       EXPECT_FALSE(std::filesystem::exists(dir / file)) << file;
   }
+}
+
+// The impact's attitude: the projectile alone with obliquity 20 degrees, yaw 10 and offset 50 um
+// flies at run.velocity along (sin 20, -cos 20), keeps its momentum and its yaw (no tilt, to
+// round-off: 1e-12 rad), and its mesh is the head-on run's turned by 30 degrees (node by node to
+// 1e-12 of the length) and moved sideways by the offset; run.h5 says the attitude, the head-on
+// run's file does not (its attributes are those of before).
+TEST(Run, AttitudeTurnsAndAimsTheProjectile) {
+  ScratchDir dir("run-attitude"), straight_dir("run-attitude-straight");
+  const std::string free = "grains = false\nframe_interval = 0\n";
+  ASSERT_EQ(runScene(straight_dir, tinyScene(free)).code, 0);
+  const auto r = runScene(dir, tinyScene(free + "obliquity = 20.0\nyaw = 10.0\noffset = 50e-6\n"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  H5File h5 = H5File::open(dir / "out/run.h5"), h0 = H5File::open(straight_dir / "out/run.h5");
+  const double o = 20.0 * M_PI / 180.0, turn = 30.0 * M_PI / 180.0;
+  const auto vx = h5.read<double>("/series/projectile/vx");
+  const auto vy = h5.read<double>("/series/projectile/vy");
+  const auto tilt = h5.read<double>("/series/projectile/tilt");
+  ASSERT_GT(vx.size(), 10u);
+  for (std::size_t i = 0; i < vx.size(); ++i) {
+    EXPECT_NEAR(vx[i], 1000.0 * std::sin(o), 1e-10 * 1000.0);
+    EXPECT_NEAR(vy[i], -1000.0 * std::cos(o), 1e-10 * 1000.0);
+    EXPECT_NEAR(tilt[i], 0.0, 1e-12);
+  }
+  // The mesh: x = R(30 deg) x0 + d, the same nodes in the same order (d from the first node).
+  const auto x = h5.read<double>("/mesh/x"), y = h5.read<double>("/mesh/y");
+  const auto x0 = h0.read<double>("/mesh/x"), y0 = h0.read<double>("/mesh/y");
+  ASSERT_EQ(x.size(), x0.size());
+  const double c = std::cos(turn), s = std::sin(turn);
+  auto turned = [&](std::size_t a) {
+    return std::array<double, 2>{c * x0[a] - s * y0[a], s * x0[a] + c * y0[a]};
+  };
+  const auto t0 = turned(0);
+  const double dx = x[0] - t0[0], dy = y[0] - t0[1];
+  double worst = 0.0;
+  for (std::size_t a = 0; a < x.size(); ++a) {
+    const auto ta = turned(a);
+    worst = std::max({worst, std::abs(ta[0] + dx - x[a]), std::abs(ta[1] + dy - y[a])});
+  }
+  EXPECT_LT(worst, 1e-12 * 0.3e-3);
+  // The offset moves it sideways only: the same attitude without it, node by node.
+  ScratchDir centred_dir("run-attitude-centred");
+  ASSERT_EQ(runScene(centred_dir, tinyScene(free + "obliquity = 20.0\nyaw = 10.0\n")).code, 0);
+  H5File hc = H5File::open(centred_dir / "out/run.h5");
+  const auto xc = hc.read<double>("/mesh/x"), yc = hc.read<double>("/mesh/y");
+  for (std::size_t a = 0; a < x.size(); a += 7) {
+    EXPECT_NEAR(x[a] - xc[a], 50e-6, 1e-15);
+    EXPECT_EQ(y[a], yc[a]);
+  }
+  EXPECT_EQ(h5.readAttribute<double>("/", "yaw"), 10.0);
+  EXPECT_EQ(h5.readAttribute<double>("/", "obliquity"), 20.0);
+  EXPECT_EQ(h5.readAttribute<double>("/", "offset"), 50e-6);
+  EXPECT_FALSE(h0.hasAttribute("/", "yaw"));
 }
 
 // The projectile alone, spinning: the series must keep its momentum and H (round-off). No frames,
