@@ -88,11 +88,12 @@ void FeDemCoupling::choose(const fem::Model &model, const DiskContact::Region &n
   char *meets = meets_.data();
 #pragma omp simd
   for (std::size_t i = 0; i < n; ++i) {
-    const double vx = vx0[i] + half * fx[i] / mass[i], vy = vy0[i] + half * fy[i] / mass[i]; // slow()
+    const double vx = vx0[i] + half * fx[i] / mass[i],
+                 vy = vy0[i] + half * fy[i] / mass[i]; // slow()
     const double xa = x[i] + elapsed_ * vx, ya = y[i] + elapsed_ * vy;
     const double xb = xa + left * vx, yb = ya + left * vy;
     meets[i] = (std::max(xa, xb) >= a.x0) & (std::min(xa, xb) <= a.x1) &
-                (std::max(ya, yb) >= a.y0) & (std::min(ya, yb) <= a.y1);
+               (std::max(ya, yb) >= a.y0) & (std::min(ya, yb) <= a.y1);
   }
   for (std::size_t i = 0; i < n; ++i) {
     if (!meets_[i] || is_near_[i])

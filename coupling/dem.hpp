@@ -14,7 +14,8 @@ namespace mesopen::coupling {
 
 // The disks, struct of arrays. Within a window's exchange: positions at its end, velocities and
 // spins at its middle (the velocity-Verlet half step both solvers take); after it, both at its end,
-// with the participant's own forces there (disk-disk and wall contacts, gravity; not the FE bodies').
+// with the participant's own forces there (disk-disk and wall contacts, gravity; not the FE
+// bodies').
 struct Particles {
   std::vector<double> x, y, vx, vy, omega; // [m], [m/s], [rad/s]
   std::vector<double> radius, mass;        // [m], [kg/m]

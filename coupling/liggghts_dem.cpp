@@ -3,11 +3,11 @@
 // LIGGGHTS: the C library interface, and the classes to reach `fix external` and the torques.
 #include "atom.h"
 #include "fix_external.h"
+#include "integrate.h"
 #include "lammps.h"
 #include "library.h"
 #include "modify.h"
 #include "neighbor.h"
-#include "integrate.h"
 #include "update.h"
 
 #include <algorithm>
@@ -97,9 +97,9 @@ LiggghtsDem::LiggghtsDem(const std::string &script,
   for (const auto &[name, value] : variables) {
     if (!isName(name))
       throw std::invalid_argument("LIGGGHTS variable name '" + name + "': only a-z, 0-9 and _");
-    if (name == "data" ? !fs::is_regular_file(value) ||
-                             value.find_first_of(" \t\n\"'$#&") != std::string::npos
-                       : !isNumber(value))
+    if (name == "data"
+            ? !fs::is_regular_file(value) || value.find_first_of(" \t\n\"'$#&") != std::string::npos
+            : !isNumber(value))
       throw std::invalid_argument("LIGGGHTS variable " + name + " = '" + value + "': " +
                                   (name == "data" ? "no such file, or a path with a space or one "
                                                     "of \"'$#&"
@@ -250,7 +250,8 @@ void LiggghtsDem::endWindow(double length, double planned, const WindowMotion &m
     atom->x[i][0] += m.dx[i] - length * m.dvx[i] + shift * atom->f[i][0] / atom->rmass[i];
     atom->x[i][1] += m.dy[i] - length * m.dvy[i] + shift * atom->f[i][1] / atom->rmass[i];
   }
-  exchange_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  exchange_seconds_ +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   setStep(length);
   step(nullptr);
 }
@@ -278,15 +279,14 @@ void LiggghtsDem::gatherParticles(const Particles &local, Particles &all) const 
     ids[i] = static_cast<double>(local.id[i]);
   auto gather = [&](const std::vector<double> &mine, std::vector<double> &out) {
     out.resize(total);
-    MPI_Gatherv(mine.data(), n, MPI_DOUBLE, out.data(), counts.data(), starts.data(), MPI_DOUBLE,
-                0, comm_);
+    MPI_Gatherv(mine.data(), n, MPI_DOUBLE, out.data(), counts.data(), starts.data(), MPI_DOUBLE, 0,
+                comm_);
   };
   gather(ids, all_ids);
   Particles gathered;
-  std::vector<double> Particles::*const fields[] = {&Particles::x,  &Particles::y,
-                                                    &Particles::vx, &Particles::vy,
-                                                    &Particles::omega, &Particles::radius,
-                                                    &Particles::mass};
+  std::vector<double> Particles::*const fields[] = {
+      &Particles::x,     &Particles::y,      &Particles::vx,  &Particles::vy,
+      &Particles::omega, &Particles::radius, &Particles::mass};
   for (auto field : fields)
     gather(local.*field, gathered.*field);
   std::vector<int> order(total);

@@ -42,7 +42,8 @@ void findBoundary(const Elements &el, Body &body) {
 } // namespace
 
 Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> materials,
-                 const std::vector<int> &body_material, const std::vector<std::string> &body_names) {
+                 const std::vector<int> &body_material,
+                 const std::vector<std::string> &body_names) {
   const std::size_t n_bodies = mesh.node_offset.size() - 1;
   if (body_material.size() != n_bodies || mesh.tri_offset.size() != n_bodies + 1)
     throw std::invalid_argument("buildModel: " + std::to_string(n_bodies) + " bodies but " +
@@ -85,13 +86,15 @@ Model buildModel(const MeshView &mesh, std::vector<std::unique_ptr<Material>> ma
       const std::uint32_t *n = &el.node[3 * e];
       for (int k = 0; k < 3; ++k)
         if (n[k] < body.node_begin || n[k] >= body.node_end)
-          throw std::invalid_argument("buildModel: element " + std::to_string(e) + " of " + body.name +
-                                      " uses node " + std::to_string(n[k]) + " of another body");
+          throw std::invalid_argument("buildModel: element " + std::to_string(e) + " of " +
+                                      body.name + " uses node " + std::to_string(n[k]) +
+                                      " of another body");
       const double area = 0.5 * ((nd.x[n[1]] - nd.x[n[0]]) * (nd.y[n[2]] - nd.y[n[0]]) -
                                  (nd.x[n[2]] - nd.x[n[0]]) * (nd.y[n[1]] - nd.y[n[0]]));
       if (!(area > 0.0))
-        throw std::invalid_argument("buildModel: element " + std::to_string(e) + " of " + body.name +
-                                    " is not counter-clockwise (area " + std::to_string(area) + " m^2)");
+        throw std::invalid_argument("buildModel: element " + std::to_string(e) + " of " +
+                                    body.name + " is not counter-clockwise (area " +
+                                    std::to_string(area) + " m^2)");
       el.area0[e] = el.area[e] = area;
       el.body[e] = static_cast<std::uint32_t>(b);
       for (int k = 0; k < 3; ++k) {

@@ -22,8 +22,8 @@ inline std::vector<std::size_t> contiguousShares(const std::vector<std::size_t> 
   bounds[0] = 0;
   std::size_t before = 0; // the weight of the items before i
   for (std::size_t i = 0, t = 0; i < weights.size(); before += weights[i++]) {
-    const std::size_t owner =
-        std::min(parts - 1, (2 * before + weights[i]) * parts / (2 * std::max<std::size_t>(total, 1)));
+    const std::size_t owner = std::min(parts - 1, (2 * before + weights[i]) * parts /
+                                                      (2 * std::max<std::size_t>(total, 1)));
     while (t < owner)
       bounds[++t] = i;
   }

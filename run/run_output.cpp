@@ -50,14 +50,20 @@ const Series::Column series_columns[] = {
     {"energy/internal", "J/m", "internal energy (includes the plastic and viscous work)", {}},
     {"energy/plastic", "J/m", "plastic work", {}},
     {"energy/viscous", "J/m", "work of the artificial viscosity", {}},
-    {"energy/friction", "J/m", "energy the frictional contact forces took out (minus their work)", {}},
+    {"energy/friction",
+     "J/m",
+     "energy the frictional contact forces took out (minus their work)",
+     {}},
     {"energy/contact",
      "J/m",
      "energy the normal contact forces took out: held in the penalty springs or dissipated",
      {}},
     {"energy/external", "J/m", "work of the imposed velocities (fixed nodes) and gravity", {}},
     {"energy/eroded", "J/m", "internal energy the eroded elements took with them", {}},
-    {"energy/mass_scaling", "J/m", "kinetic energy the mass added by mass scaling took (momentum kept)", {}},
+    {"energy/mass_scaling",
+     "J/m",
+     "kinetic energy the mass added by mass scaling took (momentum kept)",
+     {}},
     {"energy/balance_error",
      "",
      "(kinetic + internal + friction + contact + eroded + mass_scaling - initial - external) / "
@@ -101,8 +107,9 @@ vtkNew<vtkDoubleArray> vtkArray(const char *name, const std::vector<double> &val
 
 // One frame as a VTK unstructured grid (binary, appended), written whole or not at all.
 // The grid's points (x, y, 0), with their velocities (vx, vy, 0) as the point array "velocity".
-void setPoints(vtkUnstructuredGrid *grid, const std::vector<double> &x, const std::vector<double> &y,
-               const std::vector<double> &vx, const std::vector<double> &vy) {
+void setPoints(vtkUnstructuredGrid *grid, const std::vector<double> &x,
+               const std::vector<double> &y, const std::vector<double> &vx,
+               const std::vector<double> &vy) {
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
   points->SetNumberOfPoints(static_cast<vtkIdType>(x.size()));
@@ -299,8 +306,8 @@ void Frames::take(const fem::Model &model, const fem::Solver &solver) {
   h5.attribute(g, "time", solver.time());
   h5.attribute(g, "step", static_cast<std::uint64_t>(solver.steps()));
   h5.attribute(g, "stress",
-                std::string("total stress sigma = S - p I [Pa]; effective_stress: "
-                            "von Mises sqrt(3/2 S:S) [Pa]; pressure compression positive"));
+               std::string("total stress sigma = S - p I [Pa]; effective_stress: "
+                           "von Mises sqrt(3/2 S:S) [Pa]; pressure compression positive"));
   for (auto [name, v] : {std::pair{"x", &nd.x}, {"y", &nd.y}, {"vx", &nd.vx}, {"vy", &nd.vy}})
     h5.write(g + "/" + name, *v);
   for (auto [name, v] : {std::pair{"sxx", &s.sxx},
@@ -314,8 +321,12 @@ void Frames::take(const fem::Model &model, const fem::Solver &solver) {
   h5.write(g + "/eroded", el.eroded);
   if (coupled_) {
     h5.createGroup(g + "/disks");
-    for (auto [name, v] : {std::pair{"x", &disks.x}, {"y", &disks.y}, {"radius", &disks.radius},
-                           {"vx", &disks.vx}, {"vy", &disks.vy}, {"omega", &disks.omega}})
+    for (auto [name, v] : {std::pair{"x", &disks.x},
+                           {"y", &disks.y},
+                           {"radius", &disks.radius},
+                           {"vx", &disks.vx},
+                           {"vy", &disks.vy},
+                           {"omega", &disks.omega}})
       h5.write(g + "/disks/" + name, *v);
     if (!vtk_dir_.empty())
       writeDisksVtu(vtk_dir_ + "/disks_" + frameName(times_.size()) + ".vtu", disks);

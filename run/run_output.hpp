@@ -1,6 +1,7 @@
 // What `mesopen run` writes: the series and frames of run.h5, the VTK frames with their ParaView
 // collection (vtk/run.pvd). Layout of run.h5 (SI units, per metre of depth):
-//   attributes of /: format = "mesopen-run", version, status ("completed", "failed" or "interrupted"), seed,
+//   attributes of /: format = "mesopen-run", version, status ("completed", "failed" or
+//   "interrupted"), seed,
 //                    velocity, spin, end_time, projectile_length (projectile.length)
 //   /series/{time, step, dt}                                   one value per sample
 //   /series/projectile/{com_x, com_y, vx, vy, rotational_momentum, lateral_force, axial_force,

@@ -32,7 +32,6 @@ std::string show(double v) {
   return s.str();
 }
 
-
 std::string allowed(const Key &k) {
   if (!k.choices.empty()) {
     std::string s;
@@ -49,8 +48,8 @@ std::string allowed(const Key &k) {
 
 [[noreturn]] void fail(const std::string &where, const Key &k, const std::string &value,
                        const std::string &why) {
-  throw InputError(where + ": " + k.table + "." + k.name + " = " + value + " " + why + "; allowed: " +
-                   allowed(k) + (k.unit.empty() ? "" : " [" + k.unit + "]"));
+  throw InputError(where + ": " + k.table + "." + k.name + " = " + value + " " + why +
+                   "; allowed: " + allowed(k) + (k.unit.empty() ? "" : " [" + k.unit + "]"));
 }
 
 double number(const Key &k, const toml::node &n, const std::string &where) {
@@ -67,8 +66,8 @@ double number(const Key &k, const toml::node &n, const std::string &where) {
 }
 
 template <class Spec>
-Key real(std::string table, std::string name, Spec Scene::*part, double Spec::*field, std::string unit,
-         double lo, bool lo_open, double hi, std::string doc) {
+Key real(std::string table, std::string name, Spec Scene::*part, double Spec::*field,
+         std::string unit, double lo, bool lo_open, double hi, std::string doc) {
   Key k{table, name, "real", unit, doc, lo, hi, lo_open, {}, nullptr, nullptr};
   k.set = [k, part, field](Scene &s, const toml::node &n, const std::string &where) {
     (s.*part).*field = number(k, n, where);
@@ -123,7 +122,8 @@ Key choice(std::string table, std::string name, Spec Scene::*part, Enum Spec::*f
 }
 
 template <class Spec>
-Key boolean(std::string table, std::string name, Spec Scene::*part, bool Spec::*field, std::string doc) {
+Key boolean(std::string table, std::string name, Spec Scene::*part, bool Spec::*field,
+            std::string doc) {
   Key k{table, name, "bool", "", doc, -HUGE_VAL, HUGE_VAL, false, {}, nullptr, nullptr};
   k.set = [k, part, field](Scene &s, const toml::node &n, const std::string &where) {
     auto b = n.as_boolean();
@@ -131,16 +131,26 @@ Key boolean(std::string table, std::string name, Spec Scene::*part, bool Spec::*
       fail(where, k, tomlText(n), "is not true or false");
     (s.*part).*field = b->get();
   };
-  k.get = [part, field](const Scene &s) { return std::string((s.*part).*field ? "true" : "false"); };
+  k.get = [part, field](const Scene &s) {
+    return std::string((s.*part).*field ? "true" : "false");
+  };
   return k;
 }
 
 // The grain diameter: one number for a uniform size, or [min, max] for sizes uniformly
 // distributed in that range.
 Key diameter() {
-  Key k{"target", "diameter", "real or [min, max]", "m",
+  Key k{"target",
+        "diameter",
+        "real or [min, max]",
+        "m",
         "grain diameter: one value (uniform size) or a range [min, max] (uniformly distributed)",
-        1e-7, 1.0, true, {}, nullptr, nullptr};
+        1e-7,
+        1.0,
+        true,
+        {},
+        nullptr,
+        nullptr};
   k.set = [k](Scene &s, const toml::node &n, const std::string &where) {
     if (auto a = n.as_array()) {
       if (a->size() != 2)
@@ -389,16 +399,19 @@ void checkTogether(const Scene &s) {
     bad("target.width and target.height must be at least 4 grain diameters (" +
         show(4 * t.diameter_max) + " m); they are " + show(t.width) + " and " + show(t.height));
   if (t.mesh_size > 0.5 * t.diameter_min)
-    bad("target.mesh_size = " + show(t.mesh_size) + " is more than half the smallest grain diameter; " +
+    bad("target.mesh_size = " + show(t.mesh_size) +
+        " is more than half the smallest grain diameter; " +
         "allowed: mesh_size <= " + show(0.5 * t.diameter_min) + " [m]");
   // What the target will hold, against what fits in this machine's memory (about 350 bytes a site
   // and 200 a triangle, measured).
-  const double grains = t.area() * (1 - t.porosity) / (M_PI * t.meanDiameter() * t.meanDiameter() / 4);
+  const double grains =
+      t.area() * (1 - t.porosity) / (M_PI * t.meanDiameter() * t.meanDiameter() / 4);
   const double void_d = t.void_ratio * t.meanDiameter();
   const double sites = grains + t.void_scale * t.area() * t.porosity / (M_PI * void_d * void_d / 4);
   if (sites > 5.0e7)
     bad("target.width x target.height, target.diameter, target.porosity, target.void_ratio and "
-        "target.void_scale give about " + show(sites) + " grain and void sites; allowed: at most 5e7");
+        "target.void_scale give about " +
+        show(sites) + " grain and void sites; allowed: at most 5e7");
   if (t.mesh != MeshKind::none) {
     const double triangles = t.area() * (1 - t.porosity) / (0.43 * t.mesh_size * t.mesh_size);
     if (triangles > 5.0e7)
@@ -424,7 +437,8 @@ void checkTogether(const Scene &s) {
     const double size = m.mesh_size > 0 ? m.mesh_size : m.height / 10;
     if (size > m.height || size > m.length)
       bad("modal.mesh_size = " + show(size) + " is larger than the beam (" + show(m.length) +
-          " x " + show(m.height) + " m); allowed: mesh_size <= " + show(std::min(m.length, m.height)));
+          " x " + show(m.height) +
+          " m); allowed: mesh_size <= " + show(std::min(m.length, m.height)));
     if (m.length * m.height / (0.43 * size * size) > 5.0e6)
       bad("modal.mesh_size = " + show(size) + " gives about " +
           show(m.length * m.height / (0.43 * size * size)) +
@@ -660,7 +674,8 @@ std::string sceneKeysMarkdown() {
     out << "| " << p.name << " | " << p.type << " | " << values << " | " << p.doc << " |\n";
   }
   for (const auto &t : fem::materialTypes()) {
-    out << "\n### type \"" << t.name << "\"\n\n" << t.doc << "\n\n"
+    out << "\n### type \"" << t.name << "\"\n\n"
+        << t.doc << "\n\n"
         << "| parameter | type | default | allowed | unit | meaning |\n|---|---|---|---|---|---|\n";
     for (const auto &p : t.parameters)
       out << "| " << p.name << " | " << (p.boolean ? "bool" : "real") << " | "

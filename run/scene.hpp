@@ -29,18 +29,18 @@ inline constexpr Named<Representation> representation_names[] = {
 // What `mesopen run` does with the target and the projectile (table [run]).
 struct RunSpec {
   Representation representation = Representation::fe;
-  double band_half_width = 0.0;   // hybrid: meshed grains' centres within this of the axis [m];
-                                  // 0: one and a half projectile diameters
-  double band_depth = 0.0;        // hybrid: and no deeper than this below the tip at the start
-                                  // [m]; 0: the end depth plus band_half_width
-  double end_time = 1e-6;         // simulated time [s]
-  double velocity = 1000.0;       // projectile's initial speed, downward [m/s]
-  double spin = 0.0;              // projectile's initial spin about its centre of mass [rad/s]
+  double band_half_width = 0.0; // hybrid: meshed grains' centres within this of the axis [m];
+                                // 0: one and a half projectile diameters
+  double band_depth = 0.0;      // hybrid: and no deeper than this below the tip at the start
+                                // [m]; 0: the end depth plus band_half_width
+  double end_time = 1e-6;       // simulated time [s]
+  double velocity = 1000.0;     // projectile's initial speed, downward [m/s]
+  double spin = 0.0;            // projectile's initial spin about its centre of mass [rad/s]
   double obliquity = 0.0; // the velocity's angle to the target's normal (straight down), CCW [deg]
   double yaw = 0.0;       // the axis's angle to the velocity (angle of attack), CCW [deg]
   double offset = 0.0;    // the tip's lateral position from the box's middle [m]
-  bool grains = true;             // false: the projectile alone, in free flight
-  bool fix_edges = true;          // grain nodes on the box's left, right and bottom edges fixed
+  bool grains = true;     // false: the projectile alone, in free flight
+  bool fix_edges = true;  // grain nodes on the box's left, right and bottom edges fixed
   bool smooth_walls = false;      // frictionless walls: edge nodes held normal to their edge only
   bool constant_velocity = false; // the projectile's velocity held at (0, -velocity)
   // The solver's keys, with the solver's defaults (fem::SolverSettings owns them).

@@ -102,7 +102,8 @@ Target generateTarget(const TargetSpec &spec, GeneratorReport &report,
       return;
     const double elapsed = since(t0);
     char line[160];
-    std::snprintf(line, sizeof line, "placing %zu sites: iteration %d/%d, overlap %.1e of start, ETA %.0f s",
+    std::snprintf(line, sizeof line,
+                  "placing %zu sites: iteration %d/%d, overlap %.1e of start, ETA %.0f s",
                   t.sites.size(), it, most, energy, elapsed / it * (most - it));
     progress(line);
   });

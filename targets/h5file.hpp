@@ -16,9 +16,9 @@ namespace mesopen {
 
 // Element types stored: float64, int32, int64, uint8, uint32, uint64 (little-endian in the file).
 template <class T>
-concept H5Number =
-    std::same_as<T, double> || std::same_as<T, int> || std::same_as<T, std::int64_t> ||
-    std::same_as<T, std::uint8_t> || std::same_as<T, std::uint32_t> || std::same_as<T, std::uint64_t>;
+concept H5Number = std::same_as<T, double> || std::same_as<T, int> ||
+    std::same_as<T, std::int64_t> || std::same_as<T, std::uint8_t> ||
+    std::same_as<T, std::uint32_t> || std::same_as<T, std::uint64_t>;
 
 class H5File {
 public:

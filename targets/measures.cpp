@@ -76,8 +76,10 @@ TargetMeasures measureTarget(const Polygons &grains, const TargetSpec &spec) {
     const std::size_t k = grains.corners(g);
     const auto [x0, x1] = std::minmax_element(x, x + k);
     const auto [y0, y1] = std::minmax_element(y, y + k);
-    const int i0 = std::clamp(static_cast<int>(*x0 / wx), 0, nx - 1), i1 = std::clamp(static_cast<int>(*x1 / wx), 0, nx - 1);
-    const int j0 = std::clamp(static_cast<int>(*y0 / wy), 0, ny - 1), j1 = std::clamp(static_cast<int>(*y1 / wy), 0, ny - 1);
+    const int i0 = std::clamp(static_cast<int>(*x0 / wx), 0, nx - 1),
+              i1 = std::clamp(static_cast<int>(*x1 / wx), 0, nx - 1);
+    const int j0 = std::clamp(static_cast<int>(*y0 / wy), 0, ny - 1),
+              j1 = std::clamp(static_cast<int>(*y1 / wy), 0, ny - 1);
     for (int j = j0; j <= j1; ++j)
       for (int i = i0; i <= i1; ++i)
         solid[static_cast<std::size_t>(j) * nx + i] +=

@@ -9,9 +9,9 @@ namespace mesopen {
 
 struct TargetMeasures {
   std::size_t grains = 0;
-  double porosity = 0.0;          // (A_T - A_G) / A_T, Eq. 4.5
-  double mean_diameter = 0.0;     // of D = sqrt(4A/pi) [m]
-  double std_diameter = 0.0;      // sample standard deviation of D [m]
+  double porosity = 0.0;      // (A_T - A_G) / A_T, Eq. 4.5
+  double mean_diameter = 0.0; // of D = sqrt(4A/pi) [m]
+  double std_diameter = 0.0;  // sample standard deviation of D [m]
   double min_diameter = 0.0, max_diameter = 0.0;
   // Clustering: the standard deviation of the porosity of square windows of edge
   // `window` (4 mean diameters) tiling the box. Regular targets give a small spread,

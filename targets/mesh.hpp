@@ -23,11 +23,11 @@ int edgePieces(double length, double edge);
 TriangleMesh fanMesh(const double *x, const double *y, std::size_t n);
 
 // Quality mesh of a simple polygon (counter-clockwise): boundary edges are first split evenly
-// into pieces no longer than `edge` (refinement may split them further where needed), then interior points are added until every triangle has
-// edges about `edge` long or shorter and no angle below `min_angle_deg`. Refinement is proven to
-// end for bounds up to 20.7 degrees (Shewchuk; CGAL Mesh_2 handles small input angles by
-// clusters); the scene allows no more, since a grain corner sharper than a larger bound makes it
-// refine forever.
+// into pieces no longer than `edge` (refinement may split them further where needed), then interior
+// points are added until every triangle has edges about `edge` long or shorter and no angle below
+// `min_angle_deg`. Refinement is proven to end for bounds up to 20.7 degrees (Shewchuk; CGAL Mesh_2
+// handles small input angles by clusters); the scene allows no more, since a grain corner sharper
+// than a larger bound makes it refine forever.
 TriangleMesh qualityMesh(const double *x, const double *y, std::size_t n, double edge,
                          double min_angle_deg);
 

@@ -37,8 +37,8 @@ bool isConvex(const double *x, const double *y, std::size_t n, double tolerance)
   return true;
 }
 
-double clippedArea(const double *x, const double *y, std::size_t n, double x0, double y0,
-                   double x1, double y1) {
+double clippedArea(const double *x, const double *y, std::size_t n, double x0, double y0, double x1,
+                   double y1) {
   std::vector<Point> poly(n), next;
   for (std::size_t i = 0; i < n; ++i)
     poly[i] = {x[i], y[i]};

@@ -26,7 +26,7 @@ bool isConvex(const double *x, const double *y, std::size_t n, double tolerance 
 inline double equivalentDiameter(double area) { return std::sqrt(4.0 * area / M_PI); }
 
 // Area of the part of a convex polygon inside the axis-aligned rectangle (Sutherland-Hodgman).
-double clippedArea(const double *x, const double *y, std::size_t n, double x0, double y0,
-                   double x1, double y1);
+double clippedArea(const double *x, const double *y, std::size_t n, double x0, double y0, double x1,
+                   double y1);
 
 } // namespace mesopen

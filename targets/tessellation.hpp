@@ -27,12 +27,12 @@ namespace mesopen {
 constexpr double max_dent_turn = 0.3;
 
 struct TessellationReport {
-  std::size_t merged_grains = 0;       // grain pairs merged because their cells overlapped
-  std::size_t removed_voids = 0;       // void sites removed (overlap or concavity)
-  std::size_t restored_points = 0;     // VPs put back at their Voronoi position
-  std::size_t lost_grains = 0;         // power: grains with an empty cell
-  std::size_t merged_vertices = 0;     // short edges collapsed
-  std::size_t kept_short_edges = 0;    // short edges left because collapsing would dent a grain
+  std::size_t merged_grains = 0;    // grain pairs merged because their cells overlapped
+  std::size_t removed_voids = 0;    // void sites removed (overlap or concavity)
+  std::size_t restored_points = 0;  // VPs put back at their Voronoi position
+  std::size_t lost_grains = 0;      // power: grains with an empty cell
+  std::size_t merged_vertices = 0;  // short edges collapsed
+  std::size_t kept_short_edges = 0; // short edges left because collapsing would dent a grain
   int passes = 0;
   double delaunay_seconds = 0.0;
 };

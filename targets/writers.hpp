@@ -22,7 +22,8 @@ namespace mesopen {
 //   /mesh/{node_offset, tri_offset (uint64), x, y, tri (uint32, triangles x 3)}  when meshed
 //   /projectile/{outline_x, outline_y, x, y, tri} with attributes diameter, length, crh,
 //                nose_length, tip_cut, offset_x, offset_y                       when enabled
-void writeTargetH5(const std::string &path, const Target &target, const PlacedProjectile *projectile);
+void writeTargetH5(const std::string &path, const Target &target,
+                   const PlacedProjectile *projectile);
 
 // LIGGGHTS data file for atom_style granular in 2D: `disks` (as targetDisks makes them: at the
 // centroids, of the grains' masses per metre rho A, touching but not overlapping each other, the
@@ -31,7 +32,8 @@ void writeLiggghtsData(const std::string &path, const Target &target, const Disk
 
 // ParaView: grain polygons (or their triangles when meshed) and the projectile, with cell data
 // body (0 projectile, 1.. grains), grain diameter.
-void writeTargetVtu(const std::string &path, const Target &target, const PlacedProjectile *projectile);
+void writeTargetVtu(const std::string &path, const Target &target,
+                    const PlacedProjectile *projectile);
 
 // YADE sphere list: one line "x y z r density" per disk (z = 0), the disks of the LIGGGHTS file,
 // so that no two overlap; yade.ymport.text reads the first four columns.

@@ -22,9 +22,9 @@ struct RunSeries {
   std::vector<double> axial_force;         // F_y on the projectile [N/m]
   // The energy terms of /series/energy by name ([J/m]; balance_error relative), in file order.
   std::vector<std::pair<std::string, std::vector<double>>> energy;
-  double length = 0.0;                     // the projectile's initial length [m]
-  double mass = 0.0;                       // [kg/m]; 0 when the file does not say
-  double velocity = 0.0;                   // initial speed [m/s]
+  double length = 0.0;   // the projectile's initial length [m]
+  double mass = 0.0;     // [kg/m]; 0 when the file does not say
+  double velocity = 0.0; // initial speed [m/s]
 };
 
 // Reads /series and /mesh of run.h5: the projectile's length is the root attribute

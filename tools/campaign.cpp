@@ -16,8 +16,8 @@ namespace {
 // What a [[run]] entry holds besides scene tables.
 const std::set<std::string> run_fields = {"name", "label", "scene", "reference"};
 const std::set<std::string> trend_fields = {"name", "measure", "expect", "runs", "x", "tolerance"};
-const std::set<std::string> campaign_fields = {"name",        "base",   "representation",
-                                               "replicates",  "seed_stride", "frames"};
+const std::set<std::string> campaign_fields = {"name",       "base",        "representation",
+                                               "replicates", "seed_stride", "frames"};
 
 // Sets every key of `over` into `into`, table by table.
 void merge(toml::table &into, const toml::table &over) {
@@ -62,7 +62,8 @@ Campaign readCampaign(const std::string &path) {
   };
   for (const auto &[key, node] : root)
     if (key != "campaign" && key != "run" && key != "trend")
-      throw bad("unknown table [" + std::string(key.str()) + "]; known: [campaign], [[run]], [[trend]]");
+      throw bad("unknown table [" + std::string(key.str()) +
+                "]; known: [campaign], [[run]], [[trend]]");
   const fs::path dir = fs::path(path).parent_path();
   auto file = [&](const std::string &name) { return (dir / name).lexically_normal().string(); };
 
@@ -80,26 +81,30 @@ Campaign readCampaign(const std::string &path) {
     if (const toml::node *r = t->get("representation")) {
       c.representation = valueOf(r->value_or(std::string()), representation_names);
       if (!c.representation)
-        throw bad("campaign.representation = " + tomlText(*r) + " is not known; allowed: one of "
+        throw bad("campaign.representation = " + tomlText(*r) +
+                  " is not known; allowed: one of "
                   "\"fe\", \"dem\", \"hybrid\"");
     }
     if (const toml::node *r = t->get("replicates")) {
       const auto n = r->value<std::int64_t>();
       if (!n || *n < 1 || *n > 1000)
-        throw bad("campaign.replicates = " + tomlText(*r) + " is out of range; allowed: an integer, "
+        throw bad("campaign.replicates = " + tomlText(*r) +
+                  " is out of range; allowed: an integer, "
                   "1 <= replicates <= 1000");
       c.replicates = static_cast<int>(*n);
     }
     if (const toml::node *r = t->get("seed_stride")) {
       const auto n = r->value<std::int64_t>();
       if (!n || *n < 1 || *n > 1000000000)
-        throw bad("campaign.seed_stride = " + tomlText(*r) + " is out of range; allowed: an integer, "
+        throw bad("campaign.seed_stride = " + tomlText(*r) +
+                  " is out of range; allowed: an integer, "
                   "1 <= seed_stride <= 1e9");
       c.seed_stride = *n;
     }
     if (const toml::node *f = t->get("frames")) {
       if (!f->is_boolean())
-        throw bad("campaign.frames = " + tomlText(*f) + " is not a boolean; allowed: true or false");
+        throw bad("campaign.frames = " + tomlText(*f) +
+                  " is not a boolean; allowed: true or false");
       c.frames = f->value_or(false);
     }
   }
@@ -116,9 +121,12 @@ Campaign readCampaign(const std::string &path) {
     CampaignRun r;
     const auto name = (*t)["name"].value<std::string>();
     if (!name || name->empty() ||
-        !std::all_of(name->begin(), name->end(), [](char ch) {
-          return std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '_' || ch == '.';
-        }) || (*name)[0] == '.')
+        !std::all_of(name->begin(), name->end(),
+                     [](char ch) {
+                       return std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' ||
+                              ch == '_' || ch == '.';
+                     }) ||
+        (*name)[0] == '.')
       throw bad(where + ": name = " + ((*t)["name"] ? tomlText(*t->get("name")) : "(none)") +
                 " is not allowed; allowed: a name of letters, digits, '-', '_' and '.' (it names "
                 "the run's directory)");
@@ -126,17 +134,20 @@ Campaign readCampaign(const std::string &path) {
     if (!names.insert(r.name).second)
       throw bad("two runs are named \"" + r.name + "\"");
     r.label = string(*t, "label", "run \"" + r.name + "\": ", "");
-    if (const std::string scene = string(*t, "scene", "run \"" + r.name + "\": ", ""); !scene.empty())
+    if (const std::string scene = string(*t, "scene", "run \"" + r.name + "\": ", "");
+        !scene.empty())
       r.scene = file(scene);
     else if (!base.empty())
       r.scene = base;
     else
-      throw bad("run \"" + r.name + "\" has no scene, and the campaign no base; allowed: "
+      throw bad("run \"" + r.name +
+                "\" has no scene, and the campaign no base; allowed: "
                 "scene = \"FILE\" in the run or base = \"FILE\" in [campaign]");
     if (!fs::is_regular_file(r.scene))
       throw bad("run \"" + r.name + "\": scene " + r.scene + " not found");
     if (t->get("reference") && !(*t)["reference"].is_table())
-      throw bad("run \"" + r.name + "\": reference must be a table, e.g. reference = "
+      throw bad("run \"" + r.name +
+                "\": reference must be a table, e.g. reference = "
                 "{ average_lateral_force = 2950 }");
     if (const toml::table *ref = (*t)["reference"].as_table())
       for (const auto &[key, node] : *ref) {
@@ -174,7 +185,8 @@ Campaign readCampaign(const std::string &path) {
       const auto expect = (*t)["expect"].value<std::string>();
       const auto kind = valueOf(expect.value_or(""), trend_kind_names);
       if (!kind)
-        throw bad(where + ": expect = " + (t->get("expect") ? tomlText(*t->get("expect")) : "(none)") +
+        throw bad(where +
+                  ": expect = " + (t->get("expect") ? tomlText(*t->get("expect")) : "(none)") +
                   " is not known; allowed: one of \"rises\", \"falls\", \"differs\", \"similar\"");
       tr.expect = *kind;
       if (const toml::array *rs = (*t)["runs"].as_array())
@@ -199,8 +211,10 @@ Campaign readCampaign(const std::string &path) {
             tr.x.push_back(*v);
         if (tr.x.size() != xs->size() || tr.x.size() != tr.runs.size() ||
             tr.expect == TrendKind::differs || tr.expect == TrendKind::similar ||
-            std::adjacent_find(tr.x.begin(), tr.x.end(), std::greater_equal<double>()) != tr.x.end())
-          throw bad(where + ": x must give one number per run, increasing, for rises or falls only");
+            std::adjacent_find(tr.x.begin(), tr.x.end(), std::greater_equal<double>()) !=
+                tr.x.end())
+          throw bad(where +
+                    ": x must give one number per run, increasing, for rises or falls only");
       } else {
         for (std::size_t k = 0; k < tr.runs.size(); ++k)
           tr.x.push_back(static_cast<double>(k + 1));
@@ -208,13 +222,14 @@ Campaign readCampaign(const std::string &path) {
       if (const toml::node *tol = t->get("tolerance")) {
         const auto v = tol->value<double>();
         if (!v || !(*v > 0.0) || *v > 100.0 || tr.expect != TrendKind::similar)
-          throw bad(where + ": tolerance = " + tomlText(*tol) + " is not allowed; allowed: a number, "
+          throw bad(where + ": tolerance = " + tomlText(*tol) +
+                    " is not allowed; allowed: a number, "
                     "0 < tolerance <= 100, for expect = \"similar\" only");
         tr.tolerance = *v;
       }
       if (tr.expect == TrendKind::similar && std::isnan(tr.tolerance))
         throw bad(where + ": expect = \"similar\" needs tolerance (the largest difference that "
-                  "counts as alike, a fraction of the runs' mean, e.g. 0.5)");
+                          "counts as alike, a fraction of the runs' mean, e.g. 0.5)");
       c.trends.push_back(std::move(tr));
     }
   }
@@ -223,7 +238,8 @@ Campaign readCampaign(const std::string &path) {
   for (const CampaignRun &r : c.runs) {
     std::istringstream in(composeScene(c, r, 0));
     try {
-      readScene(toml::parse(in, r.scene), path + ", run \"" + r.name + "\" (scene " + r.scene + ")");
+      readScene(toml::parse(in, r.scene),
+                path + ", run \"" + r.name + "\" (scene " + r.scene + ")");
     } catch (const toml::parse_error &e) {
       throw bad("run \"" + r.name + "\": " + std::string(e.description()));
     }
@@ -241,12 +257,13 @@ std::string composeScene(const Campaign &campaign, const CampaignRun &run, int r
   };
   // (a seed that is no integer is left for readScene to report)
   if (!table("target").get("seed") || table("target")["seed"].is_integer()) {
-    const auto seed = table("target")["seed"].value_or(static_cast<std::int64_t>(TargetSpec{}.seed));
+    const auto seed =
+        table("target")["seed"].value_or(static_cast<std::int64_t>(TargetSpec{}.seed));
     table("target").insert_or_assign("seed", seed + replicate * campaign.seed_stride);
   }
   if (campaign.representation)
-    table("run").insert_or_assign("representation",
-                                  std::string(nameOf(*campaign.representation, representation_names)));
+    table("run").insert_or_assign(
+        "representation", std::string(nameOf(*campaign.representation, representation_names)));
   if (!campaign.frames)
     table("run").insert_or_assign("frame_interval", 0.0);
   std::ostringstream out;
@@ -268,7 +285,8 @@ double studentT95(int dof) {
   if (dof <= 30)
     return table[dof - 1];
   const double z = 1.959964, n = dof;
-  return z + (z * z * z + z) / (4 * n) + (5 * std::pow(z, 5) + 16 * z * z * z + 3 * z) / (96 * n * n) +
+  return z + (z * z * z + z) / (4 * n) +
+         (5 * std::pow(z, 5) + 16 * z * z * z + 3 * z) / (96 * n * n) +
          (3 * std::pow(z, 7) + 19 * std::pow(z, 5) + 17 * z * z * z - 15 * z) / (384 * n * n * n);
 }
 
@@ -353,7 +371,7 @@ TrendResult testTrend(const Trend &trend, const std::vector<std::vector<double>>
   }
   case TrendKind::differs:
     std::tie(r.effect, r.half_width) = pair(0, 1, 0.0, 1.0);
-    r.verdict = !replicated || std::isnan(r.half_width)        ? "not tested"
+    r.verdict = !replicated || std::isnan(r.half_width)   ? "not tested"
                 : std::abs(r.effect) - r.half_width > 0.0 ? "confirmed"
                                                           : "not confirmed";
     break;

@@ -89,9 +89,9 @@ Estimate estimate(const std::vector<double> &values);
 //   differs: the same slope between two runs (x = 0, 1: the difference of means, pooled variance):
 //     confirmed if the interval excludes 0;
 //   similar: an equivalence test over every pair of runs (intersection-union, two one-sided tests
-//     at 2.5 % each): confirmed if every pair's 95 % interval lies within +-tolerance times the mean
-//     of |m| over the runs; reversed if some pair's interval lies wholly beyond it (the runs differ);
-//     else not confirmed (too few replicates to tell).
+//     at 2.5 % each): confirmed if every pair's 95 % interval lies within +-tolerance times the
+//     mean of |m| over the runs; reversed if some pair's interval lies wholly beyond it (the runs
+//     differ); else not confirmed (too few replicates to tell).
 // Not tested with fewer than two replicates in some run. `effect` is the slope (per unit of x),
 // the difference, or the pair's difference that decided (similar: the farthest interval end), with
 // its interval's half-width.

@@ -20,10 +20,14 @@ const std::vector<MaterialType> &materialTypes() {
 const std::vector<MaterialPreset> &materialPresets() {
   static const std::vector<MaterialPreset> presets{
       {"steel", "von-mises", "projectile steel, thesis Table 3.2, elastic-plastic", {}},
-      {"steel-elastic", "von-mises", "projectile steel, thesis Table 3.2, plasticity off",
+      {"steel-elastic",
+       "von-mises",
+       "projectile steel, thesis Table 3.2, plasticity off",
        {{"plastic", 0.0}}},
       {"quartz", "quartz", "quartz grains, thesis Table 3.3, with the overstress strength", {}},
-      {"quartz-elastic", "quartz", "quartz grains, thesis Table 3.3, strength off",
+      {"quartz-elastic",
+       "quartz",
+       "quartz grains, thesis Table 3.3, strength off",
        {{"strength", 0.0}}},
   };
   return presets;
@@ -62,8 +66,8 @@ Parameters completeParameters(const MaterialType &type, const MaterialPreset *pr
         throw std::invalid_argument(msg.str());
       }
       if (!(value >= info->lo && value <= info->hi)) {
-        msg << "material parameter " << name << " = " << value << " is out of range; allowed: "
-            << info->lo << " <= " << name << " <= " << info->hi
+        msg << "material parameter " << name << " = " << value
+            << " is out of range; allowed: " << info->lo << " <= " << name << " <= " << info->hi
             << (info->unit.empty() ? "" : " [" + info->unit + "]");
         throw std::invalid_argument(msg.str());
       }
@@ -76,7 +80,8 @@ Parameters completeParameters(const MaterialType &type, const MaterialPreset *pr
   return values;
 }
 
-std::unique_ptr<Material> makeMaterial(const std::string &type_or_preset, const Parameters &overrides) {
+std::unique_ptr<Material> makeMaterial(const std::string &type_or_preset,
+                                       const Parameters &overrides) {
   const MaterialPreset *preset = findMaterialPreset(type_or_preset);
   const MaterialType *type = findMaterialType(preset ? preset->type : type_or_preset);
   if (!type)

@@ -20,9 +20,11 @@ namespace {
 class VonMises final : public Material {
 public:
   explicit VonMises(const Parameters &p)
-      : rho0_(p.at("density")), G_(p.at("shear_modulus")),
-        eos_{p.at("bulk_modulus"), p.at("k1"), p.at("k2"), p.at("gruneisen"), p.at("pressure_cutoff")},
-        Y0_(p.at("yield_stress")), M_(p.at("hardening_modulus")), plastic_(p.at("plastic") != 0.0) {}
+      : rho0_(p.at("density")),
+        G_(p.at("shear_modulus")), eos_{p.at("bulk_modulus"), p.at("k1"), p.at("k2"),
+                                        p.at("gruneisen"), p.at("pressure_cutoff")},
+        Y0_(p.at("yield_stress")), M_(p.at("hardening_modulus")), plastic_(p.at("plastic") != 0.0) {
+  }
   double density() const override { return rho0_; }
   bool plastic() const override { return plastic_; }
   bool usesDeformationGradient() const override { return !plastic_; }
@@ -93,8 +95,8 @@ private:
       sxx_[i] = sxx, syy_[i] = syy, sxy_[i] = sxy;
       // Pressure and energy together (the pressure depends on the new energy).
       const double w_dev = 0.5 * (power_old + power_new) * vmid[i] * dt;
-      energyEquation(eos_.energyFree(mu, eos_.cold(mu)), eos_.gamma / vol0[i], p_min, dvol[i], w_dev,
-                     energy[i], pressure[i]);
+      energyEquation(eos_.energyFree(mu, eos_.cold(mu)), eos_.gamma / vol0[i], p_min, dvol[i],
+                     w_dev, energy[i], pressure[i]);
       const double bulk = eos_.bulkModulus(mu, pressure[i]);
       cs[i] = std::sqrt((bulk + 4.0 / 3.0 * G_) * jac[i] / rho0_);
       shear_share[i] = G_ / (bulk + 4.0 / 3.0 * G_);

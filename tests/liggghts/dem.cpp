@@ -1,9 +1,9 @@
 // The LIGGGHTS participant: forces put in exactly, and a disk hitting an FE block through LIGGGHTS
 // as through the fake participant (both take the same velocity-Verlet steps).
+#include "coupled.hpp"
 #include "coupling.hpp"
 #include "fake_dem.hpp"
 #include "liggghts_dem.hpp"
-#include "coupled.hpp"
 #include "meshes.hpp"
 #include "solver.hpp"
 

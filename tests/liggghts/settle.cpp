@@ -58,7 +58,8 @@ TEST(Liggghts, DemTargetSettlesInItsBox) {
   };
   const auto [y0, mass] = height();
   const double dt = dem.stableStep();
-  EXPECT_NEAR(dt, 0.1 * M_PI * std::sqrt(*std::min_element(p.mass.begin(), p.mass.end()) / kn), 1e-20);
+  EXPECT_NEAR(dt, 0.1 * M_PI * std::sqrt(*std::min_element(p.mass.begin(), p.mass.end()) / kn),
+              1e-20);
   for (double t = 0.0; t < 1e-4; t += dt)
     dem.advance(dt, [](const coupling::Particles &, coupling::ParticleForces &) {});
   double worst = 0.0;
@@ -67,9 +68,10 @@ TEST(Liggghts, DemTargetSettlesInItsBox) {
                       (p.x[i] + p.radius[i] - spec.width) / p.radius[i],
                       (p.radius[i] - p.y[i]) / p.radius[i]});
   const double drop = y0 - height().first;
-  std::printf("%zu disks settled: centre of mass %.2f um lower, kinetic energy %.2e of the potential "
-              "energy lost, deepest beyond a wall %.4f radius\n",
-              p.size(), 1e6 * drop, p.kineticEnergy() / (mass * g * drop), worst);
+  std::printf(
+      "%zu disks settled: centre of mass %.2f um lower, kinetic energy %.2e of the potential "
+      "energy lost, deepest beyond a wall %.4f radius\n",
+      p.size(), 1e6 * drop, p.kineticEnergy() / (mass * g * drop), worst);
   EXPECT_LT(worst, 0.01);
   EXPECT_GT(drop, 0.0);
   EXPECT_LT(p.kineticEnergy(), 1e-3 * mass * g * drop);

@@ -96,7 +96,8 @@ TEST(Mpi, OneTwoAndFourRanksAgree) {
 // largest value). And the same with mass scaling at 0.5 of the first step (the mass the elements
 // ask for is gathered, and both ranks add the same).
 TEST(Mpi, TwoRanksShareTheElementWork) {
-  for (const std::string extra : {"", "erode_step_ratio = 0.4\n", "mass_scaling_step_ratio = 0.5\n"}) {
+  for (const std::string extra :
+       {"", "erode_step_ratio = 0.4\n", "mass_scaling_step_ratio = 0.5\n"}) {
     const bool eroding = extra.starts_with("erode"), scaling = extra.starts_with("mass");
     ScratchDir dir(eroding ? "mpi-fe-eroding" : scaling ? "mpi-fe-mass-scaling" : "mpi-fe");
     const char *label = eroding ? ", eroding" : scaling ? ", mass scaling" : "";
@@ -147,7 +148,8 @@ TEST(Mpi, TwoRanksShareTheElementWork) {
       for (std::size_t i = 0; i < a.size(); ++i)
         diff = std::max(diff, std::abs(a[i] - b[i])), scale = std::max(scale, std::abs(a[i]));
       std::printf("2 ranks sharing the elements%s: frame 3's %s differs by %.2e of its largest "
-                  "value\n", label, field, diff / scale);
+                  "value\n",
+                  label, field, diff / scale);
       EXPECT_LE(diff, 1e-14 * scale) << field;
     }
   }

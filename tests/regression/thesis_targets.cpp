@@ -19,10 +19,12 @@ struct Thesis {
 
 void PrintTo(const Thesis &t, std::ostream *os) { *os << t.scene; }
 
-nlohmann::json makeTarget(const ScratchDir &dir, const std::string &scene, const std::string &extra = "") {
+nlohmann::json makeTarget(const ScratchDir &dir, const std::string &scene,
+                          const std::string &extra = "") {
   const std::string out = dir / "out";
-  const auto r = mesopen::test::runMesopen("target " + std::string(MESOPEN_SOURCE_DIR) + "/examples/targets/" +
-                                           scene + " -o " + out + " --no-plot " + extra);
+  const auto r =
+      mesopen::test::runMesopen("target " + std::string(MESOPEN_SOURCE_DIR) + "/examples/targets/" +
+                                scene + " -o " + out + " --no-plot " + extra);
   EXPECT_EQ(r.code, 0) << r.output;
   std::ifstream in(out + "/target.json");
   return nlohmann::json::parse(in);
@@ -42,22 +44,24 @@ TEST_P(ThesisTarget, MatchesSection424) {
   EXPECT_NEAR(j["porosity"].get<double>(), 0.30, 0.005);
   EXPECT_NEAR(1e6 * j["mean_diameter"].get<double>(), t.mean_um, 1.0);
   EXPECT_NEAR(1e6 * j["std_diameter"].get<double>(), t.std_um, t.std_tolerance_um);
-  for (const char *file : {"target.h5", "target.data", "target.vtu", "target.spheres", "summary.json"})
+  for (const char *file :
+       {"target.h5", "target.data", "target.vtu", "target.spheres", "summary.json"})
     EXPECT_TRUE(std::filesystem::exists(dir / (std::string("out/") + file))) << file;
 }
 
-INSTANTIATE_TEST_SUITE_P(Section424, ThesisTarget,
-                         ::testing::Values(Thesis{"thesis-60um-uniform.toml", 0.3032, 59.87, 1.73, 0.5},
-                                           Thesis{"thesis-45-75um-clustered.toml", 0.2984, 60.07, 8.7, 1.0},
-                                           Thesis{"thesis-45-75um-regular.toml", 0.295, 60.19, 8.6, 1.0}),
-                         [](const auto &info) {
-                           std::string name = info.param.scene;
-                           name = name.substr(0, name.find('.'));
-                           for (char &c : name)
-                             if (!std::isalnum(static_cast<unsigned char>(c)))
-                               c = '_';
-                           return name;
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Section424, ThesisTarget,
+    ::testing::Values(Thesis{"thesis-60um-uniform.toml", 0.3032, 59.87, 1.73, 0.5},
+                      Thesis{"thesis-45-75um-clustered.toml", 0.2984, 60.07, 8.7, 1.0},
+                      Thesis{"thesis-45-75um-regular.toml", 0.295, 60.19, 8.6, 1.0}),
+    [](const auto &info) {
+      std::string name = info.param.scene;
+      name = name.substr(0, name.find('.'));
+      for (char &c : name)
+        if (!std::isalnum(static_cast<unsigned char>(c)))
+          c = '_';
+      return name;
+    });
 
 // The same scene and seed give the same target byte for byte, whatever the thread count.
 TEST(Determinism, SameSceneSameBytes) {
@@ -72,7 +76,8 @@ TEST(Determinism, SameSceneSameBytes) {
   // A different seed is a different target.
   ScratchDir c("det-c");
   makeTarget(c, "baseline.toml", "--seed 2");
-  EXPECT_FALSE(mesopen::test::readFile(a / "out/target.data") == mesopen::test::readFile(c / "out/target.data"));
+  EXPECT_FALSE(mesopen::test::readFile(a / "out/target.data") ==
+               mesopen::test::readFile(c / "out/target.data"));
 }
 
 // The baseline target of the runs: about 6,200 grains and 400,000 triangles at 10 um, the

@@ -44,7 +44,8 @@ struct TestMesh {
                    std::vector<int> body_material = {}) const {
     if (body_material.empty())
       body_material.assign(node_offset.size() - 1, 0);
-    return fem::buildModel({node_offset, tri_offset, x, y, tri}, std::move(materials), body_material, {});
+    return fem::buildModel({node_offset, tri_offset, x, y, tri}, std::move(materials),
+                           body_material, {});
   }
 };
 

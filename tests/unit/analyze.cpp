@@ -78,8 +78,9 @@ TEST(Analyze, SpectrumFlagsAPeakAtTheBandEdge) {
     const Spectrum spectrum = dominantPeriod(x, y);
     EXPECT_GT(spectrum.period, 0.0);
     EXPECT_EQ(spectrum.at_band_edge, period > 0.4) << period;
-    if (!spectrum.at_band_edge)
+    if (!spectrum.at_band_edge) {
       EXPECT_NEAR(spectrum.period, period, 0.01 * period);
+    }
   }
 }
 

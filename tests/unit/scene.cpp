@@ -1,7 +1,7 @@
 // Scenes are strict: every bad input stops with a message that names the file, the key, the
 // value and what is allowed, and the program exits with code 2.
-#include "run.hpp"
 #include "scene.hpp"
+#include "run.hpp"
 
 #include <gtest/gtest.h>
 
@@ -52,7 +52,8 @@ TEST(Scene, UnknownKeyNamesFileKeyAndKnownKeys) {
 
 TEST(Scene, UnknownTableIsRejected) {
   ScratchDir dir("scene-table");
-  EXPECT_NE(errorOf(dir, "[targets]\nwidth = 1e-3\n").find("unknown table [targets]"), std::string::npos);
+  EXPECT_NE(errorOf(dir, "[targets]\nwidth = 1e-3\n").find("unknown table [targets]"),
+            std::string::npos);
 }
 
 TEST(Scene, OutOfRangeNamesValueAndRange) {
@@ -65,19 +66,26 @@ TEST(Scene, OutOfRangeNamesValueAndRange) {
 
 TEST(Scene, WrongTypesAreRejected) {
   ScratchDir dir("scene-type");
-  EXPECT_NE(errorOf(dir, "[target]\nseed = \"one\"\n").find("is not an integer"), std::string::npos);
-  EXPECT_NE(errorOf(dir, "[target]\nwidth = \"wide\"\n").find("is not a number"), std::string::npos);
-  EXPECT_NE(errorOf(dir, "[target]\nplacement = \"random\"\n").find("one of \"regular\", \"clustered\""),
+  EXPECT_NE(errorOf(dir, "[target]\nseed = \"one\"\n").find("is not an integer"),
             std::string::npos);
+  EXPECT_NE(errorOf(dir, "[target]\nwidth = \"wide\"\n").find("is not a number"),
+            std::string::npos);
+  EXPECT_NE(
+      errorOf(dir, "[target]\nplacement = \"random\"\n").find("one of \"regular\", \"clustered\""),
+      std::string::npos);
   EXPECT_NE(errorOf(dir, "[projectile]\nenabled = 1\n").find("true or false"), std::string::npos);
-  EXPECT_NE(errorOf(dir, "[target]\ndiameter = [80e-6, 40e-6]\n").find("min > max"), std::string::npos);
+  EXPECT_NE(errorOf(dir, "[target]\ndiameter = [80e-6, 40e-6]\n").find("min > max"),
+            std::string::npos);
 }
 
 TEST(Scene, KeysThatMustAgreeAreChecked) {
   ScratchDir dir("scene-together");
-  EXPECT_NE(errorOf(dir, "[target]\nwidth = 1e-4\n").find("at least 4 grain diameters"), std::string::npos);
-  EXPECT_NE(errorOf(dir, "[target]\nmesh_size = 40e-6\n").find("half the smallest grain"), std::string::npos);
-  EXPECT_NE(errorOf(dir, "[projectile]\ntip_half_angle = 20\n").find("[projectile]"), std::string::npos);
+  EXPECT_NE(errorOf(dir, "[target]\nwidth = 1e-4\n").find("at least 4 grain diameters"),
+            std::string::npos);
+  EXPECT_NE(errorOf(dir, "[target]\nmesh_size = 40e-6\n").find("half the smallest grain"),
+            std::string::npos);
+  EXPECT_NE(errorOf(dir, "[projectile]\ntip_half_angle = 20\n").find("[projectile]"),
+            std::string::npos);
 }
 
 TEST(Scene, BadTomlSaysWhere) {
@@ -93,14 +101,17 @@ TEST(Cli, BadInputExitsWithTwo) {
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("target.void_ratio = 7"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "out/target.h5"));
-  EXPECT_EQ(mesopen::test::runMesopen("target " + (dir / "missing.toml") + " -o " + (dir / "out")).code, 2);
+  EXPECT_EQ(
+      mesopen::test::runMesopen("target " + (dir / "missing.toml") + " -o " + (dir / "out")).code,
+      2);
   EXPECT_EQ(mesopen::test::runMesopen("target").code, 2);
   EXPECT_EQ(mesopen::test::runMesopen("--help").code, 0);
 }
 
 // docs/scene-keys.md holds the table `mesopen keys` prints (regenerate it with that command).
 TEST(Cli, SceneKeysDocumentIsCurrent) {
-  const std::string doc = mesopen::test::readFile(std::string(MESOPEN_SOURCE_DIR) + "/docs/scene-keys.md");
+  const std::string doc =
+      mesopen::test::readFile(std::string(MESOPEN_SOURCE_DIR) + "/docs/scene-keys.md");
   const std::string table = sceneKeysMarkdown();
   EXPECT_NE(doc.find(table), std::string::npos)
       << "docs/scene-keys.md is out of date: regenerate it with `build/bin/mesopen keys`";
@@ -111,18 +122,22 @@ TEST(Cli, MissedRequestIsAWarning) {
   ScratchDir dir("cli-warn");
   // 60 % porosity with very many, very small voids: the void cells cannot shrink far enough
   // (measured: 68 %).
-  mesopen::test::writeFile(dir / "miss.toml", "[target]\nwidth = 1e-3\nheight = 1e-3\nporosity = 0.6\n"
-                                              "void_ratio = 0.1\nvoid_scale = 5\nmesh = \"none\"\n"
-                                              "[projectile]\nenabled = false\n");
-  const auto r = mesopen::test::runMesopen("target " + (dir / "miss.toml") + " -o " + (dir / "out") + " --no-plot");
+  mesopen::test::writeFile(dir / "miss.toml",
+                           "[target]\nwidth = 1e-3\nheight = 1e-3\nporosity = 0.6\n"
+                           "void_ratio = 0.1\nvoid_scale = 5\nmesh = \"none\"\n"
+                           "[projectile]\nenabled = false\n");
+  const auto r = mesopen::test::runMesopen("target " + (dir / "miss.toml") + " -o " +
+                                           (dir / "out") + " --no-plot");
   EXPECT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("warning: porosity"), std::string::npos) << r.output;
-  EXPECT_NE(mesopen::test::readFile(dir / "out/summary.json").find("misses the requested"), std::string::npos);
+  EXPECT_NE(mesopen::test::readFile(dir / "out/summary.json").find("misses the requested"),
+            std::string::npos);
 }
 
 TEST(Cli, TooLargeTargetsAreRefusedBeforeTheyStart) {
   ScratchDir dir("cli-big");
-  mesopen::test::writeFile(dir / "big.toml", "[target]\nwidth = 0.3\nheight = 0.3\ndiameter = 60e-6\n");
+  mesopen::test::writeFile(dir / "big.toml",
+                           "[target]\nwidth = 0.3\nheight = 0.3\ndiameter = 60e-6\n");
   const auto r = mesopen::test::runMesopen("target " + (dir / "big.toml") + " -o " + (dir / "out"));
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("allowed: at most 5e7"), std::string::npos) << r.output;

@@ -1,7 +1,7 @@
 // The target writers: HDF5 layout and read-back, byte-identical repeats, the LIGGGHTS data file's
 // contents, atomic writing (no temporary left, nothing written on failure).
-#include "disks.hpp"
 #include "writers.hpp"
+#include "disks.hpp"
 #include "h5file.hpp"
 #include "mesh.hpp"
 #include "polygon.hpp"
@@ -342,7 +342,8 @@ TEST(GrainDisks, TouchWithoutOverlapAndKeepOutOfMeshedGrains) {
   const Disks all = grainDisks(grains, rho);
   ASSERT_EQ(all.size(), 3u);
   for (std::size_t i = 0; i < 3; ++i)
-    EXPECT_NEAR(all.density[i] * M_PI * all.radius[i] * all.radius[i], rho * s * s, 1e-12 * rho * s * s);
+    EXPECT_NEAR(all.density[i] * M_PI * all.radius[i] * all.radius[i], rho * s * s,
+                1e-12 * rho * s * s);
   EXPECT_NEAR(all.radius[0], 0.5 * pitch, 1e-15); // shares the distance with its equal neighbour
   EXPECT_LT(all.radius[0], r_equal);
   // the middle grain meshed: its neighbours' disks reach its faces, no farther

@@ -73,12 +73,12 @@ TEST(Contact, SlidingBlockDeceleratesAtMuG) {
 // (1e-8 of the velocity scale; at 200 m/s the impact leaves the grains plastically deformed, at
 // 1500 m/s, the thesis's fastest, crushed). The error stays below 1e-10 until the faces part: a
 // node whose force falls to zero (f_n = max(0, ...)) in one pass a step before its mirror image,
-// by round-off, then makes one jump of a few 1e-9 (3e-9 at 200 m/s at step 305 of 370). Their faces meet node on node: a node's closest point
-// is then a vertex of the other face, at the same distance from both its segments up to round-off;
-// before the vertex normal (Contact::atVertex) the pass took the first segment of its list, or by
-// round-off its corner, and the mirror error reached 2e-2. With contact stiffness kappa >= 0.7 the
-// mirror error grows to 1e-1: the doubled stiffness of node-on-node contact is then beyond the
-// explicit limit.
+// by round-off, then makes one jump of a few 1e-9 (3e-9 at 200 m/s at step 305 of 370). Their faces
+// meet node on node: a node's closest point is then a vertex of the other face, at the same
+// distance from both its segments up to round-off; before the vertex normal (Contact::atVertex) the
+// pass took the first segment of its list, or by round-off its corner, and the mirror error reached
+// 2e-2. With contact stiffness kappa >= 0.7 the mirror error grows to 1e-1: the doubled stiffness
+// of node-on-node contact is then beyond the explicit limit.
 class HeadOn : public ::testing::TestWithParam<double> {};
 TEST_P(HeadOn, StaysMirrorSymmetric) {
   TestMesh mesh;
@@ -110,19 +110,20 @@ TEST_P(HeadOn, StaysMirrorSymmetric) {
   while (solver.time() < 0.1e-6) {
     solver.step();
     for (std::size_t a = 0; a < n; ++a)
-      worst_mirror = std::max({worst_mirror, std::abs(nd.vx[a] + nd.vx[a + n]) / v,
-                               std::abs(nd.vy[a] - nd.vy[a + n]) / v,
-                               std::abs(nd.x[a] + nd.x[a + n]) / 0.1e-3,
-                               std::abs(nd.y[a] - nd.y[a + n]) / 0.1e-3});
+      worst_mirror =
+          std::max({worst_mirror, std::abs(nd.vx[a] + nd.vx[a + n]) / v,
+                    std::abs(nd.vy[a] - nd.vy[a + n]) / v, std::abs(nd.x[a] + nd.x[a + n]) / 0.1e-3,
+                    std::abs(nd.y[a] - nd.y[a + n]) / 0.1e-3});
     double px = 0.0, py = 0.0;
     for (std::size_t a = 0; a < nd.size(); ++a)
       px += nd.mass[a] * nd.vx[a], py += nd.mass[a] * nd.vy[a];
     worst_momentum = std::max({worst_momentum, std::abs(px), std::abs(py)});
   }
-  std::printf("head-on at %g m/s: mirror error %.2e, momentum %.2e of m v, max depth %.3f elements, "
-              "plastic work %.3g J/m\n",
-              v, worst_mirror, worst_momentum / (mass * v), contact.statistics().max_depth,
-              solver.energy().plastic);
+  std::printf(
+      "head-on at %g m/s: mirror error %.2e, momentum %.2e of m v, max depth %.3f elements, "
+      "plastic work %.3g J/m\n",
+      v, worst_mirror, worst_momentum / (mass * v), contact.statistics().max_depth,
+      solver.energy().plastic);
   EXPECT_GT(contact.statistics().max_depth, 0.0); // they did meet
   EXPECT_GT(fem::bodyMotion(model, 0).px, -0.9 * fem::bodyMotion(model, 0).mass * v);
   EXPECT_LT(worst_mirror, 1e-8);
@@ -194,10 +195,11 @@ TEST(Contact, ErodingBarKeepsContactAndEnergyBalance) {
   std::size_t detached = 0;
   for (std::uint8_t d : model.nodes.detached)
     detached += d;
-  std::printf("eroding bar: %zu elements eroded (%.3g J/m of %.3g), %zu nodes detached, balance %.2e, "
-              "deepest %.3f elements\n",
-              solver.erodedElements(), e.eroded, e.initial, detached, e.balance_error,
-              contact.statistics().max_depth);
+  std::printf(
+      "eroding bar: %zu elements eroded (%.3g J/m of %.3g), %zu nodes detached, balance %.2e, "
+      "deepest %.3f elements\n",
+      solver.erodedElements(), e.eroded, e.initial, detached, e.balance_error,
+      contact.statistics().max_depth);
   EXPECT_GT(solver.erodedElements(), 0u);
   EXPECT_GT(e.eroded, 0.0);
   EXPECT_LT(std::abs(e.balance_error), 1e-3);
@@ -205,9 +207,9 @@ TEST(Contact, ErodingBarKeepsContactAndEnergyBalance) {
   EXPECT_LT(contact.statistics().max_depth, 0.5);
 }
 
-// Two grains closing at 2 m/s that overlap by 0.3 of an element at the start, as a node a folded grain
-// closes over, or a boundary that a change of closest segment puts deep at once: the contact is
-// found deeper than any step's approach could make it. Pushed out in one step the nodes would
+// Two grains closing at 2 m/s that overlap by 0.3 of an element at the start, as a node a folded
+// grain closes over, or a boundary that a change of closest segment puts deep at once: the contact
+// is found deeper than any step's approach could make it. Pushed out in one step the nodes would
 // leave at about kappa d / dt (1,000 m/s here); the excess depth is allowed for and let go over
 // release_steps (200) steps, so the grains part at about d / (200 dt). Bound: no node faster
 // than a twentieth of d / dt (the one-step push is ten times that); the overlap has opened

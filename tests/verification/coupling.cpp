@@ -1,8 +1,8 @@
 // FE-DEM coupling without LIGGGHTS (the fake DEM participant): the exchanged forces balance, a
 // disk hitting an FE block conserves momentum, and every declared exchange happens each window.
 #include "coupling.hpp"
-#include "fake_dem.hpp"
 #include "coupled.hpp"
+#include "fake_dem.hpp"
 #include "meshes.hpp"
 #include "solver.hpp"
 
@@ -40,10 +40,10 @@ fem::Model block() {
 TEST(Coupling, ExchangedForcesBalance) {
   fem::Model model = block();
   const coupling::Particles p = disks({{30e-6, 58e-6, 1.0, -20.0, 1e5, 10e-6},
-                                      {70e-6, 59e-6, -3.0, -5.0, -2e5, 10e-6},
-                                      {-4e-6, 20e-6, 30.0, 2.0, 0.0, 6e-6},
-                                      {104e-6, 54e-6, -10.0, -10.0, 3e4, 8e-6}, // at a corner
-                                      {50e-6, 200e-6, 0.0, 0.0, 0.0, 10e-6}});  // far
+                                       {70e-6, 59e-6, -3.0, -5.0, -2e5, 10e-6},
+                                       {-4e-6, 20e-6, 30.0, 2.0, 0.0, 6e-6},
+                                       {104e-6, 54e-6, -10.0, -10.0, 3e4, 8e-6}, // at a corner
+                                       {50e-6, 200e-6, 0.0, 0.0, 0.0, 10e-6}});  // far
   coupling::DiskContact contact(model, {.friction = {0.3}});
   coupling::ParticleForces f;
   f.reset(p.size());
@@ -164,9 +164,9 @@ TEST(Coupling, MultipleTimeSteppingFollowsTheStepByStepRun) {
   auto run = [](bool each_step, std::uint64_t &windows, std::uint64_t &steps) {
     fem::Model model = block();
     fem::setBodyVelocity(model, 0, 0.0, 0.0);
-    coupling::FakeDem dem(disks({{50e-6, 60.05e-6, 0.0, -50.0, 0.0, 10e-6},
-                                 {50e-6, 81e-6, 0.0, -50.0, 0.0, 10e-6}}),
-                          {.stiffness = 3.35e10, .restitution = 0.9});
+    coupling::FakeDem dem(
+        disks({{50e-6, 60.05e-6, 0.0, -50.0, 0.0, 10e-6}, {50e-6, 81e-6, 0.0, -50.0, 0.0, 10e-6}}),
+        {.stiffness = 3.35e10, .restitution = 0.9});
     coupling::FeDemCoupling coupling(model, dem, {.friction = {0.3}}, each_step ? 1e-30 : 0.0);
     fem::Solver solver(model, {});
     solver.addForceProvider(&coupling);
@@ -224,10 +224,11 @@ TEST(Coupling, SuddenDeepDiskOpensGently) {
     worst = std::max({worst, std::abs(p[0] - p0[0]), std::abs(p[1] - p0[1])});
   }
   const double one_step = overlap / dt;
-  std::printf("disk %.2f elements deep at once: %zu sudden contacts, fastest %.3g m/s (d / dt = %.3g "
-              "m/s), contacts at the end %zu, momentum %.2e of m d / dt\n",
-              overlap / 10e-6, coupling.contact().statistics().sudden, fastest, one_step,
-              coupling.contact().statistics().contacts, worst / (mass * one_step));
+  std::printf(
+      "disk %.2f elements deep at once: %zu sudden contacts, fastest %.3g m/s (d / dt = %.3g "
+      "m/s), contacts at the end %zu, momentum %.2e of m d / dt\n",
+      overlap / 10e-6, coupling.contact().statistics().sudden, fastest, one_step,
+      coupling.contact().statistics().contacts, worst / (mass * one_step));
   EXPECT_GT(coupling.contact().statistics().sudden, 0u);
   EXPECT_LT(fastest, one_step / 20.0);
   EXPECT_EQ(coupling.contact().statistics().contacts, 0u);

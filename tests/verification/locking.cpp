@@ -26,18 +26,22 @@ std::vector<std::pair<double, double>> punch(bool anti_locking, double depth, in
   TestMesh mesh;
   const double W = 8 * a, H = 4 * a, v = 2.0;
   mesh.addRectangle(0, 0, W, H, 8 * per_punch, 4 * per_punch);
-  fem::Model model = mesh.model(test::oneMaterial(
-      "von-mises", {{"k1", 0}, {"k2", 0}, {"gruneisen", 0}, {"yield_stress", Y},
-                    {"hardening_modulus", 0}, {"pressure_cutoff", 1e12}}));
+  fem::Model model = mesh.model(test::oneMaterial("von-mises", {{"k1", 0},
+                                                                {"k2", 0},
+                                                                {"gruneisen", 0},
+                                                                {"yield_stress", Y},
+                                                                {"hardening_modulus", 0},
+                                                                {"pressure_cutoff", 1e12}}));
   const auto under = test::nodesWhere(model, [&](double x, double y) {
     return y > H - 1e-9 && std::abs(x - 0.5 * W) <= 0.5 * a + 1e-9;
   });
   model.constraints.push_back({"punch", under, false, true, 0.0, -v});
+  model.constraints.push_back({"bottom",
+                               test::nodesWhere(model, [](double, double y) { return y < 1e-9; }),
+                               false, true, 0, 0});
   model.constraints.push_back(
-      {"bottom", test::nodesWhere(model, [](double, double y) { return y < 1e-9; }), false, true, 0, 0});
-  model.constraints.push_back({"sides", test::nodesWhere(model, [&](double x, double) {
-                                 return x < 1e-9 || x > W - 1e-9;
-                               }), true, false, 0, 0});
+      {"sides", test::nodesWhere(model, [&](double x, double) { return x < 1e-9 || x > W - 1e-9; }),
+       true, false, 0, 0});
   fem::Solver solver(model, {.anti_locking = anti_locking});
   std::vector<std::pair<double, double>> curve;
   double next = 0.0;

@@ -18,7 +18,8 @@ TEST(Penetration, Run6ReachesOneLengthAndClosesItsEnergyBalance) {
   std::string scene = test::readFile(std::string(MESOPEN_SOURCE_DIR) + "/examples/baseline.toml");
   scene = std::regex_replace(scene, std::regex("frame_interval = [^\n]*"), "frame_interval = 0");
   test::writeFile(dir / "scene.toml", scene);
-  const auto r = test::runMesopen("run " + (dir / "scene.toml") + " -o " + (dir / "out") + " --quiet");
+  const auto r =
+      test::runMesopen("run " + (dir / "scene.toml") + " -o " + (dir / "out") + " --quiet");
   ASSERT_EQ(r.code, 0) << r.output;
   const auto s = nlohmann::json::parse(test::readFile(dir / "out/summary.json"));
   EXPECT_EQ(s["status"], "completed");
@@ -36,10 +37,11 @@ TEST(Penetration, Run6ReachesOneLengthAndClosesItsEnergyBalance) {
   EXPECT_LT(static_cast<double>(s["contact"]["deepest_penetration_over_element_size"]), 0.5);
   for (const char *k : {"vx", "vy", "tilt", "rotational_momentum"})
     EXPECT_TRUE(std::isfinite(static_cast<double>(s["projectile"][k]))) << k;
-  std::printf("run 6: %s steps, t = %.4g s, depth / length %.4f, balance error %.2e, tilt %.4f rad, "
-              "deepest penetration %.3f elements, %.1f s\n",
-              s["steps"].dump().c_str(), static_cast<double>(s["time"]), depth / length,
-              static_cast<double>(e["balance_error"]), static_cast<double>(s["projectile"]["tilt"]),
-              static_cast<double>(s["contact"]["deepest_penetration_over_element_size"]),
-              static_cast<double>(s["wall_seconds"]));
+  std::printf(
+      "run 6: %s steps, t = %.4g s, depth / length %.4f, balance error %.2e, tilt %.4f rad, "
+      "deepest penetration %.3f elements, %.1f s\n",
+      s["steps"].dump().c_str(), static_cast<double>(s["time"]), depth / length,
+      static_cast<double>(e["balance_error"]), static_cast<double>(s["projectile"]["tilt"]),
+      static_cast<double>(s["contact"]["deepest_penetration_over_element_size"]),
+      static_cast<double>(s["wall_seconds"]));
 }

@@ -40,9 +40,13 @@ struct MaterialPoint {
 // 1e-9 of the stress.
 TEST(RadialReturn, UniaxialStrainCurve) {
   const double K = 160e9, G = 80e9, Y0 = 1.2e9, M = 5e9;
-  MaterialPoint point(fem::makeMaterial("von-mises", {{"bulk_modulus", K}, {"shear_modulus", G},
-                                                      {"k1", 0}, {"k2", 0}, {"gruneisen", 0},
-                                                      {"yield_stress", Y0}, {"hardening_modulus", M},
+  MaterialPoint point(fem::makeMaterial("von-mises", {{"bulk_modulus", K},
+                                                      {"shear_modulus", G},
+                                                      {"k1", 0},
+                                                      {"k2", 0},
+                                                      {"gruneisen", 0},
+                                                      {"yield_stress", Y0},
+                                                      {"hardening_modulus", M},
                                                       {"pressure_cutoff", 1e12}}));
   const double rate = -1e5, dt = 2e-9; // compression, 2e-4 strain per step
   double eps = 0.0, max_plastic = 0.0;

@@ -18,7 +18,8 @@ namespace {
 struct Strip {
   fem::Model model;
   std::vector<std::uint32_t> bottom;
-  Strip(std::unique_ptr<fem::Material> material, double w, double len, int nx, int ny, double piston) {
+  Strip(std::unique_ptr<fem::Material> material, double w, double len, int nx, int ny,
+        double piston) {
     TestMesh mesh;
     mesh.addRectangle(0, 0, w, len, nx, ny);
     std::vector<std::unique_ptr<fem::Material>> m;
@@ -50,8 +51,9 @@ struct Strip {
 // (measured: 0.005 %).
 TEST(ElasticWave, PWaveSpeed) {
   const double K = 163.9e9, G = 77.5e9, rho = 7823.0, v0 = 1.0;
-  Strip strip(fem::makeMaterial("elastic", {{"density", rho}, {"bulk_modulus", K}, {"shear_modulus", G}}),
-              0.1e-3, 4e-3, 2, 160, v0);
+  Strip strip(
+      fem::makeMaterial("elastic", {{"density", rho}, {"bulk_modulus", K}, {"shear_modulus", G}}),
+      0.1e-3, 4e-3, 2, 160, v0);
   fem::Solver solver(strip.model, {});
   const double y1 = 1e-3, y2 = 3e-3;
   double t1 = -1, t2 = -1;
@@ -84,8 +86,8 @@ TEST(ElasticWave, PWaveSpeed) {
 // 0.003 %).
 TEST(Shock, PlateauMatchesHugoniot) {
   const double rho0 = 2648.5, K = 43.19e9, K1 = 156.2e9, K2 = 48.6e9, gamma = 0.675, up = 500.0;
-  Strip strip(fem::makeMaterial("quartz", {{"strength", 0}, {"g0", 0}, {"g1", 0}, {"g2", 0}}), 0.05e-3,
-              3e-3, 1, 300, up);
+  Strip strip(fem::makeMaterial("quartz", {{"strength", 0}, {"g0", 0}, {"g1", 0}, {"g2", 0}}),
+              0.05e-3, 3e-3, 1, 300, up);
   // Exact: f(mu) = EOS(mu, e) - rho0 U_s u_p = 0 with U_s = u_p (1 + mu) / mu, by bisection.
   auto residual = [&](double mu) {
     const double cold = ((K2 * mu + K1) * mu + K) * mu;
@@ -114,5 +116,5 @@ TEST(Shock, PlateauMatchesHugoniot) {
   ASSERT_GT(n, 100);
   const double p_mean = sum / n;
   EXPECT_NEAR(p_mean / p_exact, 1.0, 0.005) << "plateau " << p_mean << " Pa, Hugoniot " << p_exact
-                                           << " Pa (mu " << mu << ", U_s " << us << " m/s)";
+                                            << " Pa (mu " << mu << ", U_s " << us << " m/s)";
 }
