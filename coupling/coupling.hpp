@@ -20,6 +20,7 @@
 // region that choice allowed for; the others move on their slow path alone, exactly.
 // A window of one FE step (`window` shorter than the FE step) is the plain velocity-Verlet
 // coupling of both solvers step by step.
+// Equations: docs/models.md §9.5.
 #pragma once
 
 #include "dem.hpp"

@@ -2,6 +2,7 @@
 // particles, which reads the force data the FE participant writes on them once per time window.
 // Disks in 2D plane strain, 1 m thick like the FE model: mass rho pi r^2 [kg/m], moment of inertia
 // m r^2 / 2 [kg m^2/m], forces [N/m], torques [N m/m].
+// Equations: docs/models.md §9.3.
 #pragma once
 
 #include <cmath>

@@ -15,6 +15,7 @@
 // side of the vertex's pseudo-normal, as FE-FE contact does. A depth that no step's approach can
 // make (erosion laying a boundary bare over a disk) is allowed for and let go over 200 steps, as in
 // FE-FE contact (fem/contact.hpp).
+// Equations: docs/models.md §9.4.
 #pragma once
 
 #include "cell_grid.hpp"

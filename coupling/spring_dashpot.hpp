@@ -13,6 +13,7 @@
 // Without the limit the dashpot pulls until d = 0: t_c = pi / w, e = exp(-b pi / w) (the textbook
 // law, e.g. Schaefer, Dippel & Wolf, J. Phys. I France 6 (1996) 5). With the limit e >= exp(-2)
 // (b / w -> infinity) in the underdamped range. Both are independent of the impact speed.
+// Equations: docs/models.md §9.2.
 #pragma once
 
 #include <cmath>

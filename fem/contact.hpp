@@ -47,6 +47,7 @@
 // stays outside while the two bodies move by less than g together: such clear nodes are looked at
 // again only then, the others (hot: in contact, touching) every step; a side of a pair with no hot
 // node and no clear node due is skipped.
+// Equations: docs/models.md §8.
 #pragma once
 
 #include "cell_grid.hpp"

@@ -17,6 +17,7 @@
 //
 // Each function keeps the order of its floating-point operations: FE-FE and FE-DEM runs are
 // reproduced bit for bit by it.
+// Equations: docs/models.md §8.2, §8.3, §8.5.
 #pragma once
 
 #include <algorithm>

@@ -13,6 +13,7 @@
 // smallest distance of a block and the lanes holding it come from smallestOf and lanesAt, which
 // have a fast path (AVX-512) and a scalar reference; both give the same bits (tests/unit/
 // contact_narrow.cpp).
+// Equations: docs/models.md §8.1.
 #pragma once
 
 #include <algorithm>
@@ -157,9 +158,8 @@ MESOPEN_INLINE Closest closest(const Near &near, double px, double py, double *d
 
 // Of the segments given by their ends (indices into `points`), those of nonzero length whose boxes
 // meet the rectangle `wide`: into `near`, in the given order. The ends of those are gathered first,
-// side by side (a list of a whole boundary has most of its segments far: the loop over the pairs
-// 6-9 % faster on run 6 than with every listed segment in a lane), then the geometry of all is
-// computed in one pass (vectorized).
+// side by side (a list of a whole boundary has most of its segments far, which would fill lanes for
+// nothing), then the geometry of all is computed in one pass (vectorized).
 MESOPEN_INLINE void nearSegments(const Point *points, const std::uint32_t *ends,
                                  const std::uint32_t *ends_end, const Box &wide, Near &near) {
   constexpr std::size_t L = Near::lanes;

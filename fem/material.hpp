@@ -7,6 +7,7 @@
 // integrated with the mean of the old and new stress (the pressure implicitly where it depends on
 // E). A material is one file in fem/materials/ and one line in the registry (registry.cpp), with a
 // typed, documented parameter list; a scene names it by `type` or by a `preset`.
+// Equations: docs/models.md §3, §2.3.
 #pragma once
 
 #include <array>

@@ -1,6 +1,7 @@
 // The finite-element model: nodes and 3-node triangles in struct-of-arrays form, grouped in
 // bodies (the projectile, every meshed grain). 2D plane strain, 1 m thick: areas are volumes per
 // metre, masses kg/m, forces N/m, energies J/m (plane strain).
+// Equations: docs/models.md §1.
 #pragma once
 
 #include "material.hpp"

@@ -46,8 +46,8 @@ std::vector<std::pair<std::string, std::string>> liggghtsVariables(const Scene &
     return std::string(s);
   };
   // Half a grain: a disk the projectile drives at 1500 m/s crosses a tenth of a grain (the skin's
-  // half) in about two of the disks' steps, and each crossing rebuilds every neighbour list (run 6
-  // as disks: 3.1 s with a tenth, 2.5 s with half or more, the pairs' own cost barely changed).
+  // half) in about two of the disks' steps, and each crossing rebuilds every neighbour list; a
+  // wider skin costs the pairs' own search little (docs/decisions.md).
   const double skin = d.skin > 0.0 ? d.skin : 0.5 * scene.target.meanDiameter();
   return {{"data", data},
           {"kn", text(d.stiffness)},

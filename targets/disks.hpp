@@ -8,6 +8,7 @@
 // is open). At t = 0 no disk then presses on anything: a target at rest stays at rest. Its
 // density is rho A / (pi r^2), which keeps its mass per metre rho A (baseline: radii 0.86 of the
 // equal-area ones on average, none below 0.70; the disks cover 52 % of the box).
+// Equations: docs/models.md §9.1.
 #pragma once
 
 #include "projectile.hpp"

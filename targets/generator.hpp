@@ -1,4 +1,5 @@
 // The target generator end to end (thesis section 4.2): sites, placement, tessellation, meshes.
+// Equations: docs/models.md §10.4.
 #pragma once
 
 #include "measures.hpp"

@@ -1,4 +1,5 @@
 // Validation measures of a target (thesis section 4.2.4) and a measure of clustering.
+// Equations: docs/models.md §10.6.
 #pragma once
 
 #include "target.hpp"

@@ -1,6 +1,7 @@
 // Triangle meshes of convex polygons (thesis section 4.2.3): the fan mesh (centroid to every
 // vertex, the thesis's coarse option) and a quality Delaunay mesh at a requested edge length
 // (CGAL Mesh_2, Ruppert-Shewchuk refinement with a smallest-angle bound).
+// Equations: docs/models.md §10.5.
 #pragma once
 
 #include "target.hpp"

@@ -2,6 +2,7 @@
 // caliber-radius-head psi = rho / d on a cylindrical shank, its sharp tip cut by two flat
 // facets at half-angle theta to the axis. Body frame: the sharp tip at the origin, the axis
 // along +y (the body extends upward; in a target the nose points down).
+// Equations: docs/models.md §10.7.
 #pragma once
 
 #include "mesh.hpp"

@@ -1,5 +1,6 @@
 // Grain and void sites (thesis section 4.2.1): counts from areas, initial placement
 // (regular or clustered, section 4.2.5) and the Gaussian overlap minimisation (Eq. 4.1).
+// Equations: docs/models.md §10.1, §10.2.
 #pragma once
 
 #include "random.hpp"

@@ -10,6 +10,7 @@
 //   construction and need no relaxation; a grain whose cell is empty is lost (and counted).
 // Both: the box walls act as mirrors (cells end exactly on the walls), and vertices closer than
 // the mesh size are merged where the grains stay convex (up to a slight dent).
+// Equations: docs/models.md §10.3.
 #pragma once
 
 #include "target.hpp"

@@ -1,6 +1,7 @@
 // The projectile's measures of instability (thesis section 3.4) from the series of a run (run.h5,
 // run/run_output.hpp), and the dominant period of an oscillation from its spectrum (thesis
 // section 5.9, Table 5.3).
+// Equations: docs/models.md §11.
 #pragma once
 
 #include <string>

@@ -3,6 +3,7 @@
 // p' = -K tr(D), integrated exactly), whose stored energy per initial volume is
 // U = K (J ln J - J + 1). The internal energy takes the change of A0 (W + U) exactly. No pressure
 // cut-off.
+// Equations: docs/models.md §3.4.
 #include "../material.hpp"
 #include "hyperelastic.hpp"
 

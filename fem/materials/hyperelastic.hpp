@@ -11,6 +11,7 @@
 // while the rate form dS = 2 G dev(D) dt, integrated along the path, creates energy when the
 // elements ring near their stable step or when G changes along a closed path (tests/verification/
 // energy.cpp). Materials with strength keep the rate form, where yield bounds the deviator.
+// Equations: docs/models.md §3.6.
 #pragma once
 
 #include <algorithm>

@@ -1,6 +1,7 @@
 // Pieces every material shares (thesis Eq. 3.3, 3.8): the objective rotation of the deviatoric
 // stress, Hooke's law for its increment, the deviatoric work and the energy equation.
 // Plane strain: D_zz = 0, S_zz = -S_xx - S_yy.
+// Equations: docs/models.md §3.1, §2.3.
 #pragma once
 
 #include <cmath>

@@ -3,6 +3,7 @@
 // with e the specific internal energy (rho0 e = E / V0 for an element of energy E and initial
 // volume V0), and the pressure cut-off p >= -K_c (K_c = 0: no tensile mean stress).
 // In tension (mu < 0) only the linear term K mu is used, as is usual for this form.
+// Equations: docs/models.md §3.5.
 #pragma once
 
 #include <algorithm>

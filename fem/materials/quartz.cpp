@@ -8,6 +8,7 @@
 // With dt >= T_R the update is a radial return. `strength = false`: elastic grains, whose deviator
 // is the neo-Hookean one of hyperelastic.hpp with G(J) = G(P-bar(mu)) and the pressure it adds,
 // p_G = -G'(J) / 2 (tr b* - 3): a closed path returns the work it took, however G changes on it.
+// Equations: docs/models.md §3.3.
 #include "../material.hpp"
 #include "hyperelastic.hpp"
 #include "hypoelastic.hpp"

@@ -1,5 +1,6 @@
 // The list of material types and presets: a new material is one file in this folder and one line
 // in each list below.
+// Equations: docs/models.md §3.7.
 #include "../material.hpp"
 
 #include <sstream>

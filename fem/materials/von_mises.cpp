@@ -6,6 +6,7 @@
 // `plastic = false` turns the strength off: the elastic projectile of the thesis, whose deviator is
 // then the neo-Hookean one of hyperelastic.hpp with the same G (a total form: the energy it stores
 // comes back whole, which the rate form does not guarantee without viscosity).
+// Equations: docs/models.md §3.2.
 #include "../material.hpp"
 #include "hyperelastic.hpp"
 #include "hypoelastic.hpp"
