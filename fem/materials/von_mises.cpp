@@ -117,8 +117,7 @@ MaterialType vonMisesMaterialType() {
   return {
       "von-mises",
       "Mie-Grueneisen pressure, hypoelastic deviator (neo-Hookean without plasticity), von Mises "
-      "plasticity with linear "
-      "hardening (radial return); defaults: the steel of thesis Table 3.2",
+      "plasticity with linear hardening (radial return); defaults: the steel of thesis Table 3.2",
       {{"density", "kg/m^3", "initial density rho0", 1.0, 1e5, 7823.0},
        {"shear_modulus", "Pa", "shear modulus G", 0.0, 1e13, 77.5e9},
        {"bulk_modulus", "Pa", "Mie-Grueneisen K", 1.0, 1e13, 163.9e9},
