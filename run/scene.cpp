@@ -321,7 +321,8 @@ const std::vector<Key> &keys() {
         real("contact", "friction", c, &C::friction, "", 0, false, 10,
              "Coulomb coefficient between grains and between grains and walls (thesis: 0.3)"),
         real("contact", "projectile_friction", c, &C::projectile_friction, "", 0, false, 10,
-             "Coulomb coefficient between the projectile and grains or walls (thesis: 0.3)"),
+             "Coulomb coefficient between the projectile and the grains, meshed or disks (thesis: "
+             "0.3); the walls take contact.friction"),
         real("contact", "stiffness", c, &C::stiffness, "", 0, true, 0.6,
              "penalty kappa: normal stiffness kappa m_eff / dt^2 per node (stable up to 0.6)"),
         real("contact", "damping", c, &C::damping, "", 0, false, 2,
