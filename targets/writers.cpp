@@ -215,7 +215,8 @@ void writeVtu(const std::string &path, vtkUnstructuredGrid *grid) {
     writer->SetInputData(grid);
     writer->SetDataModeToAppended();
     writer->EncodeAppendedDataOff();
-    writer->SetCompressorTypeToNone();
+    writer->SetCompressorTypeToZLib(); // raw appended data, zlib blocks: ParaView reads it
+    writer->SetCompressionLevel(1);    // the fastest level: most of the gain
     writer->SetHeaderTypeToUInt64();
     // Write() returns 1 after a failed write too (a full disk): the error code tells, and our
     // message says it (VTK's own, a page of pipeline state, is not shown).

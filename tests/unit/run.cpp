@@ -2,6 +2,16 @@
 #include "run.hpp"
 #include "h5file.hpp"
 
+#include <vtkCellData.h>
+#include <vtkDoubleArray.h>
+#include <vtkErrorCode.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
+#include <vtkXMLUnstructuredGridWriter.h>
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -331,4 +341,68 @@ TEST(Run, FreeFlightKeepsMomentum) {
   const auto summary = nlohmann::json::parse(test::readFile(dir / "out/summary.json"));
   EXPECT_EQ(summary["model"]["bodies"], 1);
   EXPECT_EQ(summary["frames"], 0);
+}
+
+// A run's VTK frames: zlib-compressed, single precision, read back whole by VTK's reader with the
+// values of run.h5's frame (to float precision: 6e-8 relative), and at least 3 times smaller than
+// the same grid written as plain doubles (the quickstart's frames: 3.7 to 11 times, 5.2 over a
+// run).
+TEST(Run, VtkFramesCompressedAndReadBack) {
+  ScratchDir dir("run-vtk");
+  ASSERT_EQ(runScene(dir, tinyScene("frame_interval = 1e-8\n")).code, 0);
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  const std::string frame = dir / "out/vtk/frame_000001.vtu";
+  reader->SetFileName(frame.c_str());
+  reader->Update();
+  ASSERT_EQ(reader->GetErrorCode(), vtkErrorCode::NoError);
+  vtkUnstructuredGrid *grid = reader->GetOutput();
+  H5File h5 = H5File::open(dir / "out/run.h5");
+  const auto x = h5.read<double>("/frames/000001/x");
+  const auto vy = h5.read<double>("/frames/000001/vy");
+  const auto sxx = h5.read<double>("/frames/000001/sxx");
+  ASSERT_EQ(grid->GetNumberOfPoints(), static_cast<vtkIdType>(x.size()));
+  ASSERT_EQ(grid->GetNumberOfCells(), static_cast<vtkIdType>(sxx.size()));
+  vtkDataArray *velocity = grid->GetPointData()->GetArray("velocity");
+  vtkDataArray *stress = grid->GetCellData()->GetArray("stress_xx");
+  ASSERT_NE(velocity, nullptr);
+  ASSERT_NE(stress, nullptr);
+  EXPECT_EQ(stress->GetDataType(), VTK_FLOAT);
+  double largest = 0.0;
+  for (double v : sxx)
+    largest = std::max(largest, std::abs(v));
+  for (std::size_t a = 0; a < x.size(); ++a) {
+    EXPECT_NEAR(grid->GetPoint(static_cast<vtkIdType>(a))[0], x[a], 6e-8 * 1e-3);
+    EXPECT_NEAR(velocity->GetComponent(static_cast<vtkIdType>(a), 1), vy[a], 6e-8 * 1000.0);
+  }
+  for (std::size_t e = 0; e < sxx.size(); ++e)
+    EXPECT_NEAR(stress->GetComponent(static_cast<vtkIdType>(e), 0), sxx[e], 6e-8 * largest);
+  // The same grid in doubles, written plain.
+  vtkNew<vtkUnstructuredGrid> plain;
+  plain->DeepCopy(grid);
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->DeepCopy(grid->GetPoints());
+  plain->SetPoints(points);
+  for (vtkDataSetAttributes *data : {static_cast<vtkDataSetAttributes *>(plain->GetPointData()),
+                                     static_cast<vtkDataSetAttributes *>(plain->GetCellData())})
+    for (int k = 0; k < data->GetNumberOfArrays(); ++k)
+      if (data->GetArray(k)->GetDataType() == VTK_FLOAT) {
+        vtkNew<vtkDoubleArray> d;
+        d->DeepCopy(data->GetArray(k));
+        d->SetName(data->GetArray(k)->GetName());
+        data->AddArray(d); // replaces the array of that name
+      }
+  vtkNew<vtkXMLUnstructuredGridWriter> writer;
+  const std::string plain_path = dir / "plain.vtu";
+  writer->SetFileName(plain_path.c_str());
+  writer->SetInputData(plain);
+  writer->SetDataModeToAppended();
+  writer->EncodeAppendedDataOff();
+  writer->SetCompressorTypeToNone();
+  writer->SetHeaderTypeToUInt64();
+  ASSERT_EQ(writer->Write(), 1);
+  const double ratio = static_cast<double>(std::filesystem::file_size(plain_path)) /
+                       static_cast<double>(std::filesystem::file_size(frame));
+  std::printf("frame 1: %.2f times smaller than plain doubles\n", ratio);
+  EXPECT_GT(ratio, 3.0);
 }

@@ -6,6 +6,12 @@
 #include "mesh.hpp"
 #include "polygon.hpp"
 
+#include <vtkCellData.h>
+#include <vtkErrorCode.h>
+#include <vtkNew.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
+
 #include <gtest/gtest.h>
 
 #include <array>
@@ -275,6 +281,23 @@ TEST_F(WritersTest, VtuWritten) {
               std::string::npos);
   }
   EXPECT_FALSE(anyTemporary());
+}
+
+// target.vtu is zlib-compressed and read back whole by VTK's reader: its cells and each grain's
+// diameter.
+TEST_F(WritersTest, VtuCompressedAndReadBack) {
+  const PlacedProjectile p = smallProjectile();
+  writeTargetVtu(file("target.vtu"), smallTarget(true), &p);
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  reader->SetFileName(file("target.vtu").c_str());
+  reader->Update();
+  ASSERT_EQ(reader->GetErrorCode(), vtkErrorCode::NoError);
+  vtkUnstructuredGrid *grid = reader->GetOutput();
+  EXPECT_EQ(grid->GetNumberOfCells(), 17);
+  EXPECT_GT(grid->GetNumberOfPoints(), 0);
+  ASSERT_NE(grid->GetCellData()->GetArray("grain_diameter"), nullptr);
+  EXPECT_NE(readFile(dir / "target.vtu").find("compressor=\"vtkZLibDataCompressor\""),
+            std::string::npos);
 }
 
 TEST_F(WritersTest, MissingDirectoryThrowsAndLeavesNothing) {
