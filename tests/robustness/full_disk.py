@@ -6,7 +6,8 @@ The full disk is the file-size limit (RLIMIT_FSIZE, SIGXFSZ ignored): a write pa
 EFBIG as it would with ENOSPC, without mounting a small file system (which needs privileges).
 Cases, each failing before its fix:
   - target: target.vtu was renamed into place cut short (VTK's writer returns 1 after a failed
-    write); now the error code is read and the file is not renamed;
+    write); now the error code is read and the file is not renamed (with target.h5, written beside
+    it, past the limit too);
   - run with VTK frames: the limit ends the run cleanly (exit 1), the frames written are whole;
   - run whose run.h5 outgrows the limit: the failed close left HDF5's exit handler a half-closed
     file, and the process crashed (SIGSEGV) after writing its failed summary.
@@ -42,12 +43,12 @@ end_time = 2e-7
 frame_interval = 1e-8
 """
 
-LIMIT = 1 << 20  # bytes a file may hold
-
-
-def limited():
-    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
-    resource.setrlimit(resource.RLIMIT_FSIZE, (LIMIT, LIMIT))
+def limited(limit):
+    """A pre-exec function: files of at most `limit` bytes."""
+    def apply():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+    return apply
 
 
 def whole(path):
@@ -78,17 +79,19 @@ def main():
     shutil.rmtree(scratch, ignore_errors=True)
     os.makedirs(scratch)
     failures = []
-    for name, command, scene, want in [
-            ("target", "target", TARGET, "target.vtu.tmp"),
-            ("run-vtk-frames", "run", RUN, ".tmp"),
-            ("run-h5", "run", RUN + "vtk = false\n", "run.h5.tmp")]:
+    # The target's files (target.h5 757 kB, target.vtu 471 kB compressed) are written side by
+    # side: both pass 256 kB, and the first to fail is named.
+    for name, command, scene, want, limit in [
+            ("target", "target", TARGET, ".tmp", 256 << 10),
+            ("run-vtk-frames", "run", RUN, ".tmp", 1 << 20),
+            ("run-h5", "run", RUN + "vtk = false\n", "run.h5.tmp", 1 << 20)]:
         path = os.path.join(scratch, name + ".toml")
         with open(path, "w") as f:
             f.write(scene)
         out = os.path.join(scratch, name)
         p = subprocess.run([mesopen, command, path, "-o", out, "--threads", "1"] +
                            (["--quiet"] if command == "run" else []),
-                           capture_output=True, text=True, timeout=120, preexec_fn=limited)
+                           capture_output=True, text=True, timeout=120, preexec_fn=limited(limit))
         message = (p.stdout + p.stderr).strip().splitlines()
         print("%s: exit %d; %s" % (name, p.returncode, message[-1] if message else ""))
         if p.returncode != 1 or not any(want in line for line in message):
