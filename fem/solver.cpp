@@ -586,20 +586,26 @@ std::array<std::vector<double> *, 8> Solver::elementState() const {
 template <std::size_t N>
 void Solver::shareOwned(std::size_t Body::*begin, std::size_t Body::*end,
                         const std::array<std::vector<double> *, N> &fields) const {
-  std::vector<double> mine;
+  std::size_t count = 0;
   for (std::uint32_t b : active_bodies_)
     if (owns(b))
-      for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
-        for (auto *f : fields)
-          mine.push_back((*f)[i]);
-  const std::vector<double> all = comm_.allGather(std::move(mine));
-  std::size_t k = 0;
-  for (int r = 0; r < comm_.size(); ++r)
+      count += N * (m_.bodies[b].*end - m_.bodies[b].*begin);
+  auto pack = [&](double *mine) {
     for (std::uint32_t b : active_bodies_)
-      if (owner(b) == r)
+      if (owns(b))
         for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
           for (auto *f : fields)
-            (*f)[i] = all[k++];
+            *mine++ = (*f)[i];
+  };
+  auto unpack = [&](const double *all) {
+    for (int r = 0; r < comm_.size(); ++r)
+      for (std::uint32_t b : active_bodies_)
+        if (owner(b) == r)
+          for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
+            for (auto *f : fields)
+              (*f)[i] = *all++;
+  };
+  comm_.share(count, pack, unpack);
 }
 
 // The velocities and forces of the nodes of every process's active bodies, from their owners.

@@ -4,7 +4,9 @@
 // the serial one, every operation gives back this process's own values.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace mesopen::parallel {
@@ -22,6 +24,11 @@ public:
   virtual std::vector<double> sumInOrder(std::vector<double> mine) const = 0;
   // The smallest of every process's `value` (std::min taken in rank order).
   virtual double min(double value) const = 0;
+  // Values each process holds part of, copied to every process: `pack` writes this process's
+  // `count` values, `unpack` reads every process's, concatenated in rank order. One process holds
+  // them all already: neither is called.
+  virtual void share(std::size_t count, const std::function<void(double *)> &pack,
+                     const std::function<void(const double *)> &unpack) const = 0;
 };
 
 // One process: gathers and reductions give back their input.
@@ -35,6 +42,8 @@ public:
   }
   std::vector<double> sumInOrder(std::vector<double> mine) const override { return mine; }
   double min(double value) const override { return value; }
+  void share(std::size_t, const std::function<void(double *)> &,
+             const std::function<void(const double *)> &) const override {}
 };
 
 // The one serial communicator (a solver's default).

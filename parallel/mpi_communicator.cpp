@@ -109,4 +109,11 @@ double MpiCommunicator::min(double value) const {
   return smallest;
 }
 
+void MpiCommunicator::share(std::size_t count, const std::function<void(double *)> &pack,
+                            const std::function<void(const double *)> &unpack) const {
+  std::vector<double> mine(count);
+  pack(mine.data());
+  unpack(allGather(std::move(mine)).data());
+}
+
 } // namespace mesopen::parallel

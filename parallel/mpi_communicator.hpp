@@ -62,6 +62,8 @@ public:
   std::vector<std::int64_t> allGather(std::vector<std::int64_t> mine) const override;
   std::vector<double> sumInOrder(std::vector<double> mine) const override;
   double min(double value) const override;
+  void share(std::size_t count, const std::function<void(double *)> &pack,
+             const std::function<void(const double *)> &unpack) const override;
 
 private:
   MPI_Comm comm_;
