@@ -37,55 +37,6 @@ bool isName(const std::string &s) {
 
 } // namespace
 
-void ensureMpi() {
-  int initialised = 0, finalised = 0;
-  MPI_Initialized(&initialised);
-  MPI_Finalized(&finalised);
-  if (initialised || finalised)
-    return;
-  // A process not started by mpirun is a singleton: Open MPI 4.1 then starts a daemon and probes
-  // UCX, 0.27 s here; isolated, with the ob1 layer (intra-node, all one process needs), 0.02 s.
-  // Settings the user made in the environment are kept.
-  if (!std::getenv("OMPI_COMM_WORLD_SIZE")) {
-    setenv("OMPI_MCA_ess_singleton_isolated", "1", 0);
-    setenv("OMPI_MCA_pml", "ob1", 0);
-  }
-  MPI_Init(nullptr, nullptr);
-  std::atexit([] {
-    int done = 0;
-    MPI_Finalized(&done);
-    if (!done)
-      MPI_Finalize();
-  });
-}
-
-World world(bool needed) {
-  if (!needed && !std::getenv("OMPI_COMM_WORLD_SIZE"))
-    return {};
-  ensureMpi();
-  World w;
-  MPI_Comm_rank(MPI_COMM_WORLD, &w.rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &w.size);
-  return w;
-}
-
-void World::barrier() const {
-  if (size > 1)
-    MPI_Barrier(MPI_COMM_WORLD);
-}
-
-double World::sum(double value) const {
-  if (size > 1)
-    MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
-  return value;
-}
-
-double World::max(double value) const {
-  if (size > 1)
-    MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-  return value;
-}
-
 LiggghtsDem::LiggghtsDem(const std::string &script,
                          std::vector<std::pair<std::string, std::string>> variables,
                          const std::string &log, MPI_Comm comm)
@@ -257,10 +208,10 @@ void LiggghtsDem::endWindow(double length, double planned, const WindowMotion &m
 }
 
 void LiggghtsDem::gatherReactions(std::vector<Reaction> &reactions) const {
-  allGather(reactions, comm_);
+  reactions = parallel::allGatherItems(std::move(reactions), comm_);
 }
 void LiggghtsDem::gatherDiskForces(std::vector<DiskForce> &forces) const {
-  allGather(forces, comm_);
+  forces = parallel::allGatherItems(std::move(forces), comm_);
 }
 
 // The disks of every rank on rank 0, ordered by id (the same order on any number of ranks).

@@ -8,6 +8,7 @@
 #pragma once
 
 #include "dem.hpp"
+#include "mpi_communicator.hpp"
 
 #include <mpi.h>
 
@@ -17,35 +18,6 @@
 #include <vector>
 
 namespace mesopen::coupling {
-
-// MPI initialised (once, for LIGGGHTS), and finalised when the program exits.
-void ensureMpi();
-// This process's rank among the processes mpirun started, and their number: MPI is initialised if
-// mpirun (Open MPI) started the program or `needed`; else rank 0 of 1.
-struct World {
-  int rank = 0, size = 1;
-  void barrier() const;
-  double sum(double value) const; // over the ranks
-  double max(double value) const;
-};
-World world(bool needed);
-
-// Every rank's items, gathered in rank order on every rank (as bytes: plain data).
-template <class T> void allGather(std::vector<T> &items, MPI_Comm comm) {
-  int ranks = 1;
-  MPI_Comm_size(comm, &ranks);
-  if (ranks == 1)
-    return;
-  const int mine = static_cast<int>(items.size() * sizeof(T));
-  std::vector<int> sizes(ranks), starts(ranks + 1, 0);
-  MPI_Allgather(&mine, 1, MPI_INT, sizes.data(), 1, MPI_INT, comm);
-  for (int r = 0; r < ranks; ++r)
-    starts[r + 1] = starts[r] + sizes[r];
-  std::vector<T> all(static_cast<std::size_t>(starts[ranks]) / sizeof(T));
-  MPI_Allgatherv(items.data(), mine, MPI_BYTE, all.data(), sizes.data(), starts.data(), MPI_BYTE,
-                 comm);
-  items.swap(all);
-}
 
 class LiggghtsDem : public DemParticipant {
 public:

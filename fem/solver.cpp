@@ -161,7 +161,8 @@ void elementMean(const double *value, std::size_t base, const std::uint32_t *con
 }
 } // namespace
 
-Solver::Solver(Model &model, SolverSettings settings) : m_(model), s_(settings) {
+Solver::Solver(Model &model, SolverSettings settings, const parallel::Communicator &processes)
+    : m_(model), s_(settings), comm_(processes) {
   s_.chunk = std::clamp<std::size_t>(s_.chunk, 1, max_chunk);
   const Nodes &nd = m_.nodes;
   inv_mass_.resize(nd.size());
@@ -528,36 +529,36 @@ void Solver::forces(double dt, bool kick) {
   }
   if (kick) {
     energy_.kinetic = 0.0;
-    if (s_.sharing) { // the units' sums of every process, in process order
-      KickSums own;
-      for (const KickSums &k : kick_sums_)
-        own.gravity += k.gravity, own.kinetic += k.kinetic, own.provider += k.provider,
-            own.friction += k.friction;
-      const std::vector<double> all =
-          sumOver({own.gravity, own.kinetic, own.provider, own.friction});
-      kick_sums_.assign(1, KickSums{all[0], all[1], all[2], all[3]});
-    }
+    // Every process's units' sums, in rank order and unit order (one process: its own).
+    std::vector<double> mine;
+    mine.reserve(4 * kick_sums_.size());
+    for (const KickSums &k : kick_sums_)
+      mine.insert(mine.end(), {k.gravity, k.kinetic, k.provider, k.friction});
+    const std::vector<double> all = comm_.allGather(std::move(mine));
+    kick_sums_.clear();
+    for (std::size_t k = 0; k < all.size(); k += 4)
+      kick_sums_.push_back({all[k], all[k + 1], all[k + 2], all[k + 3]});
     addKickSums(kick_sums_, 0.5 * dt);
   }
   const long n = static_cast<long>(chunks_.size());
-  double dt_min = std::numeric_limits<double>::infinity(), inverted = -1.0;
-  for (long i = 0; i < n && inverted < 0.0; ++i) {
-    inverted = static_cast<double>(sums_[i].inverted);
+  double dt_min = std::numeric_limits<double>::infinity();
+  std::int64_t inverted = -1;
+  for (long i = 0; i < n && inverted < 0; ++i) {
+    inverted = sums_[i].inverted;
     dt_min = std::min(dt_min, sums_[i].dt_min);
   }
-  double inverted_area =
-      inverted >= 0.0 ? m_.elements.area[static_cast<std::size_t>(inverted)] : 0.0;
-  if (s_.sharing) { // the shortest step of all, the first inverted element of any
-    const std::vector<double> all = s_.sharing->allGather({dt_min, inverted, inverted_area});
-    inverted = -1.0;
-    for (std::size_t k = 0; k < all.size(); k += 3) {
-      dt_min = std::min(dt_min, all[k]);
-      if (inverted < 0.0 && all[k + 1] >= 0.0)
-        inverted = all[k + 1], inverted_area = all[k + 2];
-    }
-  }
-  if (inverted >= 0.0) {
-    const auto e = static_cast<std::size_t>(inverted);
+  // The shortest step of all processes, and the first inverted element of any (its area from the
+  // process that computed it, gathered only then).
+  dt_min = comm_.min(dt_min);
+  const std::vector<std::int64_t> inverted_by =
+      comm_.allGather(std::vector<std::int64_t>{inverted});
+  const auto first =
+      std::find_if(inverted_by.begin(), inverted_by.end(), [](std::int64_t e) { return e >= 0; });
+  if (first != inverted_by.end()) {
+    const double area = inverted >= 0 ? m_.elements.area[static_cast<std::size_t>(inverted)] : 0.0;
+    const double inverted_area =
+        comm_.allGather(std::vector<double>{area})[first - inverted_by.begin()];
+    const auto e = static_cast<std::size_t>(*first);
     const Body &body = m_.bodies[m_.elements.body[e]];
     std::ostringstream msg;
     msg << "element " << e << " of body " << body.name << " (material "
@@ -569,17 +570,6 @@ void Solver::forces(double dt, bool kick) {
   next_dt_ = s_.safety * step_scale_ * dt_min;
   shortest_step_ = dt_min;
   shareNodes();
-}
-
-// Every process's values of `mine`, summed in process order (one process: as they are).
-std::vector<double> Solver::sumOver(std::vector<double> mine) const {
-  if (!s_.sharing || mine.empty())
-    return mine;
-  const std::vector<double> all = s_.sharing->allGather(mine);
-  std::vector<double> sum(mine.size(), 0.0);
-  for (std::size_t k = 0; k < all.size(); ++k)
-    sum[k % mine.size()] += all[k];
-  return sum;
 }
 
 // The element state a process keeps of its own elements and the others read: what output and
@@ -596,22 +586,26 @@ std::array<std::vector<double> *, 8> Solver::elementState() const {
 template <std::size_t N>
 void Solver::shareOwned(std::size_t Body::*begin, std::size_t Body::*end,
                         const std::array<std::vector<double> *, N> &fields) const {
-  if (!s_.sharing)
-    return;
-  std::vector<double> mine;
+  std::size_t count = 0;
   for (std::uint32_t b : active_bodies_)
     if (owns(b))
-      for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
-        for (auto *f : fields)
-          mine.push_back((*f)[i]);
-  const std::vector<double> all = s_.sharing->allGather(mine);
-  std::size_t k = 0;
-  for (int r = 0; r < s_.sharing->size(); ++r)
+      count += N * (m_.bodies[b].*end - m_.bodies[b].*begin);
+  auto pack = [&](double *mine) {
     for (std::uint32_t b : active_bodies_)
-      if (static_cast<int>(b % s_.sharing->size()) == r)
+      if (owns(b))
         for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
           for (auto *f : fields)
-            (*f)[i] = all[k++];
+            *mine++ = (*f)[i];
+  };
+  auto unpack = [&](const double *all) {
+    for (int r = 0; r < comm_.size(); ++r)
+      for (std::uint32_t b : active_bodies_)
+        if (owner(b) == r)
+          for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
+            for (auto *f : fields)
+              (*f)[i] = *all++;
+  };
+  comm_.share(count, pack, unpack);
 }
 
 // The velocities and forces of the nodes of every process's active bodies, from their owners.
@@ -901,21 +895,23 @@ void Solver::erode() {
           failed_[e] = 0, failed.push_back(static_cast<std::uint32_t>(e));
         }
   Elements &el = m_.elements;
-  if (s_.sharing) { // every process's failed elements, with their state, in element order
+  { // every process's failed elements, with their state, in element order
     const auto state = elementState();
-    std::vector<double> mine;
+    std::vector<std::int64_t> mine_failed;
+    std::vector<double> mine_state;
     for (std::size_t j = 0; j < failed.size(); ++j) {
-      mine.insert(mine.end(), {static_cast<double>(failed[j]), static_cast<double>(kind[j])});
+      mine_failed.insert(mine_failed.end(), {failed[j], kind[j]});
       for (auto *f : state)
-        mine.push_back((*f)[failed[j]]);
+        mine_state.push_back((*f)[failed[j]]);
     }
-    const std::vector<double> all = s_.sharing->allGather(mine);
+    const std::vector<std::int64_t> all = comm_.allGather(std::move(mine_failed));
+    const std::vector<double> all_state = comm_.allGather(std::move(mine_state));
     std::vector<std::pair<std::uint32_t, std::uint8_t>> every;
-    for (std::size_t k = 0; k < all.size(); k += 2 + state.size()) {
+    for (std::size_t k = 0, j = 0; k < all.size(); k += 2, j += state.size()) {
       const auto e = static_cast<std::uint32_t>(all[k]);
       every.emplace_back(e, static_cast<std::uint8_t>(all[k + 1]));
       for (std::size_t f = 0; f < state.size(); ++f)
-        (*state[f])[e] = all[k + 2 + f];
+        (*state[f])[e] = all_state[j + f];
     }
     std::sort(every.begin(), every.end());
     failed.clear(), kind.clear();
@@ -963,14 +959,16 @@ void Solver::scaleMasses(double half_dt) {
   std::vector<std::pair<std::uint32_t, double>> scaled;
   for (std::size_t i = 0; i < chunks_.size(); ++i)
     scaled.insert(scaled.end(), sums_[i].scaled.begin(), sums_[i].scaled.end());
-  if (s_.sharing) { // every process's, in element order
-    std::vector<double> mine;
+  { // every process's, in element order
+    std::vector<std::int64_t> elements;
+    std::vector<double> masses;
     for (auto [e, mass] : scaled)
-      mine.insert(mine.end(), {static_cast<double>(e), mass});
-    const std::vector<double> all = s_.sharing->allGather(mine);
+      elements.push_back(e), masses.push_back(mass);
+    const std::vector<std::int64_t> all = comm_.allGather(std::move(elements));
+    const std::vector<double> all_masses = comm_.allGather(std::move(masses));
     scaled.clear();
-    for (std::size_t k = 0; k < all.size(); k += 2)
-      scaled.emplace_back(static_cast<std::uint32_t>(all[k]), all[k + 1]);
+    for (std::size_t k = 0; k < all.size(); ++k)
+      scaled.emplace_back(static_cast<std::uint32_t>(all[k]), all_masses[k]);
     std::sort(scaled.begin(), scaled.end());
   }
   if (scaled.empty())
@@ -1022,10 +1020,8 @@ void Solver::accountEnergy() {
     plastic += sums_[i].plastic;
     viscous += sums_[i].viscous;
   }
-  if (s_.sharing) {
-    const std::vector<double> all = sumOver({internal, plastic, viscous});
-    internal = all[0], plastic = all[1], viscous = all[2];
-  }
+  const std::vector<double> all = comm_.sumInOrder({internal, plastic, viscous});
+  internal = all[0], plastic = all[1], viscous = all[2];
   energy_.internal = internal;
   energy_.plastic += plastic;
   energy_.viscous += viscous;

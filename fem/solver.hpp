@@ -5,6 +5,7 @@
 // Wilkins artificial viscosity in compression, and the energy of every kind accounted.
 #pragma once
 
+#include "communicator.hpp"
 #include "model.hpp"
 
 #include <array>
@@ -17,20 +18,6 @@
 #include <vector>
 
 namespace mesopen::fem {
-
-// The processes that share a model's element work (MPI ranks): each computes the elements of the
-// bodies it owns (body b is process b mod size's); the model, the nodes' motion and the force
-// providers (contact) are the same on every process. After each element pass the nodes of every
-// process's active bodies (velocity and force) are gathered by all, and so are the failed
-// elements' states; energies and the stable step are combined in process order.
-class Sharing {
-public:
-  virtual ~Sharing() = default;
-  virtual int rank() const = 0;
-  virtual int size() const = 0;
-  // Every process's `mine`, concatenated in process order (every process calls it).
-  virtual std::vector<double> allGather(const std::vector<double> &mine) const = 0;
-};
 
 // The defaults are also a scene's ([run] in run/scene.hpp takes them from here).
 struct SolverSettings {
@@ -61,7 +48,6 @@ struct SolverSettings {
   double mass_scaling_step_ratio = 0.0;
   double gravity_x = 0.0, gravity_y = 0.0; // body force per unit mass [m/s^2]
   std::size_t chunk = 256;                 // elements per material batch
-  const Sharing *sharing = nullptr;        // the element work shared by processes (null: one)
 };
 
 // Energies per metre of depth [J/m]. Internal includes the plastic and viscous work done.
@@ -104,7 +90,13 @@ public:
 
 class Solver {
 public:
-  Solver(Model &model, SolverSettings settings);
+  // `processes` share the element work: each computes the elements of the bodies it owns (body b
+  // is rank b mod size's); the model, the nodes' motion and the force providers (contact) are the
+  // same on every process. After each element pass the nodes of every process's active bodies
+  // (velocity and force) are gathered by all, and so are the failed elements' states; energies
+  // and the stable step are combined in rank order. It outlives the solver.
+  Solver(Model &model, SolverSettings settings,
+         const parallel::Communicator &processes = parallel::serial());
 
   // One time step: half-kick, drift, internal and external forces, half-kick.
   void step();
@@ -192,10 +184,8 @@ private:
   void scaleMasses(double half_dt);
   std::string thinnestElement() const;
   std::string notFinite() const; // where a state that is not finite is (RunFailure's message)
-  bool owns(std::size_t body) const {
-    return !s_.sharing || static_cast<int>(body % s_.sharing->size()) == s_.sharing->rank();
-  }
-  std::vector<double> sumOver(std::vector<double> mine) const; // over processes, in their order
+  bool owns(std::size_t body) const { return owner(body) == comm_.rank(); }
+  int owner(std::size_t body) const { return static_cast<int>(body % comm_.size()); }
   std::array<std::vector<double> *, 8> elementState() const;
   template <std::size_t N>
   void shareOwned(std::size_t Body::*begin, std::size_t Body::*end,
@@ -205,6 +195,7 @@ private:
 
   Model &m_;
   SolverSettings s_;
+  const parallel::Communicator &comm_;
   std::vector<ForceProvider *> providers_;
   std::vector<Chunk> chunks_;
   std::vector<Unit> units_;

@@ -161,15 +161,8 @@ fem::Model buildRunModel(const Scene &scene, const Target *target, const PlacedP
   return model;
 }
 
-std::vector<double> MpiSharing::allGather(const std::vector<double> &mine) const {
-  std::vector<double> all = mine;
-  coupling::allGather(all, MPI_COMM_WORLD);
-  return all;
-}
-
 RunAssembly::RunAssembly(const Scene &scene, const std::string &dir,
-                         const std::string &liggghts_script, const coupling::World &world)
-    : sharing(world) {
+                         const std::string &liggghts_script, const parallel::World &world) {
   const RunSpec &run = scene.run;
   std::unique_ptr<Target> target;
   if (run.grains) {
@@ -199,8 +192,11 @@ RunAssembly::RunAssembly(const Scene &scene, const std::string &dir,
   }
   target.reset();
   const double dem_step = dem ? dem->stableStep() : HUGE_VAL; // every rank calls it
-  solver = std::make_unique<fem::Solver>(
-      model, solverSettings(scene, dem_step, world.size > 1 ? &sharing : nullptr));
+  if (world.size > 1)
+    processes = std::make_unique<parallel::MpiCommunicator>(MPI_COMM_WORLD);
+  else
+    processes = std::make_unique<parallel::SerialCommunicator>();
+  solver = std::make_unique<fem::Solver>(model, solverSettings(scene, dem_step), *processes);
   solver->endAt(run.end_time);
   if (scene.contact.enabled) {
     contact = std::make_unique<fem::Contact>(model, contactSettings(scene, walls));

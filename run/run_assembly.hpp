@@ -7,6 +7,7 @@
 #include "coupling.hpp"
 #include "liggghts_dem.hpp"
 #include "model.hpp"
+#include "mpi_communicator.hpp"
 #include "projectile.hpp"
 #include "scene.hpp"
 #include "solver.hpp"
@@ -36,18 +37,6 @@ std::vector<char> meshedGrains(const Scene &scene, const Target &target, const P
 fem::Model buildRunModel(const Scene &scene, const Target *target, const PlacedProjectile &p,
                          const std::vector<char> &meshed);
 
-// The element work shared by the MPI ranks (fem::Sharing): all-gathers over MPI_COMM_WORLD.
-class MpiSharing final : public fem::Sharing {
-public:
-  explicit MpiSharing(const coupling::World &world) : rank_(world.rank), size_(world.size) {}
-  int rank() const override { return rank_; }
-  int size() const override { return size_; }
-  std::vector<double> allGather(const std::vector<double> &mine) const override;
-
-private:
-  int rank_, size_;
-};
-
 // Everything a run steps: the model, its solver, the contact between the FE bodies and, when some
 // grains are disks, LIGGGHTS and the coupling to it. It stays where it is made (the solver holds
 // the model).
@@ -58,12 +47,13 @@ public:
   // signal to stop is looked for between these phases (stopIfAsked). Throws Interrupted,
   // InputError (dem.step longer than the disks' stable step) or what the phases throw.
   RunAssembly(const Scene &scene, const std::string &dir, const std::string &liggghts_script,
-              const coupling::World &world);
+              const parallel::World &world);
   RunAssembly(const RunAssembly &) = delete;
   RunAssembly &operator=(const RunAssembly &) = delete;
 
   fem::Model model;
-  MpiSharing sharing;
+  // The ranks the solver shares its element work with (serial for one process).
+  std::unique_ptr<parallel::Communicator> processes;
   std::unique_ptr<coupling::LiggghtsDem> dem;       // null: no disks
   std::unique_ptr<coupling::FeDemCoupling> coupled; // null: no disks
   std::unique_ptr<fem::Solver> solver;

@@ -64,7 +64,7 @@ void writeRunAttributes(H5File &h5, const Scene &scene, const std::string &statu
       h5.attribute("/", name, value);
 }
 
-nlohmann::json demFigures(const RunAssembly &run, const coupling::World &world) {
+nlohmann::json demFigures(const RunAssembly &run, const parallel::World &world) {
   const coupling::FeDemCoupling &coupled = *run.coupled;
   const coupling::DiskContactStatistics &c = coupled.contact().statistics();
   return {{"disks", std::llround(world.sum(static_cast<double>(run.dem->particles().size())))},

@@ -26,7 +26,7 @@ void writeRunAttributes(H5File &h5, const Scene &scene, const std::string &statu
 
 // The disks' figures over all ranks (every rank takes part): disks, contacts with the FE bodies,
 // work on the disks, windows.
-nlohmann::json demFigures(const RunAssembly &run, const coupling::World &world);
+nlohmann::json demFigures(const RunAssembly &run, const parallel::World &world);
 
 // summary.json: what ran, how it ended, its figures and files; `dem` the disks' figures (null:
 // no disks), `ranks` the MPI ranks.

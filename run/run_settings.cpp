@@ -5,7 +5,7 @@
 
 namespace mesopen {
 
-fem::SolverSettings solverSettings(const Scene &scene, double max_dt, const fem::Sharing *sharing) {
+fem::SolverSettings solverSettings(const Scene &scene, double max_dt) {
   const RunSpec &run = scene.run;
   return {.safety = run.safety,
           .viscosity_linear = run.viscosity_linear,
@@ -13,8 +13,7 @@ fem::SolverSettings solverSettings(const Scene &scene, double max_dt, const fem:
           .anti_locking = run.anti_locking,
           .max_dt = max_dt,
           .erode_step_ratio = run.erode_step_ratio,
-          .mass_scaling_step_ratio = run.mass_scaling_step_ratio,
-          .sharing = sharing};
+          .mass_scaling_step_ratio = run.mass_scaling_step_ratio};
 }
 
 fem::ContactSettings contactSettings(const Scene &scene, bool walls) {

@@ -14,9 +14,8 @@
 
 namespace mesopen {
 
-// The solver's settings: [run]'s, with `max_dt` (the disks' stable step; infinite without disks)
-// and `sharing` (the element work shared by MPI ranks; null for one process).
-fem::SolverSettings solverSettings(const Scene &scene, double max_dt, const fem::Sharing *sharing);
+// The solver's settings: [run]'s, with `max_dt` (the disks' stable step; infinite without disks).
+fem::SolverSettings solverSettings(const Scene &scene, double max_dt);
 
 // Contact of the scene: Coulomb coefficients per pair of materials (0 the projectile's, 1 the
 // grains'), the box's left, right and bottom walls when there is a target (`walls`).

@@ -43,7 +43,7 @@ void checkRunnable(const Scene &scene, const std::string &where) {
   }
 }
 
-RunReport simulate(const Scene &scene, const RunPlace &place, const coupling::World &world) {
+RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::World &world) {
   const RunSpec &run = scene.run;
   const bool writer = world.rank == 0; // the files are rank 0's
   const std::string &dir = place.dir, h5_path = dir + "/run.h5";

@@ -40,6 +40,6 @@ struct RunPlace {
 // written as for a failure. Whatever the loop's end, the files hold everything computed and are
 // whole. Throws Interrupted, InputError (found once LIGGGHTS has started) or what the set-up or
 // the files throw.
-RunReport simulate(const Scene &scene, const RunPlace &place, const coupling::World &world);
+RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::World &world);
 
 } // namespace mesopen

@@ -31,7 +31,7 @@ void setStopSignal(int signal) { stop_signal = signal; }
 
 std::string stopSignalName() { return stop_signal == SIGINT ? "SIGINT" : "SIGTERM"; }
 
-void stopIfAsked(const coupling::World &world, const std::string &phase) {
+void stopIfAsked(const parallel::World &world, const std::string &phase) {
   const double s = world.size > 1 ? world.max(stopSignal()) : stopSignal();
   if (s != 0) {
     setStopSignal(static_cast<int>(s));

@@ -8,7 +8,7 @@
 
 namespace mesopen {
 
-namespace coupling {
+namespace parallel {
 struct World;
 }
 
@@ -24,6 +24,6 @@ struct Interrupted : std::runtime_error {
 // Throws Interrupted ("SIGINT during the <phase>") when a signal has been received on any rank of
 // `world`: every rank ends at the same phase (mpirun passes the signal to each, not at the same
 // moment).
-void stopIfAsked(const coupling::World &world, const std::string &phase);
+void stopIfAsked(const parallel::World &world, const std::string &phase);
 
 } // namespace mesopen

@@ -87,11 +87,11 @@ int reportEnd(const RunReport &r, const std::string &dir, bool writer) {
 int runCommand(const RunOptions &options) {
   const auto start = Clock::now();
   Scene scene;
-  coupling::World world;
+  parallel::World world;
   try {
     scene = prepareRun(options);
     // Under mpirun every rank runs the scene; rank 0 writes the files.
-    world = coupling::world(scene.run.grains && scene.run.representation != Representation::fe);
+    world = parallel::world(scene.run.grains && scene.run.representation != Representation::fe);
   } catch (const InputError &e) {
     std::cerr << "mesopen run: " << e.what() << '\n';
     return 2;

@@ -12,7 +12,7 @@ mesopen_build
 
 cd "$MESOPEN_ROOT"
 # The sources are formatted by .clang-format: a difference fails the run (fix: `ninja -C build format`).
-mapfile -t sources < <(find grid targets fem coupling run tools tests -name '*.[ch]pp' | sort)
+mapfile -t sources < <(find grid targets parallel fem coupling run tools tests -name '*.[ch]pp' | sort)
 clang-format --dry-run --Werror "${sources[@]}"
 # The default run must find tests: an empty run is a failure, not a pass.
 no_tests=()

@@ -9,7 +9,7 @@
 using namespace mesopen;
 
 TEST(RunSettings, SceneDefaultsAreTheSolversDefaults) {
-  const fem::SolverSettings s = solverSettings(Scene(), HUGE_VAL, nullptr), d;
+  const fem::SolverSettings s = solverSettings(Scene(), HUGE_VAL), d;
   EXPECT_EQ(s.safety, d.safety);
   EXPECT_EQ(s.viscosity_linear, d.viscosity_linear);
   EXPECT_EQ(s.viscosity_quadratic, d.viscosity_quadratic);

@@ -39,7 +39,7 @@ double median(std::vector<double> v) {
 } // namespace
 
 int main(int argc, char **argv) {
-  const coupling::World world = coupling::world(true);
+  const parallel::World world = parallel::world(true);
   int steps = 2000, repeats = 5;
   std::string out = "bench";
   for (int i = 1; i + 1 < argc; i += 2) {

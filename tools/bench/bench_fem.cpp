@@ -123,7 +123,7 @@ double stepSeconds(const Target &target, bool wake_all, int threads, const Optio
   if (wake_all)
     for (std::size_t b = 1; b < model.bodies.size(); ++b)
       fem::setBodyVelocity(model, b, 0.0, 0.0, 1.0);
-  fem::Solver solver(model, solverSettings(scene, HUGE_VAL, nullptr));
+  fem::Solver solver(model, solverSettings(scene, HUGE_VAL));
   solver.step();
   std::vector<double> s;
   for (int r = 0; r < o.repeats; ++r) {

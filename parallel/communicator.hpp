@@ -1,0 +1,52 @@
+// The processes a run's work is shared by, as the solvers see them: this process's rank, their
+// number, and the collective operations between them (every process calls each in the same order).
+// The solvers call a Communicator and never ask whether there is more than one process: with one,
+// the serial one, every operation gives back this process's own values.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+namespace mesopen::parallel {
+
+class Communicator {
+public:
+  virtual ~Communicator() = default;
+  virtual int rank() const = 0;
+  virtual int size() const = 0;
+  // Every process's `mine`, concatenated in rank order.
+  virtual std::vector<double> allGather(std::vector<double> mine) const = 0;
+  virtual std::vector<std::int64_t> allGather(std::vector<std::int64_t> mine) const = 0;
+  // Every process's `mine` summed element by element, the processes' values added in rank order
+  // (the same sums on every process, whatever the message order); one process: `mine` as it is.
+  virtual std::vector<double> sumInOrder(std::vector<double> mine) const = 0;
+  // The smallest of every process's `value` (std::min taken in rank order).
+  virtual double min(double value) const = 0;
+  // Values each process holds part of, copied to every process: `pack` writes this process's
+  // `count` values, `unpack` reads every process's, concatenated in rank order. One process holds
+  // them all already: neither is called.
+  virtual void share(std::size_t count, const std::function<void(double *)> &pack,
+                     const std::function<void(const double *)> &unpack) const = 0;
+};
+
+// One process: gathers and reductions give back their input.
+class SerialCommunicator final : public Communicator {
+public:
+  int rank() const override { return 0; }
+  int size() const override { return 1; }
+  std::vector<double> allGather(std::vector<double> mine) const override { return mine; }
+  std::vector<std::int64_t> allGather(std::vector<std::int64_t> mine) const override {
+    return mine;
+  }
+  std::vector<double> sumInOrder(std::vector<double> mine) const override { return mine; }
+  double min(double value) const override { return value; }
+  void share(std::size_t, const std::function<void(double *)> &,
+             const std::function<void(const double *)> &) const override {}
+};
+
+// The one serial communicator (a solver's default).
+const Communicator &serial();
+
+} // namespace mesopen::parallel
