@@ -15,6 +15,9 @@ MESOPEN_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 #   coupling and the runs over several processes).
 # - Spectra and SuiteSparse solve the eigenproblem of `mesopen modal`.
 # - python3-matplotlib/numpy/h5py are used through /usr/bin/python3 (plots, post-processing).
+# - python3-vtk9 (VTK's Python bindings, the libvtk9 of libvtk9-dev) reads the VTK files back and
+#   renders a frame off screen in the test liggghts_vtk_files; xvfb (xvfb-run) and xauth give that
+#   rendering an X display where there is none (CI). ParaView itself is not needed.
 # - yade runs the test yade_spheres_at_rest (label yade): 63 packages, 118 MB download, 0.8 GB disk.
 MESOPEN_PACKAGES=(
   build-essential cmake ninja-build pkg-config
@@ -22,7 +25,7 @@ MESOPEN_PACKAGES=(
   libhdf5-dev libvtk9-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libgtest-dev
   libliggghts-dev libopenmpi-dev openmpi-bin
   libspectra-dev libsuitesparse-dev
-  python3 python3-matplotlib python3-numpy python3-h5py
+  python3 python3-matplotlib python3-numpy python3-h5py python3-vtk9 xvfb xauth
   clang-format
   yade
 )
