@@ -14,11 +14,23 @@
 
 namespace mesopen {
 
+// A moment of a run, for the estimate of the time left: wall seconds since the loop's start,
+// simulated time [s], the projectile's depth [m] and downward speed [m/s].
+struct ProgressMark {
+  double wall, time, depth, speed;
+};
+
+// The wall seconds left until end_time, or end_depth [m] (0: none) if the projectile gets there
+// first, from the marks so far (the last is now). Over the last half of the run so far the wall
+// time is fitted by least squares as a quadratic in the simulated time (its pace, wall seconds per
+// simulated second, growing as more grains move and the step shrinks; a pace falling is taken as
+// constant), and the depth as reached at the projectile's speed now and its mean deceleration
+// over that half. With fewer than four marks in that half: the share left at the pace so far.
+double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double end_depth);
+
 // A run's progress: on a terminal one line, rewritten in place at most four times a second (step,
-// simulated time, depth, step size, speed, share done, wall time left); in the log one line per
-// 5 % done. The time left is the simulated time left at the pace of the last third of the run so
-// far: to end_time, or to end_depth at the projectile's speed and deceleration over that third
-// (a constant deceleration), whichever comes first.
+// simulated time, depth, step size, speed, share done, wall time left: wallLeft); in the log one
+// line per 5 % done.
 class Progress {
 public:
   Progress(bool terminal, CommandLog *log, double end_time, double end_depth)
@@ -29,21 +41,14 @@ public:
   // The state now: `depth` and `speed` the projectile's, downward [m, m/s].
   void update(const fem::Solver &solver, double depth, double speed);
   void clear() const;
-  double done() const { return done_; } // the share of the run done, at the last update
-  double left() const { return left_; } // the wall seconds left, estimated at the last update
 
 private:
-  struct Mark {
-    double wall, time, depth, speed;
-  };
-  double estimateLeft() const;
   bool terminal_;
   CommandLog *log_;
   double end_time_, end_depth_;
   Clock::time_point start_ = Clock::now(), last_ = Clock::now();
-  std::vector<Mark> marks_; // one per update
-  double done_ = 0.0, left_ = 0.0;
-  int logged_ = 0; // 5 % steps logged
+  std::vector<ProgressMark> marks_; // one per update
+  int logged_ = 0;                  // 5 % steps logged
 };
 
 struct LoopResult {
