@@ -28,7 +28,7 @@ void CommandLog::line(const std::string &text) {
   if (!on())
     return;
   char stamp[32];
-  std::snprintf(stamp, sizeof stamp, "[%8.1f s] ", secondsSince(start_));
+  std::snprintf(stamp, sizeof stamp, "[%10.3f s] ", secondsSince(start_));
   text_ += stamp + text + "\n";
   writeText(path_, text_);
 }

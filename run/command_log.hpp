@@ -17,7 +17,7 @@ public:
   // the time now.
   CommandLog(const std::string &dir, const std::string &command_line);
   bool on() const { return !path_.empty(); }
-  // Appends "[  12.3 s] text" and writes the file. Throws std::runtime_error when it cannot.
+  // Appends "[    12.345 s] text" and writes the file. Throws std::runtime_error when it cannot.
   void line(const std::string &text);
 
 private:
