@@ -1,10 +1,12 @@
 #include "run_files.hpp"
 
 #include "output.hpp"
+#include "version.hpp"
 
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 
@@ -27,6 +29,10 @@ std::string absoluteScenePath(const std::string &path) {
   return fs::absolute(path).lexically_normal().string();
 }
 
+std::array<std::pair<const char *, const MaterialChoice *>, 2> materialGroups(const Scene &scene) {
+  return {{{"projectile", &scene.projectile_material}, {"grains", &scene.grain_material}}};
+}
+
 } // namespace
 
 bool takeRunDirectory(const Scene &scene, const std::string &dir) {
@@ -35,7 +41,7 @@ bool takeRunDirectory(const Scene &scene, const std::string &dir) {
     return false;
   prepareOutputDirectory(dir, "run",
                          {"summary.json", "run.h5", "run.h5.tmp", "vtk/run.pvd", "dem.data",
-                          "liggghts.log", "instability.json", "instability-*"});
+                          "mesopen.log", "liggghts.log", "instability.json", "instability-*"});
   std::error_code ec;
   for (const auto &f : fs::directory_iterator(dir + "/vtk", ec))
     if (f.path().filename().string().starts_with("frame_") ||
@@ -50,7 +56,11 @@ void writeRunAttributes(H5File &h5, const Scene &scene, const std::string &statu
   const RunSpec &run = scene.run;
   h5.attribute("/", "format", std::string("mesopen-run"));
   h5.attribute("/", "version", 1);
+  h5.attribute("/", "program", std::string("mesopen ") + programVersion());
   h5.attribute("/", "status", status);
+  h5.attribute("/", "representation",
+               std::string(nameOf(run.representation, representation_names)));
+  h5.attribute("/", "scene", composedScene(scene));
   h5.attribute("/", "seed", static_cast<std::uint64_t>(scene.target.seed));
   for (auto [name, value] : {std::pair{"velocity", run.velocity},
                              {"spin", run.spin},
@@ -62,6 +72,16 @@ void writeRunAttributes(H5File &h5, const Scene &scene, const std::string &statu
        {std::pair{"obliquity", run.obliquity}, {"yaw", run.yaw}, {"offset", run.offset}})
     if (value != 0.0)
       h5.attribute("/", name, value);
+  // The materials' parameters as the run used them: /materials/{projectile, grains}, the preset
+  // or type, and each parameter as an attribute.
+  h5.createGroup("/materials");
+  for (const auto &[group, choice] : materialGroups(scene)) {
+    const std::string g = std::string("/materials/") + group;
+    h5.createGroup(g);
+    h5.attribute(g, fem::findMaterialPreset(choice->name) ? "preset" : "type", choice->name);
+    for (const auto &[name, value] : resolvedParameters(*choice))
+      h5.attribute(g, name, value);
+  }
 }
 
 nlohmann::json demFigures(const RunAssembly &run, const parallel::World &world) {
@@ -86,7 +106,13 @@ nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Seri
   const fem::Energy &e = solver.energy();
   nlohmann::json j;
   j["command"] = "run";
+  j["program"] = std::string("mesopen ") + programVersion();
   j["scene"] = absoluteScenePath(scene.path);
+  j["composed_scene"] = composedScene(scene);
+  for (const auto &[group, choice] : materialGroups(scene))
+    j["materials"][group] = {
+        {fem::findMaterialPreset(choice->name) ? "preset" : "type", choice->name},
+        {"parameters", resolvedParameters(*choice)}};
   j["seed"] = scene.target.seed;
   j["status"] = runStatus(loop);
   if (!loop.failure.empty())
@@ -164,7 +190,7 @@ nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Seri
                      {"rotational_momentum", series.last("projectile/rotational_momentum")}};
   j["samples"] = series.size();
   j["frames"] = frames.size();
-  j["files"] = {"run.h5", "summary.json"};
+  j["files"] = {"run.h5", "summary.json", "scene.toml", "mesopen.log"};
   if (frames.vtk())
     j["files"].push_back("vtk/run.pvd");
   j["representation"] = nameOf(scene.run.representation, representation_names);

@@ -20,8 +20,10 @@ namespace mesopen {
 // InputError when the directory cannot be made or holds another command's output.
 bool takeRunDirectory(const Scene &scene, const std::string &dir);
 
-// The attributes of run.h5's root: format, version, status, seed, velocity, spin, end_time,
-// projectile_length, and obliquity, yaw and offset when not 0.
+// The attributes of run.h5's root: format, version, program (the program's version), status,
+// representation, scene (composed: every key at its value), seed, velocity, spin, end_time,
+// projectile_length, and obliquity, yaw and offset when not 0; the materials' resolved
+// parameters in /materials/{projectile, grains}.
 void writeRunAttributes(H5File &h5, const Scene &scene, const std::string &status);
 
 // The disks' figures over all ranks (every rank takes part): disks, contacts with the FE bodies,

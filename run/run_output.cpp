@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
+#include <tuple>
 
 namespace mesopen {
 
@@ -142,10 +143,10 @@ void writeFrameVtu(const std::string &path, const fem::Model &model, const Frame
     body->SetValue(static_cast<vtkIdType>(e), static_cast<int>(el.body[e]));
   }
   vtkCellData *cells = grid->GetCellData();
-  cells->AddArray(vtkArray("stress_xx", s.sxx));
-  cells->AddArray(vtkArray("stress_yy", s.syy));
-  cells->AddArray(vtkArray("stress_xy", s.sxy));
-  cells->AddArray(vtkArray("stress_zz", s.szz));
+  cells->AddArray(vtkArray("sxx", s.sxx));
+  cells->AddArray(vtkArray("syy", s.syy));
+  cells->AddArray(vtkArray("sxy", s.sxy));
+  cells->AddArray(vtkArray("szz", s.szz));
   cells->AddArray(vtkArray("pressure", el.pressure));
   cells->AddArray(vtkArray("effective_stress", s.effective));
   cells->AddArray(vtkArray("plastic_strain", el.plastic_strain));
@@ -310,26 +311,33 @@ void Frames::take(const fem::Model &model, const fem::Solver &solver) {
   h5.attribute(g, "stress",
                std::string("total stress sigma = S - p I [Pa]; effective_stress: "
                            "von Mises sqrt(3/2 S:S) [Pa]; pressure compression positive"));
-  for (auto [name, v] : {std::pair{"x", &nd.x}, {"y", &nd.y}, {"vx", &nd.vx}, {"vy", &nd.vy}})
-    h5.write(g + "/" + name, *v);
+  // each dataset with its unit
+  auto put = [&](const std::string &name, const auto &values, const char *unit) {
+    h5.write(name, values);
+    h5.attribute(name, "unit", std::string(unit));
+  };
+  for (auto [name, v] : {std::pair{"x", &nd.x}, {"y", &nd.y}})
+    put(g + "/" + name, *v, "m");
+  for (auto [name, v] : {std::pair{"vx", &nd.vx}, {"vy", &nd.vy}})
+    put(g + "/" + name, *v, "m/s");
   for (auto [name, v] : {std::pair{"sxx", &s.sxx},
                          {"syy", &s.syy},
                          {"sxy", &s.sxy},
                          {"szz", &s.szz},
                          {"pressure", &el.pressure},
-                         {"effective_stress", &s.effective},
-                         {"plastic_strain", &el.plastic_strain}})
-    h5.write(g + "/" + name, *v);
-  h5.write(g + "/eroded", el.eroded);
+                         {"effective_stress", &s.effective}})
+    put(g + "/" + name, *v, "Pa");
+  put(g + "/plastic_strain", el.plastic_strain, "1");
+  put(g + "/eroded", el.eroded, "1 (eroded), 0");
   if (coupled_) {
     h5.createGroup(g + "/disks");
-    for (auto [name, v] : {std::pair{"x", &disks.x},
-                           {"y", &disks.y},
-                           {"radius", &disks.radius},
-                           {"vx", &disks.vx},
-                           {"vy", &disks.vy},
-                           {"omega", &disks.omega}})
-      h5.write(g + "/disks/" + name, *v);
+    for (auto [name, v, unit] : {std::tuple{"x", &disks.x, "m"},
+                                 {"y", &disks.y, "m"},
+                                 {"radius", &disks.radius, "m"},
+                                 {"vx", &disks.vx, "m/s"},
+                                 {"vy", &disks.vy, "m/s"},
+                                 {"omega", &disks.omega, "rad/s"}})
+      put(g + "/disks/" + name, *v, unit);
     if (!vtk_dir_.empty())
       writeDisksVtu(vtk_dir_ + "/disks_" + frameName(times_.size()) + ".vtu", disks);
   }

@@ -1,8 +1,11 @@
 // What `mesopen run` writes: the series and frames of run.h5, the VTK frames with their ParaView
 // collection (vtk/run.pvd). Layout of run.h5 (SI units, per metre of depth):
-//   attributes of /: format = "mesopen-run", version, status ("completed", "failed" or
-//   "interrupted"), seed,
-//                    velocity, spin, end_time, projectile_length (projectile.length)
+//   attributes of /: format = "mesopen-run", version, program (its version), status
+//                    ("completed", "failed" or "interrupted"), representation, scene (the scene
+//                    composed, as scene.toml), seed, velocity, spin, end_time,
+//                    projectile_length (projectile.length); obliquity, yaw, offset when not 0
+//   /materials/{projectile, grains}                            attributes preset or type, and
+//                                                              every parameter (resolved)
 //   /series/{time, step, dt}                                   one value per sample
 //   /series/projectile/{com_x, com_y, vx, vy, rotational_momentum, lateral_force, axial_force,
 //                       tilt, depth}                           attributes unit, meaning
@@ -13,7 +16,10 @@
 //                                                              attribute body_names
 //   /frames/NNNNNN/{x, y, vx, vy (nodes); sxx, syy, sxy, szz (total stress sigma = S - p I),
 //                   pressure, effective_stress, plastic_strain, eroded (uint8, 1: removed)
-//                   (elements)}, attributes time, step
+//                   (elements)}, attributes time, step; each dataset attribute unit
+//   /frames/NNNNNN/disks/{x, y, radius, vx, vy, omega}        with disks; attribute unit
+// Strings are UTF-8 (variable length). The VTK frames name their arrays as run.h5 does (the
+// velocity as one vector of vx, vy, 0).
 // Eroded elements are empty cells in the VTK frames; nodes that erosion left without elements
 // are not the projectile's in its series.
 // Body 0 is the projectile, body b >= 1 the grain b - 1 of the target.

@@ -5,6 +5,7 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <functional>
@@ -23,13 +24,21 @@ struct Key {
   bool lo_open = false;                 // lo itself not allowed
   std::vector<std::string> choices;     // for strings
   std::function<void(Scene &, const toml::node &, const std::string &where)> set;
-  std::function<std::string(const Scene &)> get; // the default, printed
+  std::function<std::string(const Scene &)> get; // the value as a scene writes it
 };
 
 std::string show(double v) {
   std::ostringstream s;
   s << v;
   return s.str();
+}
+
+// A number as a scene writes it and reads it back to the same double: the shortest text that
+// does (std::to_chars), "inf", "-inf" and "nan" as TOML spells them.
+std::string exact(double v) {
+  char text[32];
+  const auto end = std::to_chars(text, text + sizeof text, v).ptr;
+  return std::string(text, end);
 }
 
 std::string allowed(const Key &k) {
@@ -72,7 +81,7 @@ Key real(std::string table, std::string name, Spec Scene::*part, double Spec::*f
   k.set = [k, part, field](Scene &s, const toml::node &n, const std::string &where) {
     (s.*part).*field = number(k, n, where);
   };
-  k.get = [part, field](const Scene &s) { return show((s.*part).*field); };
+  k.get = [part, field](const Scene &s) { return exact((s.*part).*field); };
   return k;
 }
 
@@ -165,9 +174,9 @@ Key diameter() {
   };
   k.get = [](const Scene &s) {
     std::string text = "[";
-    text += show(s.target.diameter_min);
+    text += exact(s.target.diameter_min);
     text += ", ";
-    text += show(s.target.diameter_max);
+    text += exact(s.target.diameter_max);
     return text + "]";
   };
   return k;
@@ -511,7 +520,7 @@ std::string materialName(const std::string &where, const toml::table &tab,
 
 // A parameter's value as a scene writes it.
 std::string parameterText(const fem::ParameterInfo &p, double value) {
-  return p.boolean ? (value != 0 ? "true" : "false") : show(value);
+  return p.boolean ? (value != 0 ? "true" : "false") : exact(value);
 }
 
 // One parameter of a material type: a number in its range, or true/false for a switch.
@@ -684,6 +693,44 @@ std::string sceneKeysMarkdown() {
           << p.doc << " |\n";
   }
   return out.str();
+}
+
+} // namespace mesopen
+
+namespace mesopen {
+
+std::string composedScene(const Scene &scene) {
+  std::string text = "# The scene as run: every key at its value (defaults included), every\n"
+                     "# material parameter resolved. `mesopen run` reads it back to the same "
+                     "scene.\n";
+  std::string table;
+  for (const Key &k : keys()) {
+    if (k.table != table) {
+      table = k.table;
+      text += "\n[" + table + "]\n";
+      if (const Key *preset = findKey(table, "preset")) // first: it sets the keys below
+        text += "preset = " + preset->get(scene) + "\n";
+    }
+    if (k.name != "preset")
+      text += k.name + " = " + k.get(scene) + "\n";
+  }
+  for (const auto &[group, choice] :
+       {std::pair{"projectile", &scene.projectile_material}, {"grains", &scene.grain_material}}) {
+    const fem::MaterialPreset *preset = fem::findMaterialPreset(choice->name);
+    const fem::MaterialType &type = *fem::findMaterialType(preset ? preset->type : choice->name);
+    text += std::string("\n[materials.") + group + "]\n" + (preset ? "preset" : "type") + " = \"" +
+            choice->name + "\"\n";
+    const fem::Parameters values = resolvedParameters(*choice);
+    for (const fem::ParameterInfo &info : type.parameters)
+      text += info.name + " = " + parameterText(info, values.at(info.name)) + "\n";
+  }
+  return text;
+}
+
+fem::Parameters resolvedParameters(const MaterialChoice &choice) {
+  const fem::MaterialPreset *preset = fem::findMaterialPreset(choice.name);
+  const fem::MaterialType &type = *fem::findMaterialType(preset ? preset->type : choice.name);
+  return fem::completeParameters(type, preset, choice.parameters);
 }
 
 } // namespace mesopen

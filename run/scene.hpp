@@ -5,6 +5,7 @@
 
 #include "contact.hpp"
 #include "disks.hpp"
+#include "material.hpp"
 #include "projectile.hpp"
 #include "solver.hpp"
 #include "spring_dashpot.hpp"
@@ -162,6 +163,12 @@ toml::table parseToml(const std::string &path);
 // A TOML value as a scene file writes it (strings quoted), for messages: at most 80 characters
 // of it, and its length when longer.
 std::string tomlText(const toml::node &n);
+
+// The scene as TOML with every key at its value (defaults included) and every material parameter
+// resolved; readScene reads it back to the same scene, and composes it again to the same text.
+std::string composedScene(const Scene &scene);
+// A material choice's parameters: the type's defaults, the preset's values, the scene's.
+fem::Parameters resolvedParameters(const MaterialChoice &choice);
 
 // The reference of every key (Markdown): table, key, type, default, allowed, meaning.
 std::string sceneKeysMarkdown();

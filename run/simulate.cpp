@@ -48,6 +48,8 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
   const bool writer = world.rank == 0; // the files are rank 0's
   const std::string &dir = place.dir, h5_path = dir + "/run.h5";
   catchStopSignals(true); // to the end of the time loop
+  if (writer)
+    writeText(dir + "/scene.toml", composedScene(scene));
   RunAssembly assembly(scene, dir, place.liggghts_script, world);
   const fem::Model &model = assembly.model;
   const fem::Solver &solver = *assembly.solver;
@@ -62,7 +64,12 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
                 run.vtk && writer ? dir + "/vtk" : std::string());
   if (assembly.coupled)
     frames.addDisks(assembly.coupled.get());
-  Progress progress(writer && place.progress, run.end_time,
+  if (writer && place.log)
+    place.log->line(std::to_string(model.bodies.size()) + " bodies, " +
+                    std::to_string(model.nodes.size()) + " nodes, " +
+                    std::to_string(model.elements.size()) + " elements (" +
+                    nameOf(run.representation, representation_names) + "); the time loop starts");
+  Progress progress(writer && place.progress, writer ? place.log : nullptr, run.end_time,
                     run.end_depth * scene.projectile.length);
   RunReport report;
   report.loop = timeLoop(scene, model, *assembly.solver, series, frames, progress);

@@ -1,8 +1,10 @@
 // A run of a scene from its set-up to its files: the target and the projectile as finite-element
 // bodies (some grains LIGGGHTS's disks), integrated in time; run.h5 (series and frames),
-// vtk/run.pvd, summary.json in the output directory.
+// vtk/run.pvd, summary.json, scene.toml (the scene composed: every key at its value) and
+// mesopen.log in the output directory.
 #pragma once
 
+#include "command_log.hpp"
 #include "liggghts_dem.hpp"
 #include "output.hpp"
 #include "scene.hpp"
@@ -32,6 +34,7 @@ struct RunPlace {
   std::string liggghts_script; // liggghts-inputs/dem.in
   bool progress = false;       // the progress line on stderr (rank 0)
   Clock::time_point start;     // the command's start, for the wall time
+  CommandLog *log = nullptr;   // DIR/mesopen.log (rank 0)
 };
 
 // The scene run on every rank of `world` (rank 0 writes the files). SIGINT and SIGTERM are caught

@@ -4,27 +4,96 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
 namespace mesopen {
 
-bool Progress::due() const { return on_ && Clock::now() - last_ >= std::chrono::milliseconds(250); }
+bool Progress::due() const {
+  return (terminal_ || log_) && Clock::now() - last_ >= std::chrono::milliseconds(250);
+}
 
-void Progress::show(const fem::Solver &solver, double depth) {
+void Progress::update(const fem::Solver &solver, double depth, double speed) {
   last_ = Clock::now();
   const double wall = secondsSince(start_), t = solver.time();
-  const double done = std::max(t / end_time_, end_depth_ > 0.0 ? depth / end_depth_ : 0.0);
-  std::fprintf(stderr,
-               "\r\033[Kmesopen run: step %zu, t = %.3f ns, depth %.3f mm, dt = %.3g ps, "
-               "%.0f steps/s, %.0f %% done, ETA %.0f s",
-               solver.steps(), 1e9 * t, 1e3 * depth, 1e12 * solver.dt(),
-               solver.steps() / std::max(wall, 1e-9), 100.0 * done,
-               std::max(0.0, wall * (1.0 - done) / std::max(done, 1e-30)));
+  marks_.push_back({wall, t, depth, speed});
+  const double done =
+      std::min(1.0, std::max(t / end_time_, end_depth_ > 0.0 ? depth / end_depth_ : 0.0));
+  char line[240];
+  std::snprintf(line, sizeof line,
+                "step %zu, t = %.3f ns, depth %.3f mm, dt = %.3g ps, %.0f steps/s, %.0f %% done, "
+                "ETA %.3g s",
+                solver.steps(), 1e9 * t, 1e3 * depth, 1e12 * solver.dt(),
+                solver.steps() / std::max(wall, 1e-9), 100.0 * done,
+                wallLeft(marks_, end_time_, end_depth_));
+  if (terminal_)
+    std::fprintf(stderr, "\r\033[Kmesopen run: %s", line);
+  if (log_ && static_cast<int>(20.0 * done) > logged_) {
+    logged_ = static_cast<int>(20.0 * done);
+    log_->line(line);
+  }
+}
+
+double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double end_depth) {
+  if (marks.empty())
+    return 0.0;
+  const ProgressMark &now = marks.back();
+  std::size_t first = marks.size() - 1; // the first mark of the last half
+  while (first > 0 && marks[first - 1].wall >= 0.5 * now.wall)
+    --first;
+  const double span = now.time - marks[first].time;
+  if (marks.size() - first < 4 || !(span > 0.0)) {
+    const double done =
+        std::max(now.time / end_time, end_depth > 0.0 ? now.depth / end_depth : 0.0);
+    return done > 0.0 ? std::max(0.0, now.wall * (1.0 - done) / done) : 0.0;
+  }
+  // Simulated time left: to end_time, or to end_depth at deceleration a if it comes first,
+  // depth left = v tau - a tau^2 / 2.
+  double time_left = std::max(0.0, end_time - now.time);
+  if (end_depth > 0.0 && now.speed > 0.0) {
+    const double depth_left = std::max(0.0, end_depth - now.depth), v = now.speed;
+    const double a = (marks[first].speed - v) / span;
+    double tau = depth_left / v;
+    if (a > 0.0)
+      tau = v * v > 2.0 * a * depth_left ? (v - std::sqrt(v * v - 2.0 * a * depth_left)) / a
+                                         : time_left;
+    time_left = std::min(time_left, tau);
+  }
+  // wall = c0 + c1 x + c2 x^2 by least squares, x = (t - t_now) / span in [-1, 0]: the normal
+  // equations' sums of x^k (k = 0..4) and of wall x^k (k = 0..2), solved by Cramer's rule; a
+  // falling pace (c2 < 0) is fitted again as a line.
+  double sx[5] = {}, sw[3] = {};
+  for (std::size_t i = first; i < marks.size(); ++i) {
+    const double x = (marks[i].time - now.time) / span;
+    double xk = 1.0;
+    for (int k = 0; k < 5; ++k, xk *= x) {
+      sx[k] += xk;
+      if (k < 3)
+        sw[k] += marks[i].wall * xk;
+    }
+  }
+  auto det3 = [](double a, double b, double c, double d, double e, double f, double g, double h,
+                 double i) {
+    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g);
+  };
+  const double d = det3(sx[0], sx[1], sx[2], sx[1], sx[2], sx[3], sx[2], sx[3], sx[4]);
+  double c1 = 0.0, c2 = -1.0;
+  if (d != 0.0) {
+    c1 = det3(sx[0], sw[0], sx[2], sx[1], sw[1], sx[3], sx[2], sw[2], sx[4]) / d;
+    c2 = det3(sx[0], sx[1], sw[0], sx[1], sx[2], sw[1], sx[2], sx[3], sw[2]) / d;
+  }
+  if (!(c2 >= 0.0)) {
+    c2 = 0.0;
+    const double d2 = sx[0] * sx[2] - sx[1] * sx[1];
+    c1 = d2 != 0.0 ? (sx[0] * sw[1] - sx[1] * sw[0]) / d2 : now.wall - marks[first].wall;
+  }
+  const double X = time_left / span;
+  return std::max(0.0, c1 * X + c2 * X * X);
 }
 
 void Progress::clear() const {
-  if (on_)
+  if (terminal_)
     std::fprintf(stderr, "\r\033[K");
 }
 
@@ -82,7 +151,7 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
         series.sample(model, solver);
       frames.offer(model, solver, last);
       if (progress.due())
-        progress.show(solver, series.depth(model));
+        progress.update(solver, series.depth(model), -series.last("projectile/vy"));
     }
   } catch (const std::exception &e) {
     result.failure = e.what();

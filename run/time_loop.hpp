@@ -2,6 +2,7 @@
 // a failure or a signal to stop.
 #pragma once
 
+#include "command_log.hpp"
 #include "model.hpp"
 #include "output.hpp"
 #include "run_output.hpp"
@@ -9,24 +10,45 @@
 #include "solver.hpp"
 
 #include <string>
+#include <vector>
 
 namespace mesopen {
 
-// One line on a terminal, rewritten in place at most four times a second: step, simulated time,
-// depth, step size, speed and time left (from the simulated time or the depth, whichever is
-// further along).
+// A moment of a run, for the estimate of the time left: wall seconds since the loop's start,
+// simulated time [s], the projectile's depth [m] and downward speed [m/s].
+struct ProgressMark {
+  double wall, time, depth, speed;
+};
+
+// The wall seconds left until end_time, or end_depth [m] (0: none) if the projectile gets there
+// first, from the marks so far (the last is now). Over the last half of the run so far the wall
+// time is fitted by least squares as a quadratic in the simulated time (its pace, wall seconds per
+// simulated second, growing as more grains move and the step shrinks; a pace falling is taken as
+// constant), and the depth as reached at the projectile's speed now and its mean deceleration
+// over that half. With fewer than four marks in that half: the share left at the pace so far.
+double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double end_depth);
+
+// A run's progress: on a terminal one line, rewritten in place at most four times a second (step,
+// simulated time, depth, step size, speed, share done, wall time left: wallLeft); in the log one
+// line per 5 % done.
 class Progress {
 public:
-  Progress(bool on, double end_time, double end_depth)
-      : on_(on), end_time_(end_time), end_depth_(end_depth) {}
+  Progress(bool terminal, CommandLog *log, double end_time, double end_depth)
+      : terminal_(terminal), log_(log && log->on() ? log : nullptr), end_time_(end_time),
+        end_depth_(end_depth) {}
+  // Time for an update: a quarter of a second since the last (never when it shows nothing).
   bool due() const;
-  void show(const fem::Solver &solver, double depth);
+  // The state now: `depth` and `speed` the projectile's, downward [m, m/s].
+  void update(const fem::Solver &solver, double depth, double speed);
   void clear() const;
 
 private:
-  bool on_;
+  bool terminal_;
+  CommandLog *log_;
   double end_time_, end_depth_;
   Clock::time_point start_ = Clock::now(), last_ = Clock::now();
+  std::vector<ProgressMark> marks_; // one per update
+  int logged_ = 0;                  // 5 % steps logged
 };
 
 struct LoopResult {

@@ -243,14 +243,12 @@ void H5File::attribute(const std::string &object, const std::string &name,
                        const std::string &value) {
   quiet();
   const std::string where = object + "@" + name;
-  // Fixed-length ASCII, padded with nulls (HDF5 has no zero-length fixed strings).
-  std::string padded = value;
-  padded.resize(std::max<std::size_t>(value.size(), 1), '\0');
+  // Variable-length UTF-8: h5py reads it as str (a fixed-length string comes back as bytes).
   Handle type(check(H5Tcopy(H5T_C_S1), path_, "create string type for", where), H5Tclose);
-  check(H5Tset_size(type, padded.size()), path_, "size string of", where);
-  check(H5Tset_strpad(type, H5T_STR_NULLPAD), path_, "pad string of", where);
-  check(H5Tset_cset(type, H5T_CSET_ASCII), path_, "set character set of", where);
-  putAttribute(id_, path_, object, name, type, type, padded.data());
+  check(H5Tset_size(type, H5T_VARIABLE), path_, "size string of", where);
+  check(H5Tset_cset(type, H5T_CSET_UTF8), path_, "set character set of", where);
+  const char *text = value.c_str();
+  putAttribute(id_, path_, object, name, type, type, &text);
 }
 
 std::vector<std::uint64_t> H5File::shape(const std::string &name) const {
@@ -318,9 +316,22 @@ std::string H5File::readStringAttribute(const std::string &object, const std::st
                     path_, "open attribute", where),
               H5Aclose);
   Handle type(check(H5Aget_type(attr), path_, "get type of", where), H5Tclose);
-  if (H5Tget_class(type) != H5T_STRING || H5Tis_variable_str(type) != 0)
+  Handle space(check(H5Aget_space(attr), path_, "get dataspace of", where), H5Sclose);
+  if (H5Tget_class(type) != H5T_STRING ||
+      check(H5Sget_simple_extent_npoints(space), path_, "count elements of", where) != 1)
     throw std::runtime_error("HDF5 file '" + path_ + "': attribute '" + where +
-                             "' is not a fixed-length string");
+                             "' is not one string");
+  if (H5Tis_variable_str(type) > 0) {
+    Handle memory(check(H5Tcopy(H5T_C_S1), path_, "create string type for", where), H5Tclose);
+    check(H5Tset_size(memory, H5T_VARIABLE), path_, "size string of", where);
+    check(H5Tset_cset(memory, H5Tget_cset(type)), path_, "set character set of", where);
+    char *text = nullptr;
+    check(H5Aread(attr, memory, &text), path_, "read attribute", where);
+    std::string value = text ? text : "";
+    H5free_memory(text);
+    return value;
+  }
+  // fixed length (files of earlier versions), padded with nulls
   std::string value(H5Tget_size(type), '\0');
   check(H5Aread(attr, type, value.data()), path_, "read attribute", where);
   value.erase(value.find_last_not_of('\0') + 1);

@@ -237,9 +237,12 @@ int campaignCommand(const CampaignOptions &options) {
         const std::string where = c.path + ", run \"" + r.name + "\", replicate " +
                                   std::to_string(k + 1) + " (scene " + r.scene + ")";
         std::istringstream in(j.scene);
-        j.tables = toml::parse(in);
-        const Scene scene = readScene(j.tables, where);
+        const Scene scene = readScene(toml::parse(in), where);
         checkRunnable(scene, where);
+        // the scene as the run will record it (scene.toml, every key at its value)
+        j.scene = composedScene(scene);
+        std::istringstream composed(j.scene);
+        j.tables = toml::parse(composed);
         j.seed = scene.target.seed;
         jobs.push_back(std::move(j));
       }

@@ -18,6 +18,7 @@ struct SceneOptions {
   std::string out_dir;
   std::optional<std::uint64_t> seed; // overrides target.seed
   std::optional<int> threads;
+  std::string command_line; // as typed, for the log
 };
 
 struct TargetOptions : SceneOptions {
@@ -34,7 +35,8 @@ struct RunOptions : SceneOptions {
 int runCommand(const RunOptions &options);
 
 struct ModalOptions {
-  std::string input; // scene (.toml), target.h5 or run.h5
+  std::string input;        // scene (.toml), target.h5 or run.h5
+  std::string command_line; // as typed, for the log
   std::string out_dir;
   std::optional<int> modes; // overrides modal.modes
   std::optional<int> threads;

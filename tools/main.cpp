@@ -1,6 +1,8 @@
 // mesopen: mesoscale simulation of projectiles penetrating granular targets.
+#include "command_log.hpp"
 #include "commands.hpp"
 #include "scene.hpp"
+#include "version.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -47,6 +49,7 @@ CLI::App *sceneCommand(CLI::App &app, const char *name, const char *about,
 
 int main(int argc, char **argv) {
   CLI::App app{"mesopen: 2D mesoscale simulation of projectiles penetrating dry sand"};
+  app.set_version_flag("--version", std::string("mesopen ") + mesopen::programVersion());
   app.require_subcommand(1);
 
   mesopen::TargetOptions target;
@@ -112,7 +115,7 @@ int main(int argc, char **argv) {
   if (argc > 1) {
     const std::string first = argv[1];
     std::string names;
-    bool known = first == "-h" || first == "--help";
+    bool known = first == "-h" || first == "--help" || first == "--version";
     const CLI::App &commands = app;
     for (const CLI::App *sub : commands.get_subcommands({})) {
       known = known || sub->check_name(first);
@@ -120,8 +123,9 @@ int main(int argc, char **argv) {
     }
     if (!known) {
       std::cerr << "mesopen: unknown " << (first.starts_with('-') ? "option" : "command") << " '"
-                << first << "'; allowed: " << (first.starts_with('-') ? "--help, or " : "") << names
-                << "\nRun with --help for more information.\n";
+                << first
+                << "'; allowed: " << (first.starts_with('-') ? "--help, --version, or " : "")
+                << names << "\nRun with --help for more information.\n";
       return 2;
     }
   }
@@ -131,6 +135,7 @@ int main(int argc, char **argv) {
     const int code = app.exit(e);
     return code == 0 ? 0 : 2;
   }
+  run.command_line = target.command_line = modal.command_line = mesopen::shellWords(argc, argv);
   if (*keys) {
     std::cout << mesopen::sceneKeysMarkdown();
     return 0;

@@ -3,6 +3,7 @@
 // shapes for ParaView), summary.json. INPUT is a scene (its [modal] table, [projectile] and
 // [materials.projectile]) or a mesh file: target.h5 (its /projectile mesh) or run.h5 (body 0 of
 // its /mesh), with the thesis's steel (Table 3.2) in plane strain.
+#include "command_log.hpp"
 #include "commands.hpp"
 #include "h5file.hpp"
 #include "material.hpp"
@@ -44,7 +45,8 @@ struct ModalProblem {
   double mesh_size = 0.0;  // [m]; 0 when read from a file
   double velocity = 0.0;   // for the scaled depth per cycle [m/s]
   bool clamped = false;
-  int modes = 10; // elastic modes wanted
+  int modes = 10;    // elastic modes wanted
+  std::string scene; // composed (scene.toml), when the input is a scene
 };
 
 // The elastic constants of [materials.projectile] (any type: density, bulk_modulus and the shear
@@ -82,6 +84,7 @@ ModalProblem sceneProblem(const std::string &path) {
   const Scene scene = readScene(path);
   const ModalSpec &m = scene.modal;
   ModalProblem p;
+  p.scene = composedScene(scene);
   p.solid = elasticSolid(scene);
   p.velocity = scene.run.velocity;
   p.modes = static_cast<int>(m.modes);
@@ -297,11 +300,29 @@ int modalCommand(const ModalOptions &options) {
       throw InputError(options.input + ": not a file (a directory?); allowed: a scene (.toml), "
                                        "target.h5 or run.h5");
     problem = ext == ".h5" ? fileProblem(options.input) : sceneProblem(options.input);
-    prepareOutputDirectory(options.out_dir, "modal", {"modes.json", "modes.vtu", "summary.json"});
+    prepareOutputDirectory(
+        options.out_dir, "modal",
+        {"modes.json", "modes.vtu", "summary.json", "scene.toml", "mesopen.log"});
   } catch (const InputError &e) {
     std::cerr << "mesopen modal: " << e.what() << '\n';
     return 2;
   }
+  CommandLog log;
+  try {
+    if (!problem.scene.empty())
+      writeText(options.out_dir + "/scene.toml", problem.scene);
+    log = CommandLog(options.out_dir, options.command_line);
+    log.line("input " + options.input + (problem.scene.empty() ? "" : " (composed: scene.toml)"));
+  } catch (const std::exception &e) {
+    std::cerr << "mesopen modal: " << options.out_dir << ": cannot write: " << e.what() << '\n';
+    return 1;
+  }
+  auto logEnd = [&](const std::string &text) { // (a log that cannot be written is not a failure)
+    try {
+      log.line(text);
+    } catch (const std::exception &) {
+    }
+  };
   if (options.threads)
     omp_set_num_threads(*options.threads);
   try {
@@ -318,9 +339,13 @@ int modalCommand(const ModalOptions &options) {
                               {"nodes", problem.mesh.nodes()},
                               {"frequency_hz", modes["frequency_hz"]},
                               {"omega_rad_per_s", modes["omega_rad_per_s"]},
-                              {"files", {"modes.json", "modes.vtu", "summary.json"}},
+                              {"files", {"modes.json", "modes.vtu", "summary.json", "mesopen.log"}},
                               {"wall_seconds", wall}};
+    if (!problem.scene.empty())
+      summary["files"].push_back("scene.toml");
     writeJson(options.out_dir + "/summary.json", summary);
+    logEnd("completed: " + std::to_string(result.omega.size()) + " modes, " +
+           std::to_string(problem.mesh.nodes()) + " nodes, " + std::to_string(wall) + " s");
     std::cout << "mesopen modal: " << problem.body << ", " << problem.mesh.nodes() << " nodes, "
               << result.omega.size() << " modes in " << wall << " s\n";
     for (std::size_t k = 0; k < result.omega.size(); ++k)
@@ -331,9 +356,11 @@ int modalCommand(const ModalOptions &options) {
     return 0;
   } catch (const std::invalid_argument &e) {
     std::cerr << "mesopen modal: " << options.input << ": " << e.what() << '\n';
+    logEnd(std::string("bad input: ") + e.what());
     return 2;
   } catch (const std::exception &e) {
     std::cerr << "mesopen modal: failed: " << e.what() << '\n';
+    logEnd(std::string("failed: ") + e.what());
     return 1;
   }
 }

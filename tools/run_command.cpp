@@ -1,5 +1,6 @@
 // mesopen run SCENE -o DIR: the scene's input checked, its output directory taken, the run made by
 // the run layer (run/simulate.hpp), its end said on the terminal and as the exit code.
+#include "command_log.hpp"
 #include "commands.hpp"
 #include "output.hpp"
 #include "run_files.hpp"
@@ -11,6 +12,7 @@
 
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 #include <unistd.h>
 
 namespace mesopen {
@@ -19,9 +21,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Keys the scene sets that the chosen representation does not use: said on stderr, not refused
-// (a scene may be switched between representations).
-void warnIdleKeys(const Scene &scene, const std::string &path) {
+// Keys the scene sets that the chosen representation does not use: warnings (said on stderr and
+// in the log), not refused (a scene may be switched between representations).
+std::vector<std::string> idleKeys(const Scene &scene, const std::string &path) {
   const toml::table root = parseToml(path);
   const bool disks = scene.run.grains && scene.run.representation != Representation::fe;
   std::vector<std::string> idle;
@@ -31,14 +33,16 @@ void warnIdleKeys(const Scene &scene, const std::string &path) {
     for (const char *key : {"band_half_width", "band_depth"})
       if (scene.run.representation != Representation::hybrid && run->contains(key))
         idle.push_back(std::string("run.") + key);
+  std::vector<std::string> warnings;
   for (const std::string &what : idle)
-    std::cerr << "mesopen run: warning: " << path << ": " << what
-              << " does nothing with run.representation = \""
-              << nameOf(scene.run.representation, representation_names) << "\"\n";
+    warnings.push_back("warning: " + path + ": " + what +
+                       " does nothing with run.representation = \"" +
+                       nameOf(scene.run.representation, representation_names) + "\"");
+  return warnings;
 }
 
-// The scene, checked for what a run needs. Throws InputError.
-Scene prepareRun(const RunOptions &options) {
+// The scene, checked for what a run needs, and the warnings about it. Throws InputError.
+Scene prepareRun(const RunOptions &options, std::vector<std::string> &warnings) {
   Scene scene = readScene(options.scene);
   if (options.seed)
     scene.target.seed = *options.seed;
@@ -53,31 +57,47 @@ Scene prepareRun(const RunOptions &options) {
                      "\" needs an output directory without spaces or any of \"'$#& (LIGGGHTS "
                      "reads the disks from it); it is '" +
                      out + "'");
-  warnIdleKeys(scene, options.scene);
+  warnings = idleKeys(scene, options.scene);
   return scene;
 }
 
-// The run's end on the terminal (rank 0) and as the exit code: 0 completed, 1 failed, 128 + the
-// signal when stopped by one.
-int reportEnd(const RunReport &r, const std::string &dir, bool writer) {
+// A line in the log at the run's end: a log that cannot be written then does not change how the
+// run ended (the message on stderr says what happened).
+void logQuietly(CommandLog &log, const std::string &text) {
+  try {
+    log.line(text);
+  } catch (const std::exception &) {
+  }
+}
+
+// The run's end on the terminal and in the log (rank 0) and as the exit code: 0 completed, 1
+// failed, 128 + the signal when stopped by one.
+int reportEnd(const RunReport &r, const std::string &dir, bool writer, CommandLog &log) {
   const LoopResult &loop = r.loop;
   if (!writer)
     return loop.failure.empty() ? 0 : loop.interrupted ? 128 + stopSignal() : 1;
+  std::ostringstream text;
+  text << "t = " << r.time << " s, step " << r.steps;
   if (loop.interrupted) {
+    logQuietly(log, "interrupted: " + loop.failure + ", " + text.str());
     std::cerr << "mesopen run: " << loop.failure << ", t = " << r.time
               << " s\n  what was computed up to there is in " << dir << " (run.h5, summary.json)\n";
     return 128 + stopSignal();
   }
   if (!loop.failure.empty()) {
+    logQuietly(log, "failed at " + text.str() + ": " + loop.failure);
     std::cerr << "mesopen run: failed at t = " << r.time << " s, step " << r.steps << ": "
               << loop.failure << "\n  what was computed up to there is in " << dir
               << " (run.h5, summary.json)\n";
     return 1;
   }
-  std::cout << "mesopen run: " << r.steps << " steps to t = " << r.time << " s, " << r.elements
-            << " elements in " << r.bodies << " bodies, " << r.wall << " s ("
-            << r.steps / std::max(loop.seconds, 1e-9) << " steps/s); energy balance error "
-            << r.balance_error << "\n  files in " << dir << ": run.h5 summary.json"
+  text.str("");
+  text << r.steps << " steps to t = " << r.time << " s, " << r.elements << " elements in "
+       << r.bodies << " bodies, " << r.wall << " s (" << r.steps / std::max(loop.seconds, 1e-9)
+       << " steps/s); energy balance error " << r.balance_error;
+  logQuietly(log, "completed: " + text.str());
+  std::cout << "mesopen run: " << text.str() << "\n  files in " << dir
+            << ": run.h5 summary.json scene.toml mesopen.log"
             << (r.vtk ? " vtk/run.pvd (ParaView)" : "") << "\n";
   return 0;
 }
@@ -87,9 +107,10 @@ int reportEnd(const RunReport &r, const std::string &dir, bool writer) {
 int runCommand(const RunOptions &options) {
   const auto start = Clock::now();
   Scene scene;
+  std::vector<std::string> warnings;
   parallel::World world;
   try {
-    scene = prepareRun(options);
+    scene = prepareRun(options, warnings);
     // Under mpirun every rank runs the scene; rank 0 writes the files.
     world = parallel::world(scene.run.grains && scene.run.representation != Representation::fe);
   } catch (const InputError &e) {
@@ -114,15 +135,35 @@ int runCommand(const RunOptions &options) {
   }
   if (const int code = static_cast<int>(world.max(refused)))
     return code;
+  CommandLog log;
+  if (world.rank == 0) {
+    for (const std::string &warning : warnings)
+      std::cerr << "mesopen run: " << warning << '\n';
+    try {
+      log = CommandLog(options.out_dir, options.command_line);
+      log.line("scene " + options.scene + " (composed: scene.toml), seed " +
+               std::to_string(scene.target.seed) + ", " + std::to_string(world.size) + " MPI rank" +
+               (world.size > 1 ? "s" : ""));
+      for (const std::string &warning : warnings)
+        log.line(warning);
+    } catch (const std::exception &e) {
+      std::cerr << "mesopen run: " << options.out_dir << ": cannot write mesopen.log: " << e.what()
+                << '\n';
+      refused = 1;
+    }
+  }
+  if (const int code = static_cast<int>(world.max(refused)))
+    return code;
   if (options.threads)
     omp_set_num_threads(*options.threads);
   const RunPlace place{options.out_dir, shareDirectory() + "/liggghts-inputs/dem.in",
-                       !options.quiet && isatty(STDERR_FILENO), start};
+                       !options.quiet && isatty(STDERR_FILENO), start, &log};
   try {
-    return reportEnd(simulate(scene, place, world), options.out_dir, world.rank == 0);
+    return reportEnd(simulate(scene, place, world), options.out_dir, world.rank == 0, log);
   } catch (const Interrupted &e) {
     // during the set-up: no run.h5, a summary saying so
     std::cerr << "mesopen run: " << e.what() << '\n';
+    logQuietly(log, std::string("interrupted: ") + e.what());
     if (world.rank == 0)
       writeUnstartedSummary(options.out_dir, options.scene, "interrupted", e.what());
     return 128 + stopSignal();
@@ -130,6 +171,7 @@ int runCommand(const RunOptions &options) {
     // found once the target or LIGGGHTS is made (dem.step against the disks' stable step): bad
     // input all the same; no run.h5 or summary.json is written
     std::cerr << "mesopen run: " << e.what() << '\n';
+    logQuietly(log, std::string("bad input: ") + e.what());
     return 2;
   } catch (const std::exception &e) {
     // Before the time loop (target, model) or while writing the files: no run.h5, a summary
@@ -137,6 +179,7 @@ int runCommand(const RunOptions &options) {
     std::cerr << "mesopen run: failed: " << e.what() << '\n';
     if (world.rank != 0)
       return 1;
+    logQuietly(log, std::string("failed: ") + e.what());
     std::error_code ec;
     fs::remove(options.out_dir + "/run.h5.tmp", ec);
     try {

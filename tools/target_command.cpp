@@ -1,5 +1,6 @@
 // mesopen target SCENE -o DIR: the sand target, the projectile placed on it, and their files.
 #include "atomic_file.hpp"
+#include "command_log.hpp"
 #include "commands.hpp"
 #include "generator.hpp"
 #include "measures.hpp"
@@ -20,6 +21,7 @@
 #include <fstream>
 #include <future>
 #include <iostream>
+#include <sstream>
 #include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -118,11 +120,28 @@ int targetCommand(const TargetOptions &options) {
     if (options.no_mesh)
       scene.target.mesh = MeshKind::none;
     prepareOutputDirectory(options.out_dir, "target",
-                           {"target.json", "summary.json", "grain-sizes.png"});
+                           {"target.json", "summary.json", "grain-sizes.png", "mesopen.log"});
   } catch (const InputError &e) {
     std::cerr << "mesopen target: " << e.what() << '\n';
     return 2;
   }
+  CommandLog log;
+  try {
+    writeText(options.out_dir + "/scene.toml", composedScene(scene));
+    log = CommandLog(options.out_dir, options.command_line);
+    log.line("scene " + options.scene + " (composed: scene.toml), seed " +
+             std::to_string(scene.target.seed));
+  } catch (const std::exception &e) {
+    std::cerr << "mesopen target: " << options.out_dir << ": cannot write: " << e.what() << '\n';
+    return 1;
+  }
+  // The log's last line: a log that cannot be written then does not change how the command ended.
+  auto logEnd = [&](const std::string &text) {
+    try {
+      log.line(text);
+    } catch (const std::exception &) {
+    }
+  };
   if (options.threads)
     omp_set_num_threads(*options.threads);
 
@@ -134,6 +153,7 @@ int targetCommand(const TargetOptions &options) {
   auto interrupted = [&] {
     const std::string what = stopSignalName() + " while " + phase;
     std::cerr << "mesopen target: " << what << "\n";
+    logEnd("interrupted: " + what);
     writeJson(options.out_dir + "/summary.json",
               {{"command", "target"},
                {"scene", fs::absolute(options.scene).lexically_normal().string()},
@@ -265,22 +285,30 @@ int targetCommand(const TargetOptions &options) {
                           {"mean_diameter", m.mean_diameter},
                           {"std_diameter", m.std_diameter},
                           {"local_porosity_std", m.local_porosity_std}};
-    summary["files"] = {"target.h5", "target.data", "target.vtu", "target.spheres", "target.json"};
+    summary["files"] = {"target.h5",   "target.data", "target.vtu", "target.spheres",
+                        "target.json", "scene.toml",  "mesopen.log"};
     if (plotted)
       summary["files"].push_back("grain-sizes.png");
     summary["warnings"] = warnings;
     summary["wall_seconds"] = seconds;
     writeJson(dir + "/summary.json", summary);
+    for (const auto &warning : warnings)
+      logEnd("warning: " + warning);
+    std::ostringstream done;
+    done << m.grains << " grains, porosity " << m.porosity << ", " << target.mesh.triangles()
+         << " triangles, " << seconds << " s";
+    logEnd("completed: " + done.str());
 
     std::cout << "mesopen target: " << m.grains << " grains, porosity " << 100 * m.porosity
               << " %, mean diameter " << 1e6 * m.mean_diameter << " um, std "
               << 1e6 * m.std_diameter << " um, " << target.mesh.triangles() << " triangles, "
               << seconds << " s\n"
               << "  files in " << dir << ": target.h5 target.data target.vtu (ParaView) "
-              << "target.spheres target.json summary.json\n";
+              << "target.spheres target.json summary.json scene.toml mesopen.log\n";
     return 0;
   } catch (const std::exception &e) {
     std::cerr << "mesopen target: failed while " << phase << ": " << e.what() << '\n';
+    logEnd("failed while " + phase + ": " + e.what());
     try { // the files it wrote are whole (each renamed when complete); the summary says what failed
       writeJson(options.out_dir + "/summary.json",
                 {{"command", "target"},

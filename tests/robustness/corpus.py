@@ -459,7 +459,8 @@ def corpus(mesopen, ref):
     add("cli", "analyze without directories", ["analyze"], 2, "dirs is required")
     add("cli", "misspelt command rnu", ["rnu", "scene.toml", "-o", "out"], 2,
         "unknown command 'rnu'; allowed: target, run, analyze, modal, campaign, keys", files=S)
-    add("cli", "--version (none)", ["--version"], 2, "unknown option '--version'; allowed: --help")
+    add("cli", "misspelt option --versoin", ["--versoin"], 2,
+        "unknown option '--versoin'; allowed: --help, --version")
 
     # -- file ---------------------------------------------------------------------------------
     for command in ("run", "target", "modal", "campaign"):
@@ -702,7 +703,7 @@ def corpus(mesopen, ref):
     add(O, "run into an unwritable directory (frames)", ["run", "scene.toml", "-o", "/proc/self"]
         + QUIET["run"], 2, "vtk: cannot create", files=S)
     add(O, "run into an unwritable directory (no frames)",
-        ["run", "scene.toml", "-o", "/proc/self"] + QUIET["run"], 1, "run.h5.tmp",
+        ["run", "scene.toml", "-o", "/proc/self"] + QUIET["run"], 1, "cannot write mesopen.log",
         files={"scene.toml": scene({"run.frame_interval": "0.0"})})
     add(O, "target into an unwritable directory", ["target", "scene.toml", "-o", "/proc/self"]
         + QUIET["target"], 1, "cannot create", files=S)

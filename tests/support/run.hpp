@@ -30,9 +30,9 @@ struct Result {
   std::string output; // stdout and stderr together
 };
 
-// Run `mesopen ARGS` and return its exit code and output.
-inline Result runMesopen(const std::string &args) {
-  const std::string cmd = std::string(MESOPEN_BINARY) + " " + args + " 2>&1";
+// Run a shell command and return its exit code and output.
+inline Result runCommand(const std::string &command) {
+  const std::string cmd = command + " 2>&1";
   Result r{-1, {}};
   FILE *pipe = ::popen(cmd.c_str(), "r");
   if (!pipe)
@@ -44,6 +44,11 @@ inline Result runMesopen(const std::string &args) {
   const int status = ::pclose(pipe);
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+// Run `mesopen ARGS` and return its exit code and output.
+inline Result runMesopen(const std::string &args) {
+  return runCommand(std::string(MESOPEN_BINARY) + " " + args);
 }
 
 // A 0.6 x 0.3 mm target of 60 um grains and a 0.3 mm projectile, 20 ns; `run` ends the [run]

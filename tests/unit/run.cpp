@@ -363,7 +363,7 @@ TEST(Run, VtkFramesCompressedAndReadBack) {
   ASSERT_EQ(grid->GetNumberOfPoints(), static_cast<vtkIdType>(x.size()));
   ASSERT_EQ(grid->GetNumberOfCells(), static_cast<vtkIdType>(sxx.size()));
   vtkDataArray *velocity = grid->GetPointData()->GetArray("velocity");
-  vtkDataArray *stress = grid->GetCellData()->GetArray("stress_xx");
+  vtkDataArray *stress = grid->GetCellData()->GetArray("sxx");
   ASSERT_NE(velocity, nullptr);
   ASSERT_NE(stress, nullptr);
   EXPECT_EQ(stress->GetDataType(), VTK_FLOAT);
@@ -405,4 +405,55 @@ TEST(Run, VtkFramesCompressedAndReadBack) {
                        static_cast<double>(std::filesystem::file_size(frame));
   std::printf("frame 1: %.2f times smaller than plain doubles\n", ratio);
   EXPECT_GT(ratio, 3.0);
+}
+
+// A run records what it ran: scene.toml (the scene composed) and mesopen.log in its directory;
+// run.h5 and summary.json hold the program's version, the representation, the composed scene
+// and the materials' resolved parameters. The record is whole: the run made again from
+// DIR/scene.toml writes the same run.h5 byte for byte, and the same scene.toml.
+TEST(Run, RecordsWhatItRanAndRunsAgainFromIt) {
+  ScratchDir dir("run-provenance");
+  const auto r = runScene(dir, tinyScene("frame_interval = 1e-8\nvtk = false\n"
+                                         "[materials.grains]\nyield_cap = 4.5e9\n"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const std::string scene = test::readFile(dir / "out/scene.toml");
+  EXPECT_NE(scene.find("\n[run]\n"), std::string::npos) << scene;
+  EXPECT_NE(scene.find("\nsafety = "), std::string::npos) << scene; // a default, written out
+  EXPECT_NE(scene.find("\n[materials.grains]\npreset = \"quartz\"\n"), std::string::npos);
+  EXPECT_NE(scene.find("\nyield_cap = 4.5e+09\n"), std::string::npos) << scene;
+  const std::string log = test::readFile(dir / "out/mesopen.log");
+  EXPECT_EQ(log.rfind("mesopen 0.", 0), 0u) << log;
+  EXPECT_NE(log.find("command: "), std::string::npos) << log;
+  EXPECT_NE(log.find(" run " + (dir / "scene.toml") + " -o "), std::string::npos) << log;
+  EXPECT_NE(log.find("] completed: "), std::string::npos) << log;
+  {
+    const H5File h5 = H5File::open(dir / "out/run.h5");
+    EXPECT_EQ(h5.readStringAttribute("/", "program").rfind("mesopen 0.", 0), 0u);
+    EXPECT_EQ(h5.readStringAttribute("/", "representation"), "fe");
+    EXPECT_EQ(h5.readStringAttribute("/", "scene"), scene);
+    EXPECT_EQ(h5.readStringAttribute("/materials/grains", "preset"), "quartz");
+    EXPECT_EQ(h5.readAttribute<double>("/materials/grains", "yield_cap"), 4.5e9);
+    EXPECT_EQ(h5.readStringAttribute("/materials/projectile", "preset"), "steel");
+    EXPECT_GT(h5.readAttribute<double>("/materials/projectile", "density"), 7000.0);
+    EXPECT_EQ(h5.readStringAttribute("/frames/000001/sxx", "unit"), "Pa");
+    EXPECT_EQ(h5.readStringAttribute("/frames/000001/vx", "unit"), "m/s");
+  }
+  const auto summary = nlohmann::json::parse(test::readFile(dir / "out/summary.json"));
+  EXPECT_EQ(summary["composed_scene"], scene);
+  EXPECT_EQ(summary["program"],
+            H5File::open(dir / "out/run.h5").readStringAttribute("/", "program"));
+  EXPECT_EQ(summary["materials"]["grains"]["parameters"]["yield_cap"], 4.5e9);
+  EXPECT_EQ(summary["materials"]["projectile"]["preset"], "steel");
+  // h5py reads the strings as str, not bytes
+  const auto py = test::runCommand(
+      "/usr/bin/python3 -c \"import h5py, sys; f = h5py.File(sys.argv[1]); "
+      "assert isinstance(f.attrs['scene'], str) and isinstance(f.attrs['status'], str); "
+      "assert f['/frames/000000/pressure'].attrs['unit'] == 'Pa'\" " +
+      (dir / "out/run.h5"));
+  EXPECT_EQ(py.code, 0) << py.output;
+  const auto again =
+      test::runMesopen("run " + (dir / "out/scene.toml") + " -o " + (dir / "again") + " --quiet");
+  ASSERT_EQ(again.code, 0) << again.output;
+  EXPECT_EQ(test::readFile(dir / "again/scene.toml"), scene);
+  EXPECT_TRUE(test::readFile(dir / "again/run.h5") == test::readFile(dir / "out/run.h5"));
 }

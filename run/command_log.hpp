@@ -1,0 +1,32 @@
+// A command's log, DIR/mesopen.log: what ran (program version, command line, host, threads, the
+// start in UTC), then one line per event (progress, warnings, the end) with the wall seconds since
+// the start. The file is rewritten whole under a temporary name at every line, so that it is
+// always whole and holds every line written so far.
+#pragma once
+
+#include "output.hpp"
+
+#include <string>
+
+namespace mesopen {
+
+class CommandLog {
+public:
+  CommandLog() = default; // writes nothing (the ranks but 0, the tests)
+  // Starts DIR/mesopen.log with the program's version, `command_line`, the host, the threads and
+  // the time now.
+  CommandLog(const std::string &dir, const std::string &command_line);
+  bool on() const { return !path_.empty(); }
+  // Appends "[    12.345 s] text" and writes the file. Throws std::runtime_error when it cannot.
+  void line(const std::string &text);
+
+private:
+  std::string path_, text_;
+  Clock::time_point start_ = Clock::now();
+};
+
+// The words as a shell reads them back: quoted where they hold anything but letters, digits and
+// -_./=,:+@%.
+std::string shellWords(int argc, const char *const *argv);
+
+} // namespace mesopen
