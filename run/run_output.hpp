@@ -74,7 +74,7 @@ public:
   void offer(const fem::Model &model, const fem::Solver &solver, bool force = false);
   // The DEM participant's disks go into every frame too: /frames/NNNNNN/disks/{x, y, radius, vx,
   // vy, omega} and vtk/disks_NNNNNN.vtu (points with radius, velocity and spin, as the second part
-  // of each time in run.pvd; in ParaView a Glyph of 2D circles scaled by radius shows them). Under
+  // of each time in run.pvd; tools/paraview/show.py draws them as circles of their radius). Under
   // MPI every rank takes the frames (the disks are gathered to rank 0, which writes them). The
   // disks are where they are at the frame's time, within the coupling's window.
   void addDisks(const coupling::FeDemCoupling *coupled) { coupled_ = coupled; }
