@@ -68,8 +68,9 @@ TEST(Progress, WallLeftFollowsAGrowingPaceAndAProjectileSlowing) {
       }
     }
     EXPECT_LT(worst, growth >= 0.0 ? 0.02 : 0.5) << "growth " << growth;
-    if (growth < 0.0)
+    if (growth < 0.0) {
       EXPECT_GE(shortest, 1.0);
+    }
   }
   // no depth to reach: to end_time at the pace so far; one mark: the share left
   const std::vector<ProgressMark> one{{10.0, 1e-7, 0.0, 0.0}};
