@@ -253,4 +253,36 @@ void LiggghtsDem::gatherParticles(const Particles &local, Particles &all) const 
   }
 }
 
+std::vector<DiskForce> LiggghtsDem::writeRestart(const std::string &path) {
+  const LAMMPS_NS::Atom *atom = lammps(lmp_)->atom;
+  std::vector<DiskForce> forces(static_cast<std::size_t>(atom->nlocal));
+  for (std::size_t i = 0; i < forces.size(); ++i)
+    forces[i] = {atom->tag[i], atom->f[i][0], atom->f[i][1], atom->torque[i][2]};
+  const std::string temp = path + ".tmp";
+  if (temp.find_first_of(" \t\n\"'$#&") != std::string::npos)
+    throw std::invalid_argument("LIGGGHTS restart file '" + temp +
+                                "': a path with a space or one of \"'$#&");
+  std::string command = "write_restart " + temp;
+  lammps_command(lmp_, command.data());
+  int rank = 0;
+  MPI_Comm_rank(comm_, &rank);
+  if (rank == 0)
+    std::filesystem::rename(temp, path);
+  lammps_command(lmp_, const_cast<char *>("run 0"));
+  restoreForces(forces);
+  gatherDiskForces(forces);
+  return forces;
+}
+
+void LiggghtsDem::restoreForces(const std::vector<DiskForce> &forces) {
+  LAMMPS_NS::Atom *atom = lammps(lmp_)->atom;
+  for (const DiskForce &d : forces) {
+    const int i = d.id > 0 && d.id <= atom->map_tag_max ? atom->map(static_cast<int>(d.id)) : -1;
+    if (i < 0 || i >= atom->nlocal) // another rank's
+      continue;
+    atom->f[i][0] = d.fx, atom->f[i][1] = d.fy, atom->torque[i][2] = d.torque;
+  }
+  read();
+}
+
 } // namespace mesopen::coupling

@@ -1,5 +1,6 @@
 #include "simulate.hpp"
 
+#include "checkpoint.hpp"
 #include "h5file.hpp"
 #include "run_assembly.hpp"
 #include "run_files.hpp"
@@ -43,12 +44,14 @@ void checkRunnable(const Scene &scene, const std::string &where) {
   }
 }
 
-RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::World &world) {
+RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::World &world,
+                   bool resume) {
   const RunSpec &run = scene.run;
   const bool writer = world.rank == 0; // the files are rank 0's
   const std::string &dir = place.dir, h5_path = dir + "/run.h5";
   catchStopSignals(true); // to the end of the time loop
-  RunAssembly assembly(scene, dir, place.liggghts_script, world);
+  RunAssembly assembly(scene, dir, place.liggghts_script, world,
+                       resume ? checkpointRestart(dir) : std::string());
   const fem::Model &model = assembly.model;
   const fem::Solver &solver = *assembly.solver;
   stopIfAsked(world, "set-up");
@@ -62,10 +65,13 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
                 run.vtk && writer ? dir + "/vtk" : std::string());
   if (assembly.coupled)
     frames.addDisks(assembly.coupled.get());
+  // The checkpoints (a new run's), or the state of the last one and run.h5 so far (a run
+  // continued).
+  Checkpoints checkpoints(scene, dir, assembly, series, frames, h5 ? &*h5 : nullptr, world, resume);
   Progress progress(writer && place.progress, run.end_time,
                     run.end_depth * scene.projectile.length);
   RunReport report;
-  report.loop = timeLoop(scene, model, *assembly.solver, series, frames, progress);
+  report.loop = timeLoop(scene, model, *assembly.solver, series, frames, progress, checkpoints);
   catchStopSignals(false);
   report.steps = solver.steps();
   report.time = solver.time();
@@ -75,6 +81,7 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
 
   // Whatever happened, the files hold everything computed so far and are whole.
   if (writer) {
+    h5->record(nullptr); // (the checkpoints' journal holds the loop's calls)
     series.write(*h5);
     writeRunAttributes(*h5, scene, runStatus(report.loop));
     h5->close();
@@ -84,10 +91,16 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
     return report;
   std::filesystem::rename(h5_path + ".tmp", h5_path);
   frames.writeCollection();
-  report.wall = secondsSince(place.start);
+  report.wall = checkpoints.wallBefore() + secondsSince(place.start);
   report.vtk = frames.vtk();
-  writeJson(dir + "/summary.json",
-            runSummary(scene, assembly, series, frames, report.loop, report.wall, world.size, dem));
+  nlohmann::json summary =
+      runSummary(scene, assembly, series, frames, report.loop, report.wall, world.size, dem);
+  if (checkpoints.on() || checkpoints.resumed())
+    summary["checkpoints"] = {{"written", checkpoints.written()},
+                              {"resumed", checkpoints.resumed()},
+                              {"kept", runStatus(report.loop) != "completed"}};
+  writeJson(dir + "/summary.json", summary);
+  checkpoints.end(runStatus(report.loop) == "completed"); // after the files it stands in for
   return report;
 }
 

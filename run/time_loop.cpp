@@ -1,5 +1,6 @@
 #include "time_loop.hpp"
 
+#include "checkpoint.hpp"
 #include "stop_signals.hpp"
 
 #include <algorithm>
@@ -33,9 +34,9 @@ std::string runStatus(const LoopResult &loop) {
 }
 
 LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &solver,
-                    Series &series, Frames &frames, Progress &progress) {
+                    Series &series, Frames &frames, Progress &progress, Checkpoints &checkpoints) {
   const RunSpec &run = scene.run;
-  LoopResult result;
+  LoopResult result = checkpoints.before();
   const auto start = Clock::now();
   const auto max_steps = static_cast<std::size_t>(run.max_steps);
   const auto every = static_cast<std::size_t>(run.series_interval);
@@ -52,10 +53,13 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
     return !result.end.empty();
   };
   try {
-    series.sample(model, solver);
-    frames.offer(model, solver, true);
-    for (bool last = ended(true); !last;) {
-      if (stopSignal() != 0) {
+    // (a run continued from a checkpoint has its first sample and frame, and had not ended)
+    if (!checkpoints.resumed()) {
+      series.sample(model, solver);
+      frames.offer(model, solver, true);
+    }
+    for (bool last = !checkpoints.resumed() && ended(true); !last;) {
+      if (checkpoints.stopBySignal(result)) {
         result.interrupted = true;
         result.failure = std::string("stopped by ") + stopSignalName() + " at step " +
                          std::to_string(solver.steps());
@@ -81,6 +85,8 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
       if (last && !due)
         series.sample(model, solver);
       frames.offer(model, solver, last);
+      if (!last)
+        checkpoints.afterStep(result);
       if (progress.due())
         progress.show(solver, series.depth(model));
     }
@@ -88,7 +94,7 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
     result.failure = e.what();
   }
   progress.clear();
-  result.seconds = secondsSince(start);
+  result.seconds = checkpoints.before().seconds + secondsSince(start);
   return result;
 }
 

@@ -12,6 +12,8 @@
 
 namespace mesopen {
 
+class Checkpoints;
+
 // One line on a terminal, rewritten in place at most four times a second: step, simulated time,
 // depth, step size, speed and time left (from the simulated time or the depth, whichever is
 // further along).
@@ -40,10 +42,12 @@ struct LoopResult {
 // "completed", "failed" or "interrupted".
 std::string runStatus(const LoopResult &loop);
 
-// The time loop: step, sample the series, take frames, show progress; until run.end_time,
-// run.end_depth or run.max_steps, a failure (an inverted element, a frame that cannot be
-// written) or SIGINT or SIGTERM (caught by catchStopSignals; the loop ends after its step).
+// The time loop: step, sample the series, take frames, show progress, write checkpoints; until
+// run.end_time, run.end_depth or run.max_steps, a failure (an inverted element, a frame or a
+// checkpoint that cannot be written) or SIGINT or SIGTERM (caught by catchStopSignals; the loop
+// ends after its step, with a checkpoint when they are on). A run continued from a checkpoint
+// goes on from its step, its figures added to the checkpoint's.
 LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &solver,
-                    Series &series, Frames &frames, Progress &progress);
+                    Series &series, Frames &frames, Progress &progress, Checkpoints &checkpoints);
 
 } // namespace mesopen

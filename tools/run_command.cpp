@@ -1,5 +1,6 @@
 // mesopen run SCENE -o DIR: the scene's input checked, its output directory taken, the run made by
 // the run layer (run/simulate.hpp), its end said on the terminal and as the exit code.
+#include "checkpoint.hpp"
 #include "commands.hpp"
 #include "output.hpp"
 #include "run_files.hpp"
@@ -37,22 +38,41 @@ void warnIdleKeys(const Scene &scene, const std::string &path) {
               << nameOf(scene.run.representation, representation_names) << "\"\n";
 }
 
-// The scene, checked for what a run needs. Throws InputError.
-Scene prepareRun(const RunOptions &options) {
-  Scene scene = readScene(options.scene);
-  if (options.seed)
-    scene.target.seed = *options.seed;
-  checkRunnable(scene, options.scene);
-  // LIGGGHTS reads the disks from the output directory through a script variable: a path it
-  // would split or expand is refused before it starts (it exits the process on a bad command).
-  const std::string out = fs::absolute(options.out_dir).string();
+// LIGGGHTS reads the disks from the output directory through a script variable: a path it would
+// split or expand is refused before it starts (it exits the process on a bad command).
+void checkOutputForLiggghts(const Scene &scene, const std::string &dir) {
+  const std::string out = fs::absolute(dir).string();
   if (scene.run.grains && scene.run.representation != Representation::fe &&
       out.find_first_of(" \t\n\"'$#&") != std::string::npos)
-    throw InputError(options.scene + ": run.representation = \"" +
+    throw InputError(scene.path + ": run.representation = \"" +
                      nameOf(scene.run.representation, representation_names) +
                      "\" needs an output directory without spaces or any of \"'$#& (LIGGGHTS "
                      "reads the disks from it); it is '" +
                      out + "'");
+}
+
+// The scene, checked for what a run needs: SCENE with --seed, or with --resume DIR the one its
+// last checkpoint holds. Throws InputError.
+Scene prepareRun(const RunOptions &options) {
+  if (!options.resume.empty()) {
+    if (!options.scene.empty() || !options.out_dir.empty() || options.seed)
+      throw InputError("--resume " + options.resume +
+                       " continues a run with its checkpoint's scene, seed and directory; "
+                       "allowed: --resume DIR without SCENE, -o or --seed (with --threads, "
+                       "--quiet)");
+    Scene scene = checkpointScene(options.resume);
+    checkRunnable(scene, scene.path);
+    checkOutputForLiggghts(scene, options.resume);
+    return scene;
+  }
+  if (options.scene.empty() || options.out_dir.empty())
+    throw InputError("a scene and an output directory are needed; allowed: mesopen run SCENE -o "
+                     "DIR, or mesopen run --resume DIR");
+  Scene scene = readScene(options.scene);
+  if (options.seed)
+    scene.target.seed = *options.seed;
+  checkRunnable(scene, options.scene);
+  checkOutputForLiggghts(scene, options.out_dir);
   warnIdleKeys(scene, options.scene);
   return scene;
 }
@@ -84,12 +104,16 @@ int reportEnd(const RunReport &r, const std::string &dir, bool writer) {
 
 } // namespace
 
-int runCommand(const RunOptions &options) {
+int runCommand(const RunOptions &given) {
   const auto start = Clock::now();
+  const bool resume = !given.resume.empty();
+  RunOptions options = given;
+  if (resume)
+    options.out_dir = given.resume;
   Scene scene;
   parallel::World world;
   try {
-    scene = prepareRun(options);
+    scene = prepareRun(given);
     // Under mpirun every rank runs the scene; rank 0 writes the files.
     world = parallel::world(scene.run.grains && scene.run.representation != Representation::fe);
   } catch (const InputError &e) {
@@ -101,7 +125,8 @@ int runCommand(const RunOptions &options) {
   int refused = 0;
   if (world.rank == 0) {
     try {
-      if (!takeRunDirectory(scene, options.out_dir)) {
+      if (resume ? !takeResumedDirectory(options.out_dir)
+                 : !takeRunDirectory(scene, options.out_dir)) {
         std::cerr << "mesopen run: " << options.out_dir
                   << " is in use by another mesopen run; allowed: another output directory, or "
                      "this one once that run has ended\n";
@@ -119,12 +144,12 @@ int runCommand(const RunOptions &options) {
   const RunPlace place{options.out_dir, shareDirectory() + "/liggghts-inputs/dem.in",
                        !options.quiet && isatty(STDERR_FILENO), start};
   try {
-    return reportEnd(simulate(scene, place, world), options.out_dir, world.rank == 0);
+    return reportEnd(simulate(scene, place, world, resume), options.out_dir, world.rank == 0);
   } catch (const Interrupted &e) {
     // during the set-up: no run.h5, a summary saying so
     std::cerr << "mesopen run: " << e.what() << '\n';
     if (world.rank == 0)
-      writeUnstartedSummary(options.out_dir, options.scene, "interrupted", e.what());
+      writeUnstartedSummary(options.out_dir, scene.path, "interrupted", e.what());
     return 128 + stopSignal();
   } catch (const InputError &e) {
     // found once the target or LIGGGHTS is made (dem.step against the disks' stable step): bad
@@ -140,7 +165,7 @@ int runCommand(const RunOptions &options) {
     std::error_code ec;
     fs::remove(options.out_dir + "/run.h5.tmp", ec);
     try {
-      writeUnstartedSummary(options.out_dir, options.scene, "failed", e.what());
+      writeUnstartedSummary(options.out_dir, scene.path, "failed", e.what());
     } catch (const std::exception &) {
       // the directory itself cannot be written: the message above is all there is
     }
