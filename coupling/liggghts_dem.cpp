@@ -13,9 +13,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <fcntl.h>
 #include <filesystem>
 #include <stdexcept>
+#include <unistd.h>
 
 namespace mesopen::coupling {
 
@@ -34,6 +37,33 @@ bool isName(const std::string &s) {
     return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
   });
 }
+
+// Standard output sent to /dev/null while it lives: read_restart prints its file's version there
+// whatever -screen says.
+class QuietStdout {
+public:
+  QuietStdout() {
+    std::fflush(stdout);
+    saved_ = ::dup(STDOUT_FILENO);
+    const int null = ::open("/dev/null", O_WRONLY);
+    if (saved_ >= 0 && null >= 0)
+      ::dup2(null, STDOUT_FILENO);
+    if (null >= 0)
+      ::close(null);
+  }
+  ~QuietStdout() {
+    std::fflush(stdout);
+    if (saved_ >= 0) {
+      ::dup2(saved_, STDOUT_FILENO);
+      ::close(saved_);
+    }
+  }
+  QuietStdout(const QuietStdout &) = delete;
+  QuietStdout &operator=(const QuietStdout &) = delete;
+
+private:
+  int saved_ = -1;
+};
 
 } // namespace
 
@@ -63,7 +93,10 @@ LiggghtsDem::LiggghtsDem(const std::string &script,
   for (std::string &a : args)
     argv.push_back(a.data());
   lammps_open(static_cast<int>(argv.size()), argv.data(), comm, &lmp_);
-  lammps_file(lmp_, const_cast<char *>(script.c_str()));
+  {
+    const QuietStdout quiet;
+    lammps_file(lmp_, const_cast<char *>(script.c_str()));
+  }
   LAMMPS_NS::Modify *modify = lammps(lmp_)->modify;
   const int fix = modify->find_fix(const_cast<char *>("mesopen"));
   if (fix < 0 || std::string(modify->fix[fix]->style) != "external") {
