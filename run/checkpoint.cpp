@@ -499,6 +499,7 @@ bool Checkpoints::stopBySignal(const LoopResult &loop) {
 }
 
 void Checkpoints::write(const LoopResult &loop) {
+  const auto began = Clock::now();
   const std::uint64_t n = number_ + 1;
   const fem::Solver &solver = *run_.solver;
   solver.shareElementState(); // every rank's elements, for rank 0 to write
@@ -560,23 +561,26 @@ void Checkpoints::write(const LoopResult &loop) {
       h5.close();
       syncFile(temp);
     });
-    openJournal();
   }
   // What the checkpoint before held and this one replaces.
+  const std::uint64_t before = number_;
+  number_ = n;
+  if (h5_)
+    openJournal();
   std::error_code ec;
-  if (number_ > 0 && run_.dem) {
+  if (before > 0 && run_.dem) {
     fs::remove(checkpoint_dir_ + "/" +
-                   file("coupling", number_, "-r" + std::to_string(world_.rank) + ".h5"),
+                   file("coupling", before, "-r" + std::to_string(world_.rank) + ".h5"),
                ec);
     if (world_.rank == 0)
-      fs::remove(checkpoint_dir_ + "/" + file("liggghts", number_, ".restart"), ec);
+      fs::remove(checkpoint_dir_ + "/" + file("liggghts", before, ".restart"), ec);
   }
-  number_ = n;
   last_step_ = solver.steps();
   last_wall_ = Clock::now();
   if (scene_.run.checkpoint_time > 0.0) // the next multiple after now
     next_time_ =
         scene_.run.checkpoint_time * (std::floor(solver.time() / scene_.run.checkpoint_time) + 1.0);
+  seconds_ += secondsSince(began);
 }
 
 void Checkpoints::resume() {
@@ -651,11 +655,14 @@ void Checkpoints::resume() {
 void Checkpoints::end(bool completed) {
   if (h5_)
     h5_->record(nullptr);
-  journal_.reset(); // the calls after the last checkpoint: not one (its .tmp stays unless removed)
-  if (!completed || world_.rank != 0)
-    return;
   std::error_code ec;
-  fs::remove_all(checkpoint_dir_, ec);
+  if (journal_) { // the calls after the last checkpoint: a run continued makes them again
+    const std::string part = journal_->path();
+    journal_.reset();
+    fs::remove(part, ec);
+  }
+  if (completed && world_.rank == 0)
+    fs::remove_all(checkpoint_dir_, ec);
 }
 
 } // namespace mesopen

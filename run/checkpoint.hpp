@@ -82,6 +82,7 @@ public:
   const LoopResult &before() const { return before_; }
   double wallBefore() const { return wall_before_; }
   std::uint64_t written() const { return number_; } // the last checkpoint's number
+  double seconds() const { return seconds_; }       // spent writing them in this process
 
   // After a step that did not end the run: a checkpoint when one is due.
   void afterStep(const LoopResult &loop);
@@ -115,6 +116,7 @@ private:
   Clock::time_point start_;         // of this process's part of the run
   LoopResult before_;
   double wall_before_ = 0.0;
+  double seconds_ = 0.0;
   std::unique_ptr<H5Journal> journal_; // run.h5's calls since the last checkpoint (rank 0)
 };
 

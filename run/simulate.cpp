@@ -98,6 +98,7 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
   if (checkpoints.on() || checkpoints.resumed())
     summary["checkpoints"] = {{"written", checkpoints.written()},
                               {"resumed", checkpoints.resumed()},
+                              {"seconds", checkpoints.seconds()},
                               {"kept", runStatus(report.loop) != "completed"}};
   writeJson(dir + "/summary.json", summary);
   checkpoints.end(runStatus(report.loop) == "completed"); // after the files it stands in for

@@ -1,5 +1,6 @@
-// mesopen run SCENE -o DIR: the scene's input checked, its output directory taken, the run made by
-// the run layer (run/simulate.hpp), its end said on the terminal and as the exit code.
+// mesopen run SCENE -o DIR (or --resume DIR: continued from its last checkpoint): the scene's
+// input checked, its output directory taken, the run made by the run layer (run/simulate.hpp), its
+// end said on the terminal and as the exit code.
 #include "checkpoint.hpp"
 #include "commands.hpp"
 #include "output.hpp"
@@ -152,9 +153,12 @@ int runCommand(const RunOptions &given) {
       writeUnstartedSummary(options.out_dir, scene.path, "interrupted", e.what());
     return 128 + stopSignal();
   } catch (const InputError &e) {
-    // found once the target or LIGGGHTS is made (dem.step against the disks' stable step): bad
-    // input all the same; no run.h5 or summary.json is written
+    // found once the target or LIGGGHTS is made (dem.step against the disks' stable step), or a
+    // checkpoint not of this run: bad input all the same; no run.h5 or summary.json is written
     std::cerr << "mesopen run: " << e.what() << '\n';
+    std::error_code ec;
+    if (world.rank == 0)
+      fs::remove(options.out_dir + "/run.h5.tmp", ec);
     return 2;
   } catch (const std::exception &e) {
     // Before the time loop (target, model) or while writing the files: no run.h5, a summary
