@@ -67,8 +67,9 @@ Scene prepareRun(const RunOptions &options) {
     return scene;
   }
   if (options.scene.empty() || options.out_dir.empty())
-    throw InputError("a scene and an output directory are needed; allowed: mesopen run SCENE -o "
-                     "DIR, or mesopen run --resume DIR");
+    throw InputError(std::string(options.scene.empty() ? "a scene is required"
+                                                       : "--output is required (-o DIR)") +
+                     "; allowed: mesopen run SCENE -o DIR, or mesopen run --resume DIR");
   Scene scene = readScene(options.scene);
   if (options.seed)
     scene.target.seed = *options.seed;

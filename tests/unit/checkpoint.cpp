@@ -68,6 +68,30 @@ TEST(Checkpoint, StoppedAndResumedFeRunIsByteIdentical) {
   }
 }
 
+// A run whose projectile erodes (steel at 2000 m/s eroding at a plastic strain of 0.3: elements
+// removed from step 15 on, boundaries and nodal areas changed, overlaps allowed for) stopped after
+// step 200 and continued: the same run.h5.
+TEST(Checkpoint, ErodingRunResumesByteIdentical) {
+  ScratchDir dir("checkpoint-erosion");
+  std::string text = test::tinyScene("velocity = 2000.0\nframe_interval = 2e-8\n"
+                                     "checkpoint_time = 5e-9\n") +
+                     "[materials.projectile]\npreset = \"steel\"\nerosion_strain = 0.3\n";
+  text.replace(text.find("end_time = 2e-8"), 15, "end_time = 6e-8");
+  test::writeFile(dir / "scene.toml", text);
+  const auto whole = test::runScene(dir / "scene.toml", dir / "whole", 1);
+  ASSERT_EQ(whole.code, 0) << whole.output;
+  const auto summary = nlohmann::json::parse(test::readFile(dir / "whole/summary.json"));
+  ASSERT_GT(summary["eroded_elements"].get<int>(), 10);
+  const auto eroded = H5File::open(dir / "whole/run.h5").read<double>("/series/energy/eroded");
+  ASSERT_GT(eroded.size(), 300u);
+  ASSERT_GT(eroded[200], 0.0); // erosion under way before the stop
+  const auto stopped = test::runStoppedAt(dir / "scene.toml", dir / "stopped", 200, 2);
+  ASSERT_EQ(stopped.code, 128 + SIGTERM) << stopped.output;
+  const auto resumed = test::resume(dir / "stopped", 1);
+  ASSERT_EQ(resumed.code, 0) << resumed.output;
+  EXPECT_TRUE(test::sameBytes(dir / "whole/run.h5", dir / "stopped/run.h5"));
+}
+
 // A run's bytes do not depend on its checkpoints: none (no keys), one every step by the clock,
 // one every 0.2 ns of simulated time (every few steps) give the same run.h5.
 TEST(Checkpoint, CheckpointsChangeNothing) {
