@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
 
 namespace mesopen::coupling {
 
@@ -183,6 +184,18 @@ Particles FeDemCoupling::disks() const {
     d.omega[i] = spin + m.domega[i];
   }
   return d;
+}
+
+FeDemCoupling::State FeDemCoupling::state() const {
+  if (open_)
+    throw std::logic_error("the coupling's state is taken between windows");
+  return {window_, carried_, seconds_, contact_.state()};
+}
+
+void FeDemCoupling::restore(const fem::Model &model, const State &state) {
+  contact_.restore(model, state.contact);
+  window_ = state.windows, carried_ = state.carried, seconds_ = state.seconds;
+  open_ = false, listed_ = false; // the disks' places by id taken at the next window's start
 }
 
 } // namespace mesopen::coupling

@@ -53,6 +53,22 @@ public:
   double window() const { return planned_; }
   double seconds() const { return seconds_; } // in the coupling: the FE-DEM contact, the DEM steps
   const ExchangeLedger &exchanges() const { return exchanges_; }
+  // A time window under way (between them the coupling's state is its State's).
+  bool windowOpen() const { return open_; }
+
+  // What the windows to come depend on beyond the model's and the disks' states, between two
+  // windows (a run's checkpoint, run/checkpoint.hpp).
+  struct State {
+    std::uint64_t windows = 0;
+    std::vector<DiskForce> carried; // the last forces of the window before, by disk id
+    double seconds = 0.0;
+    DiskContact::State contact;
+  };
+  // Throws std::logic_error within a window.
+  State state() const;
+  // Continues from `state` once the model's state was restored, the disks' being the
+  // participant's.
+  void restore(const fem::Model &model, const State &state);
 
 private:
   // Disk i's velocity and spin after the slow half kick of its own forces over the window:

@@ -108,11 +108,10 @@ DiskContact::Closest DiskContact::closest(const fem::Model &model, std::size_t b
 }
 
 // A body's boundary segments in cells over its box (each in every cell its box widened by a
-// quarter cell meets), with their first nodes' positions now.
-void DiskContact::EdgeGrid::build(const fem::Model &model, std::size_t body, const Box &box,
-                                  double cell_size) {
-  const fem::Nodes &nd = model.nodes;
-  const auto &edges = model.bodies[body].boundary;
+// quarter cell meets), with their first nodes' positions (x, y).
+void DiskContact::EdgeGrid::build(const std::vector<std::uint32_t> &edges, const double *x,
+                                  const double *y, const Box &box_now, double cell_for) {
+  box = box_now, cell_size = cell_for;
   const std::size_t n = edges.size() / 2;
   // cells of a few segments' length, or the disks' size if larger
   const double cell =
@@ -122,12 +121,12 @@ void DiskContact::EdgeGrid::build(const fem::Model &model, std::size_t body, con
               box.y1 - box.y0 + 2.0 * slack, cell);
   built_x.resize(n), built_y.resize(n);
   for (std::size_t e = 0; e < edges.size(); e += 2)
-    built_x[e / 2] = nd.x[edges[e]], built_y[e / 2] = nd.y[edges[e]];
+    built_x[e / 2] = x[edges[e]], built_y[e / 2] = y[edges[e]];
   cells.fill(
       n,
       [&](std::size_t k) {
-        const double ax = nd.x[edges[2 * k]], ay = nd.y[edges[2 * k]], bx = nd.x[edges[2 * k + 1]],
-                     by = nd.y[edges[2 * k + 1]];
+        const double ax = x[edges[2 * k]], ay = y[edges[2 * k]], bx = x[edges[2 * k + 1]],
+                     by = y[edges[2 * k + 1]];
         return cells.cells(std::min(ax, bx) - slack, std::min(ay, by) - slack,
                            std::max(ax, bx) + slack, std::max(ay, by) + slack);
       },
@@ -246,7 +245,8 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks, Par
             binned = true;
             if (n_edges > 64) {
               if (!grids_[kb].valid)
-                grids_[kb].build(model, b, box, 2.0 * r_max);
+                grids_[kb].build(model.bodies[b].boundary, nd.x.data(), nd.y.data(), box,
+                                 2.0 * r_max);
             } else
               for (std::uint32_t e = 0, j = 0; j < n_edges; ++j, e += 2)
                 j == 0 ? near_edges_.assign(1, e) : near_edges_.push_back(e);
@@ -295,6 +295,69 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks, Par
           ++stats_.contacts;
         });
   }
+}
+
+DiskContact::State DiskContact::state() const {
+  State st;
+  st.size = size_;
+  // the disks in id order (the map's order depends on its history)
+  std::vector<std::int64_t> ids;
+  for (const auto &[id, h] : held_)
+    ids.push_back(id);
+  std::sort(ids.begin(), ids.end());
+  for (std::int64_t id : ids) {
+    const Held &h = held_.at(id);
+    st.held.push_back(id);
+    st.last.push_back(h.last), st.now.push_back(h.now);
+    st.allowance.push_back(h.allowance), st.rate.push_back(h.rate);
+  }
+  for (std::size_t k = 0; k < grids_.size(); ++k) {
+    const EdgeGrid &g = grids_[k];
+    if (!g.valid)
+      continue;
+    st.grid_body.push_back(fe_bodies_[k]);
+    st.grid_box.insert(st.grid_box.end(), {g.box.x0, g.box.y0, g.box.x1, g.box.y1, g.cell_size});
+    st.grid_x.insert(st.grid_x.end(), g.built_x.begin(), g.built_x.end());
+    st.grid_y.insert(st.grid_y.end(), g.built_y.begin(), g.built_y.end());
+  }
+  st.statistics = stats_;
+  return st;
+}
+
+void DiskContact::restore(const fem::Model &model, const State &st) {
+  boundaryChanged(model); // the bodies with a boundary; boxes measured anew at the next step
+  const std::size_t n = st.held.size();
+  if (st.size.size() != model.bodies.size() || st.last.size() != n || st.now.size() != n ||
+      st.allowance.size() != n || st.rate.size() != n ||
+      st.grid_box.size() != 5 * st.grid_body.size() || st.grid_x.size() != st.grid_y.size())
+    throw std::invalid_argument("FE-DEM contact state: sizes not of this model");
+  size_ = st.size;
+  held_.clear();
+  for (std::size_t i = 0; i < n; ++i)
+    held_[st.held[i]] = {st.last[i], st.now[i], st.allowance[i], st.rate[i]};
+  // Each grid built again from its nodes' positions then: a copy of the positions with the
+  // body's boundary nodes put back there.
+  grids_.resize(fe_bodies_.size());
+  std::vector<double> x, y;
+  std::size_t at = 0;
+  for (std::size_t g = 0; g < st.grid_body.size(); ++g) {
+    const auto k = static_cast<std::size_t>(
+        std::lower_bound(fe_bodies_.begin(), fe_bodies_.end(), st.grid_body[g]) -
+        fe_bodies_.begin());
+    if (k == fe_bodies_.size() || fe_bodies_[k] != st.grid_body[g])
+      throw std::invalid_argument("FE-DEM contact state: a grid of a body without a boundary");
+    const auto &edges = model.bodies[fe_bodies_[k]].boundary;
+    if (at + edges.size() / 2 > st.grid_x.size())
+      throw std::invalid_argument("FE-DEM contact state: a grid not of this model");
+    if (x.empty())
+      x = model.nodes.x, y = model.nodes.y;
+    for (std::size_t e = 0; e < edges.size(); e += 2)
+      x[edges[e]] = st.grid_x[at + e / 2], y[edges[e]] = st.grid_y[at + e / 2];
+    const double *b = &st.grid_box[5 * g];
+    grids_[k].build(edges, x.data(), y.data(), Box{b[0], b[1], b[2], b[3]}, b[4]);
+    at += edges.size() / 2;
+  }
+  stats_ = st.statistics;
 }
 
 } // namespace mesopen::coupling

@@ -85,8 +85,12 @@ private:
     CellGrid<> cells; // per cell: offsets into Body::boundary
     double slack = 0;
     std::vector<double> built_x, built_y; // per segment: its first node when built
+    Box box{};                            // the body's box when built
+    double cell_size = 0;                 // the disks' size it was built for
     bool valid = false;
-    void build(const fem::Model &model, std::size_t body, const Box &box, double cell_size);
+    // From the nodes' positions x, y (by node number).
+    void build(const std::vector<std::uint32_t> &edges, const double *x, const double *y,
+               const Box &box, double cell_size);
   };
   std::vector<EdgeGrid> grids_; // per FE body with many segments
   std::vector<std::uint32_t> near_edges_;
@@ -107,6 +111,26 @@ private:
     double last = 0.0, now = 0.0, allowance = 0.0, rate = 0.0;
   };
   std::unordered_map<std::int64_t, Held> held_;
+
+public:
+  // What the steps to come depend on beyond the model's and the disks' states (a run's
+  // checkpoint, run/checkpoint.hpp): the bodies' element sizes (taken where the boundaries last
+  // changed), the disks' depths and allowances, and the segment grids as they were built (a grid
+  // built elsewhere lists a disk's segments in another order, which can pick another of two
+  // segments as near).
+  struct State {
+    std::vector<double> size;                       // per FE body
+    std::vector<std::int64_t> held;                 // disks (ids) with a depth or an allowance
+    std::vector<double> last, now, allowance, rate; // theirs
+    std::vector<std::uint32_t> grid_body;           // the bodies with a valid grid
+    std::vector<double> grid_box;                   // per grid: x0, y0, x1, y1, cell size
+    std::vector<double> grid_x, grid_y;             // per grid: its built_x, built_y, in order
+    DiskContactStatistics statistics;
+  };
+  State state() const;
+  // Continues from `state` once the model's state was restored. Throws std::invalid_argument
+  // when `state` is not of this model.
+  void restore(const fem::Model &model, const State &state);
 };
 
 } // namespace mesopen::coupling

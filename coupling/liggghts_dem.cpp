@@ -13,9 +13,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <fcntl.h>
 #include <filesystem>
 #include <stdexcept>
+#include <unistd.h>
 
 namespace mesopen::coupling {
 
@@ -34,6 +37,33 @@ bool isName(const std::string &s) {
     return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
   });
 }
+
+// Standard output sent to /dev/null while it lives: read_restart prints its file's version there
+// whatever -screen says.
+class QuietStdout {
+public:
+  QuietStdout() {
+    std::fflush(stdout);
+    saved_ = ::dup(STDOUT_FILENO);
+    const int null = ::open("/dev/null", O_WRONLY);
+    if (saved_ >= 0 && null >= 0)
+      ::dup2(null, STDOUT_FILENO);
+    if (null >= 0)
+      ::close(null);
+  }
+  ~QuietStdout() {
+    std::fflush(stdout);
+    if (saved_ >= 0) {
+      ::dup2(saved_, STDOUT_FILENO);
+      ::close(saved_);
+    }
+  }
+  QuietStdout(const QuietStdout &) = delete;
+  QuietStdout &operator=(const QuietStdout &) = delete;
+
+private:
+  int saved_ = -1;
+};
 
 } // namespace
 
@@ -63,7 +93,10 @@ LiggghtsDem::LiggghtsDem(const std::string &script,
   for (std::string &a : args)
     argv.push_back(a.data());
   lammps_open(static_cast<int>(argv.size()), argv.data(), comm, &lmp_);
-  lammps_file(lmp_, const_cast<char *>(script.c_str()));
+  {
+    const QuietStdout quiet;
+    lammps_file(lmp_, const_cast<char *>(script.c_str()));
+  }
   LAMMPS_NS::Modify *modify = lammps(lmp_)->modify;
   const int fix = modify->find_fix(const_cast<char *>("mesopen"));
   if (fix < 0 || std::string(modify->fix[fix]->style) != "external") {
@@ -251,6 +284,38 @@ void LiggghtsDem::gatherParticles(const Particles &local, Particles &all) const 
     for (int i = 0; i < total; ++i)
       out[i] = (gathered.*field)[order[i]];
   }
+}
+
+std::vector<DiskForce> LiggghtsDem::writeRestart(const std::string &path) {
+  const LAMMPS_NS::Atom *atom = lammps(lmp_)->atom;
+  std::vector<DiskForce> forces(static_cast<std::size_t>(atom->nlocal));
+  for (std::size_t i = 0; i < forces.size(); ++i)
+    forces[i] = {atom->tag[i], atom->f[i][0], atom->f[i][1], atom->torque[i][2]};
+  const std::string temp = path + ".tmp";
+  if (temp.find_first_of(" \t\n\"'$#&") != std::string::npos)
+    throw std::invalid_argument("LIGGGHTS restart file '" + temp +
+                                "': a path with a space or one of \"'$#&");
+  std::string command = "write_restart " + temp;
+  lammps_command(lmp_, command.data());
+  int rank = 0;
+  MPI_Comm_rank(comm_, &rank);
+  if (rank == 0)
+    std::filesystem::rename(temp, path);
+  lammps_command(lmp_, const_cast<char *>("run 0"));
+  restoreForces(forces);
+  gatherDiskForces(forces);
+  return forces;
+}
+
+void LiggghtsDem::restoreForces(const std::vector<DiskForce> &forces) {
+  LAMMPS_NS::Atom *atom = lammps(lmp_)->atom;
+  for (const DiskForce &d : forces) {
+    const int i = d.id > 0 && d.id <= atom->map_tag_max ? atom->map(static_cast<int>(d.id)) : -1;
+    if (i < 0 || i >= atom->nlocal) // another rank's
+      continue;
+    atom->f[i][0] = d.fx, atom->f[i][1] = d.fy, atom->torque[i][2] = d.torque;
+  }
+  read();
 }
 
 } // namespace mesopen::coupling

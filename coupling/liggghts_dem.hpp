@@ -41,6 +41,18 @@ public:
   void gatherParticles(const Particles &local, Particles &all) const override;
   // The LIGGGHTS instance, for library.h calls (benchmarks).
   void *handle() const { return lmp_; }
+
+  // Between two windows: LIGGGHTS's restart file `path` (written under a temporary name and
+  // renamed when whole, by rank 0; every rank calls it), and every rank's disks' own forces and
+  // torques by id (a restart file does not hold them). LIGGGHTS's set-up, which must follow a
+  // restart file, is made here as it is after read_restart (the run continued from it): with the
+  // script's `lists = 1`, its lists are those the last step built, and the forces it computes
+  // again (in another order of summation, without the contacts' history update) are put back as
+  // they were, so that the run goes on as without the restart file.
+  std::vector<DiskForce> writeRestart(const std::string &path);
+  // The disks' own forces and torques put back for this rank's disks (by id), after LIGGGHTS's
+  // set-up computed them again (writeRestart's, or this one's of a restart file).
+  void restoreForces(const std::vector<DiskForce> &forces);
   // Time in the windows [s]: all of it, and the part spent in the exchange (the state read, the
   // FE-DEM contact, the forces put in, the state read at the window's end).
   double windowSeconds() const { return window_seconds_; }

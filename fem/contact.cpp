@@ -623,4 +623,79 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
   hits.deep += found_depth / h > deep;
 }
 
+Contact::State Contact::state() const {
+  State st;
+  for (const Pair &p : pairs_)
+    st.pairs.insert(st.pairs.end(), {p.a, p.b});
+  st.search_due = run_pairs_.empty();
+  st.travel = travel_, st.travel_searched = travel_searched_;
+  st.listed.assign(listed_.begin(), listed_.end());
+  for (const Box &b : boxes_)
+    st.boxes.insert(st.boxes.end(), {b.x0, b.y0, b.x1, b.y1});
+  for (const Point &p : points_)
+    st.points.insert(st.points.end(), {p.x, p.y});
+  for (const Allowance &a : allowed_)
+    st.allowed.push_back(a.node), st.allowance.push_back(allowance_[a.node]),
+        st.rate.push_back(a.rate);
+  for (const auto &nodes : block_pushed_)
+    for (std::uint32_t p : nodes)
+      st.pushed.push_back(p), st.pushed_depth.push_back(pushed_[p]);
+  st.statistics = stats_;
+  return st;
+}
+
+void Contact::restore(const Model &model, const State &st) {
+  takeBoundaries(model);
+  const std::size_t n_bodies = model.bodies.size();
+  if (st.travel.size() != n_bodies || st.travel_searched.size() != n_bodies ||
+      st.listed.size() != n_bodies || st.boxes.size() != 4 * n_bodies ||
+      st.points.size() != 2 * points_.size() || st.pairs.size() % 2 != 0 ||
+      st.allowance.size() != st.allowed.size() || st.rate.size() != st.allowed.size() ||
+      st.pushed_depth.size() != st.pushed.size())
+    throw std::invalid_argument("contact state: sizes not of this model");
+  for (const auto *nodes : {&st.allowed, &st.pushed})
+    for (std::uint32_t p : *nodes)
+      if (p >= pushed_.size())
+        throw std::invalid_argument("contact state: a node not of this model");
+  for (std::uint32_t b : st.pairs)
+    if (b >= n_bodies)
+      throw std::invalid_argument("contact state: a body not of this model");
+  travel_ = st.travel, travel_searched_ = st.travel_searched;
+  listed_.assign(st.listed.begin(), st.listed.end());
+  for (std::size_t b = 0; b < n_bodies; ++b)
+    boxes_[b] = {st.boxes[4 * b], st.boxes[4 * b + 1], st.boxes[4 * b + 2], st.boxes[4 * b + 3]};
+  for (std::size_t k = 0; k < points_.size(); ++k)
+    points_[k] = {st.points[2 * k], st.points[2 * k + 1]};
+  // The pairs in their order, their lists to be taken at their first look; the runs of pairs
+  // split anew (the hits come in pair order whatever the split).
+  pairs_.clear();
+  for (std::size_t k = 0; k < st.pairs.size(); k += 2)
+    pairs_.emplace_back(st.pairs[k], st.pairs[k + 1]);
+  for (auto &arena : arenas_)
+    arena.clear();
+  run_pairs_.clear();
+  if (!st.search_due) {
+    const std::size_t runs = arenas_.size();
+    run_pairs_.resize(runs + 1);
+    for (std::size_t r = 0; r <= runs; ++r)
+      run_pairs_[r] = pairs_.size() * r / runs;
+  }
+  allowance_.clear(), allowed_.clear();
+  for (std::size_t k = 0; k < st.allowed.size(); ++k) {
+    if (allowance_.empty())
+      allowance_.assign(pushed_.size(), 0.0);
+    allowance_[st.allowed[k]] = st.allowance[k];
+    allowed_.push_back({st.allowed[k], st.rate[k]});
+  }
+  std::fill(pushed_.begin(), pushed_.end(), 0.0);
+  for (auto &nodes : block_pushed_)
+    nodes.clear();
+  for (std::size_t k = 0; k < st.pushed.size(); ++k) {
+    const std::uint32_t p = st.pushed[k];
+    pushed_[p] = st.pushed_depth[k];
+    block_pushed_[block_[model.nodes.body[p]]].push_back(p);
+  }
+  stats_ = st.statistics;
+}
+
 } // namespace mesopen::fem

@@ -234,6 +234,27 @@ private:
   // The depth each model node was pushed at in the last step (the deepest of its contacts; 0 if
   // none; the nodes where it is not 0 are in block_pushed_).
   std::vector<double> pushed_;
+
+public:
+  // What the steps to come depend on beyond the model's state (a run's checkpoint,
+  // run/checkpoint.hpp). The pairs' lists are left out: taken anew they hold the same contacts
+  // (docs/solver.md); the pairs' order is kept, the order in which a node's forces add up.
+  struct State {
+    std::vector<std::uint32_t> pairs; // a and b of each pair, in order
+    bool search_due = true;           // the pairs are searched anew at the next step
+    std::vector<double> travel, travel_searched, boxes; // per body (boxes: x0, y0, x1, y1)
+    std::vector<std::uint8_t> listed;                   // per body
+    std::vector<double> points;          // per boundary node: x, y where it was last measured
+    std::vector<std::uint32_t> allowed;  // the nodes with an allowance, in order
+    std::vector<double> allowance, rate; // their allowance [m] and its release per step [m]
+    std::vector<std::uint32_t> pushed;   // the nodes pushed in the last step
+    std::vector<double> pushed_depth;    // and at what depth [m]
+    ContactStatistics statistics;
+  };
+  State state() const;
+  // Continues from `state` once the model's state (its boundaries among it) was restored.
+  // Throws std::invalid_argument when `state` is not of this model.
+  void restore(const Model &model, const State &state);
 };
 
 } // namespace mesopen::fem

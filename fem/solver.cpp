@@ -1005,10 +1005,13 @@ void Solver::scaleMasses(double half_dt) {
 }
 
 double Solver::addedMass(std::size_t body) const {
+  // summed in element order: the same after a run continued from a checkpoint
+  std::vector<std::pair<std::uint32_t, double>> added(added_mass_.begin(), added_mass_.end());
+  std::sort(added.begin(), added.end());
   double mass = 0.0;
-  for (auto [e, added] : added_mass_)
+  for (auto [e, m] : added)
     if (body == all_bodies || m_.elements.body[e] == body)
-      mass += added;
+      mass += m;
   return mass;
 }
 
@@ -1033,6 +1036,47 @@ void Solver::accountEnergy() {
   const double scale =
       std::max({std::abs(total), std::abs(energy_.initial), std::abs(energy_.external)});
   energy_.balance_error = scale > 0.0 ? (total - energy_.initial - energy_.external) / scale : 0.0;
+}
+
+Solver::State Solver::state() const {
+  State st{time_,
+           dt_,
+           next_dt_,
+           shortest_allowed_,
+           first_dt_,
+           erode_below_,
+           scale_below_,
+           shortest_step_,
+           steps_,
+           eroded_elements_,
+           collapsed_elements_,
+           energy_,
+           {},
+           {}};
+  std::vector<std::pair<std::uint32_t, double>> added(added_mass_.begin(), added_mass_.end());
+  std::sort(added.begin(), added.end());
+  for (auto [e, mass] : added)
+    st.scaled_elements.push_back(e), st.scaled_mass.push_back(mass);
+  return st;
+}
+
+void Solver::restore(const State &st) {
+  time_ = st.time, dt_ = st.dt, next_dt_ = st.next_dt, shortest_allowed_ = st.shortest_allowed;
+  first_dt_ = st.first_dt, erode_below_ = st.erode_below, scale_below_ = st.scale_below;
+  shortest_step_ = st.shortest_step;
+  steps_ = st.steps, eroded_elements_ = st.eroded_elements;
+  collapsed_elements_ = st.collapsed_elements;
+  energy_ = st.energy;
+  added_mass_.clear();
+  for (std::size_t k = 0; k < st.scaled_elements.size(); ++k)
+    added_mass_[st.scaled_elements[k]] = st.scaled_mass[k];
+  const Nodes &nd = m_.nodes;
+  for (std::size_t a = 0; a < nd.size(); ++a)
+    inv_mass_[a] = nd.mass[a] > 0.0 ? 1.0 / nd.mass[a] : 0.0;
+  constrained_.clear();
+  std::fill(failed_.begin(), failed_.end(), 0);
+  at_rest_seen_.clear(); // the chunks laid out anew: eroded elements leave them
+  updateActivity();
 }
 
 } // namespace mesopen::fem

@@ -130,6 +130,22 @@ public:
   // plastic strain, area) of its active bodies copied to all, for output (every process calls it).
   void shareElementState() const;
 
+  // What the steps to come depend on beyond the model's state and the settings (a run's
+  // checkpoint, run/checkpoint.hpp).
+  struct State {
+    double time = 0, dt = 0, next_dt = 0, shortest_allowed = 0, first_dt = 0, erode_below = 0,
+           scale_below = 0, shortest_step = 0;
+    std::uint64_t steps = 0, eroded_elements = 0, collapsed_elements = 0;
+    Energy energy;
+    // mass scaling so far: the elements given mass, in element order, and the mass of each
+    std::vector<std::uint32_t> scaled_elements;
+    std::vector<double> scaled_mass;
+  };
+  State state() const;
+  // Continues from `state` once the model's state was restored (nodes, elements, boundaries,
+  // bodies at rest): the work ranges and the nodes' inverse masses are taken anew.
+  void restore(const State &state);
+
 private:
   struct Range {
     std::size_t begin, end;

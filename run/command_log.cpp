@@ -7,20 +7,30 @@
 
 #include <cstdio>
 #include <ctime>
+#include <fstream>
+#include <sstream>
 #include <unistd.h>
 
 namespace mesopen {
 
-CommandLog::CommandLog(const std::string &dir, const std::string &command_line)
+CommandLog::CommandLog(const std::string &dir, const std::string &command_line, bool append)
     : path_(dir + "/mesopen.log") {
+  if (append) {
+    std::ifstream before(path_, std::ios::binary);
+    std::ostringstream text;
+    text << before.rdbuf();
+    text_ = text.str();
+    if (!text_.empty() && text_.back() != '\n')
+      text_ += '\n';
+  }
   char host[256] = "unknown";
   gethostname(host, sizeof host - 1);
   const std::time_t now = std::time(nullptr);
   char when[32];
   std::strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
-  text_ = std::string("mesopen ") + programVersion() + "\ncommand: " + command_line +
-          "\nhost: " + host + ", " + std::to_string(omp_get_max_threads()) +
-          " threads\nstarted: " + when + "\n";
+  text_ += std::string("mesopen ") + programVersion() + "\ncommand: " + command_line +
+           "\nhost: " + host + ", " + std::to_string(omp_get_max_threads()) +
+           " threads\nstarted: " + when + "\n";
   writeText(path_, text_);
 }
 

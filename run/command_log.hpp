@@ -14,8 +14,8 @@ class CommandLog {
 public:
   CommandLog() = default; // writes nothing (the ranks but 0, the tests)
   // Starts DIR/mesopen.log with the program's version, `command_line`, the host, the threads and
-  // the time now.
-  CommandLog(const std::string &dir, const std::string &command_line);
+  // the time now; `append`: after what the file holds (a run resumed).
+  CommandLog(const std::string &dir, const std::string &command_line, bool append = false);
   bool on() const { return !path_.empty(); }
   // Appends "[    12.345 s] text" and writes the file. Throws std::runtime_error when it cannot.
   void line(const std::string &text);

@@ -162,7 +162,8 @@ fem::Model buildRunModel(const Scene &scene, const Target *target, const PlacedP
 }
 
 RunAssembly::RunAssembly(const Scene &scene, const std::string &dir,
-                         const std::string &liggghts_script, const parallel::World &world) {
+                         const std::string &liggghts_script, const parallel::World &world,
+                         const std::string &liggghts_restart) {
   const RunSpec &run = scene.run;
   std::unique_ptr<Target> target;
   if (run.grains) {
@@ -186,9 +187,9 @@ RunAssembly::RunAssembly(const Scene &scene, const std::string &dir,
       writeLiggghtsData(dir + "/dem.data", *target,
                         targetDisks(*target, scene.dem.disk_size, meshed, &projectile));
     world.barrier();
-    dem = std::make_unique<coupling::LiggghtsDem>(liggghts_script,
-                                                  liggghtsVariables(scene, dir + "/dem.data"),
-                                                  dir + "/liggghts.log", MPI_COMM_WORLD);
+    dem = std::make_unique<coupling::LiggghtsDem>(
+        liggghts_script, liggghtsVariables(scene, dir + "/dem.data", liggghts_restart),
+        dir + "/liggghts.log", MPI_COMM_WORLD);
   }
   target.reset();
   const double dem_step = dem ? dem->stableStep() : HUGE_VAL; // every rank calls it

@@ -46,8 +46,10 @@ public:
   // started there (liggghts.log) when there are disks, `liggghts_script` its input script. A
   // signal to stop is looked for between these phases (stopIfAsked). Throws Interrupted,
   // InputError (dem.step longer than the disks' stable step) or what the phases throw.
+  // `liggghts_restart`: LIGGGHTS starts from this restart file instead (a run continued from
+  // its checkpoint, run/checkpoint.hpp).
   RunAssembly(const Scene &scene, const std::string &dir, const std::string &liggghts_script,
-              const parallel::World &world);
+              const parallel::World &world, const std::string &liggghts_restart = "");
   RunAssembly(const RunAssembly &) = delete;
   RunAssembly &operator=(const RunAssembly &) = delete;
 

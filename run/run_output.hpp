@@ -54,6 +54,7 @@ public:
   };
 
 private:
+  friend class Checkpoints;     // keeps and restores the samples so far (checkpoint.hpp)
   std::vector<double> x0_, y0_; // projectile nodes relative to the initial centre of mass [m]
   double mass_ = 0.0;           // the projectile's mass [kg/m]
   double lowest0_ = 0.0;        // initial lowest point of the projectile [m]
@@ -84,6 +85,7 @@ public:
   bool vtk() const { return !vtk_dir_.empty() && !times_.empty(); }
 
 private:
+  friend class Checkpoints; // keeps and restores the frames' times (checkpoint.hpp)
   void take(const fem::Model &model, const fem::Solver &solver);
 
   H5File *h5_;

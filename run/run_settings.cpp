@@ -36,8 +36,8 @@ coupling::DiskContactSettings diskContactSettings(const Scene &scene, std::size_
   return disk;
 }
 
-std::vector<std::pair<std::string, std::string>> liggghtsVariables(const Scene &scene,
-                                                                   const std::string &data) {
+std::vector<std::pair<std::string, std::string>>
+liggghtsVariables(const Scene &scene, const std::string &data, const std::string &restart) {
   const DemSpec &d = scene.dem;
   auto text = [](double v) {
     char s[32];
@@ -48,7 +48,11 @@ std::vector<std::pair<std::string, std::string>> liggghtsVariables(const Scene &
   // half) in about two of the disks' steps, and each crossing rebuilds every neighbour list; a
   // wider skin costs the pairs' own search little (docs/decisions.md).
   const double skin = d.skin > 0.0 ? d.skin : 0.5 * scene.target.meanDiameter();
-  return {{"data", data},
+  // With checkpoints, lists rebuilt every step and no sorting: LIGGGHTS's set-up after a restart
+  // file then builds what the last step built (liggghts-inputs/dem.in, run/checkpoint.hpp).
+  return {{"data", restart.empty() ? data : restart},
+          {"restart", restart.empty() ? "0" : "1"},
+          {"lists", scene.run.checkpoints() ? "1" : "0"},
           {"kn", text(d.stiffness)},
           {"kt", text(d.tangential_stiffness)},
           {"gn", text(d.damping)},

@@ -25,9 +25,10 @@ fem::ContactSettings contactSettings(const Scene &scene, bool walls);
 // the grains' for the `bodies - 1` others.
 coupling::DiskContactSettings diskContactSettings(const Scene &scene, std::size_t bodies);
 
-// The variables of liggghts-inputs/dem.in: the disks' data file `data`, the [dem] law,
-// [contact]'s friction between grains, the box's walls.
-std::vector<std::pair<std::string, std::string>> liggghtsVariables(const Scene &scene,
-                                                                   const std::string &data);
+// The variables of liggghts-inputs/dem.in: the disks' data file `data` (or the LIGGGHTS restart
+// file `restart` of a run's checkpoint), the [dem] law, [contact]'s friction between grains, the
+// box's walls, the neighbour lists as checkpoints need them (when the scene asks for them).
+std::vector<std::pair<std::string, std::string>>
+liggghtsVariables(const Scene &scene, const std::string &data, const std::string &restart = "");
 
 } // namespace mesopen

@@ -325,6 +325,12 @@ const std::vector<Key> &keys() {
              "end; 0: no frames"),
         boolean("run", "vtk", r, &R::vtk, "write the frames also as VTK files (vtk/run.pvd)"),
         integer("run", "max_steps", r, &R::max_steps, 1, 1e12, "time steps at most"),
+        real("run", "checkpoint_interval", r, &R::checkpoint_interval, "s", 0, false, 1e7,
+             "wall-clock seconds between checkpoints (DIR/checkpoint; `mesopen run --resume "
+             "DIR` continues from the last); 0: none by the clock. With checkpoints on (this or "
+             "checkpoint_time) SIGINT and SIGTERM write one too"),
+        real("run", "checkpoint_time", r, &R::checkpoint_time, "s", 0, false, 1,
+             "simulated time between checkpoints; 0: none by simulated time"),
         boolean("contact", "enabled", c, &C::enabled,
                 "contact between the bodies and with the box's walls; false: bodies pass through"),
         real("contact", "friction", c, &C::friction, "", 0, false, 10,

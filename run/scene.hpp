@@ -60,6 +60,11 @@ struct RunSpec {
   double frame_interval = 1e-7;     // simulated time between frames [s]; 0: no frames
   bool vtk = true;                  // frames also as VTK files for ParaView
   std::int64_t max_steps = 100000000;
+  // Checkpoints (run/checkpoint.hpp): wall-clock seconds between them, simulated time between
+  // them [s]; 0: none of that kind. Either on: also one on SIGINT or SIGTERM.
+  double checkpoint_interval = 0.0;
+  double checkpoint_time = 0.0;
+  bool checkpoints() const { return checkpoint_interval > 0.0 || checkpoint_time > 0.0; }
 };
 
 // Contact between the bodies and with the box's walls (table [contact]), with the contact's

@@ -1,5 +1,6 @@
 #include "simulate.hpp"
 
+#include "checkpoint.hpp"
 #include "h5file.hpp"
 #include "run_assembly.hpp"
 #include "run_files.hpp"
@@ -43,14 +44,16 @@ void checkRunnable(const Scene &scene, const std::string &where) {
   }
 }
 
-RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::World &world) {
+RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::World &world,
+                   bool resume) {
   const RunSpec &run = scene.run;
   const bool writer = world.rank == 0; // the files are rank 0's
   const std::string &dir = place.dir, h5_path = dir + "/run.h5";
   catchStopSignals(true); // to the end of the time loop
   if (writer)
     writeText(dir + "/scene.toml", composedScene(scene));
-  RunAssembly assembly(scene, dir, place.liggghts_script, world);
+  RunAssembly assembly(scene, dir, place.liggghts_script, world,
+                       resume ? checkpointRestart(dir) : std::string());
   const fem::Model &model = assembly.model;
   const fem::Solver &solver = *assembly.solver;
   stopIfAsked(world, "set-up");
@@ -68,11 +71,15 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
     place.log->line(std::to_string(model.bodies.size()) + " bodies, " +
                     std::to_string(model.nodes.size()) + " nodes, " +
                     std::to_string(model.elements.size()) + " elements (" +
-                    nameOf(run.representation, representation_names) + "); the time loop starts");
+                    nameOf(run.representation, representation_names) + "); the time loop " +
+                    (resume ? "continues" : "starts"));
+  // The checkpoints (a new run's), or the state of the last one and run.h5 so far (a run
+  // continued).
+  Checkpoints checkpoints(scene, dir, assembly, series, frames, h5 ? &*h5 : nullptr, world, resume);
   Progress progress(writer && place.progress, writer ? place.log : nullptr, run.end_time,
                     run.end_depth * scene.projectile.length);
   RunReport report;
-  report.loop = timeLoop(scene, model, *assembly.solver, series, frames, progress);
+  report.loop = timeLoop(scene, model, *assembly.solver, series, frames, progress, checkpoints);
   catchStopSignals(false);
   report.steps = solver.steps();
   report.time = solver.time();
@@ -82,6 +89,7 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
 
   // Whatever happened, the files hold everything computed so far and are whole.
   if (writer) {
+    h5->record(nullptr); // (the checkpoints' journal holds the loop's calls)
     series.write(*h5);
     writeRunAttributes(*h5, scene, runStatus(report.loop));
     h5->close();
@@ -91,10 +99,17 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
     return report;
   std::filesystem::rename(h5_path + ".tmp", h5_path);
   frames.writeCollection();
-  report.wall = secondsSince(place.start);
+  report.wall = checkpoints.wallBefore() + secondsSince(place.start);
   report.vtk = frames.vtk();
-  writeJson(dir + "/summary.json",
-            runSummary(scene, assembly, series, frames, report.loop, report.wall, world.size, dem));
+  nlohmann::json summary =
+      runSummary(scene, assembly, series, frames, report.loop, report.wall, world.size, dem);
+  if (checkpoints.on() || checkpoints.resumed())
+    summary["checkpoints"] = {{"written", checkpoints.written()},
+                              {"resumed", checkpoints.resumed()},
+                              {"seconds", checkpoints.seconds()},
+                              {"kept", runStatus(report.loop) != "completed"}};
+  writeJson(dir + "/summary.json", summary);
+  checkpoints.end(runStatus(report.loop) == "completed"); // after the files it stands in for
   return report;
 }
 

@@ -39,10 +39,13 @@ struct RunPlace {
 
 // The scene run on every rank of `world` (rank 0 writes the files). SIGINT and SIGTERM are caught
 // from the set-up to the end of the time loop: during the set-up (target, meshes, model, LIGGGHTS)
-// they end it with Interrupted at the next phase, during the loop after its step, the files
-// written as for a failure. Whatever the loop's end, the files hold everything computed and are
-// whole. Throws Interrupted, InputError (found once LIGGGHTS has started) or what the set-up or
-// the files throw.
-RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::World &world);
+// they end it with Interrupted at the next phase, during the loop after its step (with a
+// checkpoint when they are on), the files written as for a failure. Whatever the loop's end, the
+// files hold everything computed and are whole. `resume`: the run goes on from the last
+// checkpoint in place.dir (scene: checkpointScene's; run/checkpoint.hpp). Throws Interrupted,
+// InputError (found once LIGGGHTS has started, or a checkpoint not of this run) or what the
+// set-up or the files throw.
+RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::World &world,
+                   bool resume = false);
 
 } // namespace mesopen

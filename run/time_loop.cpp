@@ -1,5 +1,6 @@
 #include "time_loop.hpp"
 
+#include "checkpoint.hpp"
 #include "stop_signals.hpp"
 
 #include <algorithm>
@@ -17,6 +18,8 @@ bool Progress::due() const {
 void Progress::update(const fem::Solver &solver, double depth, double speed) {
   last_ = Clock::now();
   const double wall = secondsSince(start_), t = solver.time();
+  if (marks_.empty())
+    first_step_ = solver.steps();
   marks_.push_back({wall, t, depth, speed});
   const double done =
       std::min(1.0, std::max(t / end_time_, end_depth_ > 0.0 ? depth / end_depth_ : 0.0));
@@ -25,8 +28,9 @@ void Progress::update(const fem::Solver &solver, double depth, double speed) {
                 "step %zu, t = %.3f ns, depth %.3f mm, dt = %.3g ps, %.0f steps/s, %.0f %% done, "
                 "ETA %.3g s",
                 solver.steps(), 1e9 * t, 1e3 * depth, 1e12 * solver.dt(),
-                solver.steps() / std::max(wall, 1e-9), 100.0 * done,
-                wallLeft(marks_, end_time_, end_depth_));
+                static_cast<double>(solver.steps() - first_step_) /
+                    std::max(wall - marks_.front().wall, 1e-9),
+                100.0 * done, wallLeft(marks_, end_time_, end_depth_));
   if (terminal_)
     std::fprintf(stderr, "\r\033[Kmesopen run: %s", line);
   if (log_ && static_cast<int>(20.0 * done) > logged_) {
@@ -44,9 +48,13 @@ double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double 
     --first;
   const double span = now.time - marks[first].time;
   if (marks.size() - first < 4 || !(span > 0.0)) {
-    const double done =
-        std::max(now.time / end_time, end_depth > 0.0 ? now.depth / end_depth : 0.0);
-    return done > 0.0 ? std::max(0.0, now.wall * (1.0 - done) / done) : 0.0;
+    auto done = [&](const ProgressMark &m) {
+      return std::max(m.time / end_time, end_depth > 0.0 ? m.depth / end_depth : 0.0);
+    };
+    // the share left at the pace since the first mark (a resumed run's first is not at 0)
+    const ProgressMark &start = marks.size() > 1 ? marks.front() : ProgressMark{0.0, 0.0, 0.0, 0.0};
+    const double gained = done(now) - done(start);
+    return gained > 0.0 ? std::max(0.0, (now.wall - start.wall) * (1.0 - done(now)) / gained) : 0.0;
   }
   // Simulated time left: to end_time, or to end_depth at deceleration a if it comes first,
   // depth left = v tau - a tau^2 / 2.
@@ -102,9 +110,9 @@ std::string runStatus(const LoopResult &loop) {
 }
 
 LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &solver,
-                    Series &series, Frames &frames, Progress &progress) {
+                    Series &series, Frames &frames, Progress &progress, Checkpoints &checkpoints) {
   const RunSpec &run = scene.run;
-  LoopResult result;
+  LoopResult result = checkpoints.before();
   const auto start = Clock::now();
   const auto max_steps = static_cast<std::size_t>(run.max_steps);
   const auto every = static_cast<std::size_t>(run.series_interval);
@@ -121,10 +129,13 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
     return !result.end.empty();
   };
   try {
-    series.sample(model, solver);
-    frames.offer(model, solver, true);
-    for (bool last = ended(true); !last;) {
-      if (stopSignal() != 0) {
+    // (a run continued from a checkpoint has its first sample and frame, and had not ended)
+    if (!checkpoints.resumed()) {
+      series.sample(model, solver);
+      frames.offer(model, solver, true);
+    }
+    for (bool last = !checkpoints.resumed() && ended(true); !last;) {
+      if (checkpoints.stopBySignal(result)) {
         result.interrupted = true;
         result.failure = std::string("stopped by ") + stopSignalName() + " at step " +
                          std::to_string(solver.steps());
@@ -150,6 +161,8 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
       if (last && !due)
         series.sample(model, solver);
       frames.offer(model, solver, last);
+      if (!last)
+        checkpoints.afterStep(result);
       if (progress.due())
         progress.update(solver, series.depth(model), -series.last("projectile/vy"));
     }
@@ -157,7 +170,7 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
     result.failure = e.what();
   }
   progress.clear();
-  result.seconds = secondsSince(start);
+  result.seconds = checkpoints.before().seconds + secondsSince(start);
   return result;
 }
 

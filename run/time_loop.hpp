@@ -14,6 +14,8 @@
 
 namespace mesopen {
 
+class Checkpoints;
+
 // A moment of a run, for the estimate of the time left: wall seconds since the loop's start,
 // simulated time [s], the projectile's depth [m] and downward speed [m/s].
 struct ProgressMark {
@@ -49,6 +51,7 @@ private:
   Clock::time_point start_ = Clock::now(), last_ = Clock::now();
   std::vector<ProgressMark> marks_; // one per update
   int logged_ = 0;                  // 5 % steps logged
+  std::size_t first_step_ = 0;      // the step at the first update
 };
 
 struct LoopResult {
@@ -62,10 +65,12 @@ struct LoopResult {
 // "completed", "failed" or "interrupted".
 std::string runStatus(const LoopResult &loop);
 
-// The time loop: step, sample the series, take frames, show progress; until run.end_time,
-// run.end_depth or run.max_steps, a failure (an inverted element, a frame that cannot be
-// written) or SIGINT or SIGTERM (caught by catchStopSignals; the loop ends after its step).
+// The time loop: step, sample the series, take frames, show progress, write checkpoints; until
+// run.end_time, run.end_depth or run.max_steps, a failure (an inverted element, a frame or a
+// checkpoint that cannot be written) or SIGINT or SIGTERM (caught by catchStopSignals; the loop
+// ends after its step, with a checkpoint when they are on). A run continued from a checkpoint
+// goes on from its step, its figures added to the checkpoint's.
 LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &solver,
-                    Series &series, Frames &frames, Progress &progress);
+                    Series &series, Frames &frames, Progress &progress, Checkpoints &checkpoints);
 
 } // namespace mesopen

@@ -151,8 +151,10 @@ H5File H5File::open(const std::string &path, bool writable) {
   return H5File(path, id);
 }
 
-H5File::H5File(H5File &&other) noexcept : path_(std::move(other.path_)), id_(other.id_) {
+H5File::H5File(H5File &&other) noexcept
+    : path_(std::move(other.path_)), id_(other.id_), recorder_(other.recorder_) {
   other.id_ = -1;
+  other.recorder_ = nullptr;
 }
 
 H5File &H5File::operator=(H5File &&other) noexcept {
@@ -161,7 +163,9 @@ H5File &H5File::operator=(H5File &&other) noexcept {
       H5Fclose(id_);
     path_ = std::move(other.path_);
     id_ = other.id_;
+    recorder_ = other.recorder_;
     other.id_ = -1;
+    other.recorder_ = nullptr;
   }
   return *this;
 }
@@ -202,6 +206,8 @@ void H5File::createGroup(const std::string &name) {
   Handle group(check(H5Gcreate2(id_, name.c_str(), H5P_DEFAULT, gcpl, H5P_DEFAULT), path_,
                      "create group", name),
                H5Gclose);
+  if (recorder_)
+    recorder_->group(name);
 }
 
 void H5File::checkSize(const std::string &name, std::size_t have, std::size_t want) const {
@@ -231,12 +237,16 @@ void H5File::writeRaw(const std::string &name, const void *data, Type type, int 
   if (count > 0)
     check(H5Dwrite(dataset, memoryType(type), H5S_ALL, H5S_ALL, H5P_DEFAULT, data), path_,
           "write dataset", name);
+  if (recorder_)
+    recorder_->dataset(name, data, type, rank, dims);
 }
 
 void H5File::attributeRaw(const std::string &object, const std::string &name, const void *value,
                           Type type) {
   quiet();
   putAttribute(id_, path_, object, name, fileType(type), memoryType(type), value);
+  if (recorder_)
+    recorder_->attribute(object, name, value, type);
 }
 
 void H5File::attribute(const std::string &object, const std::string &name,
@@ -249,6 +259,8 @@ void H5File::attribute(const std::string &object, const std::string &name,
   check(H5Tset_cset(type, H5T_CSET_UTF8), path_, "set character set of", where);
   const char *text = value.c_str();
   putAttribute(id_, path_, object, name, type, type, &text);
+  if (recorder_)
+    recorder_->attribute(object, name, value);
 }
 
 std::vector<std::uint64_t> H5File::shape(const std::string &name) const {

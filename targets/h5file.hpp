@@ -14,6 +14,8 @@
 
 namespace mesopen {
 
+class H5Recorder;
+
 // Element types stored: float64, int32, int64, uint8, uint32, uint64 (little-endian in the file).
 template <class T>
 concept H5Number = std::same_as<T, double> || std::same_as<T, int> ||
@@ -94,7 +96,13 @@ public:
   }
   std::string readStringAttribute(const std::string &object, const std::string &name) const;
 
+  // Every later call that changes the file (a group, a dataset, an attribute) is also told to
+  // `recorder`, after it succeeded, until another (or null) is set: a journal of them made again
+  // on another file writes what they wrote (h5_journal.hpp).
+  void record(H5Recorder *recorder) { recorder_ = recorder; }
+
 private:
+  friend class H5Journal; // makes recorded calls again
   H5File(std::string path, std::int64_t id) : path_(std::move(path)), id_(id) {}
 
   template <H5Number T> static constexpr Type typeOf() {
@@ -123,6 +131,21 @@ private:
 
   std::string path_;
   std::int64_t id_ = -1; // hid_t
+  H5Recorder *recorder_ = nullptr;
+};
+
+// Told of the calls that change a file, as H5File makes them (H5File::record).
+class H5Recorder {
+public:
+  virtual ~H5Recorder() = default;
+  virtual void group(const std::string &name) = 0;
+  // `data` holds the product of the `rank` dims values of `type`.
+  virtual void dataset(const std::string &name, const void *data, H5File::Type type, int rank,
+                       const std::uint64_t *dims) = 0;
+  virtual void attribute(const std::string &object, const std::string &name, const void *value,
+                         H5File::Type type) = 0;
+  virtual void attribute(const std::string &object, const std::string &name,
+                         const std::string &value) = 0;
 };
 
 } // namespace mesopen

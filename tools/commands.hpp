@@ -30,6 +30,7 @@ int targetCommand(const TargetOptions &options);
 
 struct RunOptions : SceneOptions {
   bool quiet = false; // no progress line
+  std::string resume; // an output directory to continue from its last checkpoint
 };
 
 int runCommand(const RunOptions &options);

@@ -30,13 +30,14 @@ const CLI::Validator seed_range(
     },
     "SEED");
 
-// A subcommand that reads a scene and writes into a directory.
+// A subcommand that reads a scene and writes into a directory (`required`: both must be given;
+// else the command checks them).
 CLI::App *sceneCommand(CLI::App &app, const char *name, const char *about,
-                       mesopen::SceneOptions &options) {
+                       mesopen::SceneOptions &options, bool required = true) {
   auto *cmd = app.add_subcommand(name, about);
-  cmd->add_option("scene", options.scene, "scene file (TOML)")->required();
+  cmd->add_option("scene", options.scene, "scene file (TOML)")->required(required);
   cmd->add_option("-o,--output", options.out_dir, "output directory")
-      ->required()
+      ->required(required)
       ->check(output_directory);
   cmd->add_option("--seed", options.seed, "random seed of the target (overrides target.seed)")
       ->check(seed_range);
@@ -60,8 +61,13 @@ int main(int argc, char **argv) {
 
   mesopen::RunOptions run;
   auto *run_cmd = sceneCommand(
-      app, "run", "run a scene: the projectile and the grains as finite elements", run);
+      app, "run", "run a scene: the projectile and the grains as finite elements", run, false);
   run_cmd->add_flag("--quiet", run.quiet, "no progress line");
+  run_cmd
+      ->add_option("--resume", run.resume,
+                   "continue the run in this output directory from its last checkpoint (instead "
+                   "of SCENE -o DIR)")
+      ->check(output_directory);
 
   mesopen::AnalyzeOptions analyze;
   auto *analyze_cmd = app.add_subcommand(

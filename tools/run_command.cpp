@@ -1,5 +1,7 @@
-// mesopen run SCENE -o DIR: the scene's input checked, its output directory taken, the run made by
-// the run layer (run/simulate.hpp), its end said on the terminal and as the exit code.
+// mesopen run SCENE -o DIR (or --resume DIR: continued from its last checkpoint): the scene's
+// input checked, its output directory taken, the run made by the run layer (run/simulate.hpp), its
+// end said on the terminal and in the log and as the exit code.
+#include "checkpoint.hpp"
 #include "command_log.hpp"
 #include "commands.hpp"
 #include "output.hpp"
@@ -41,22 +43,42 @@ std::vector<std::string> idleKeys(const Scene &scene, const std::string &path) {
   return warnings;
 }
 
-// The scene, checked for what a run needs, and the warnings about it. Throws InputError.
-Scene prepareRun(const RunOptions &options, std::vector<std::string> &warnings) {
-  Scene scene = readScene(options.scene);
-  if (options.seed)
-    scene.target.seed = *options.seed;
-  checkRunnable(scene, options.scene);
-  // LIGGGHTS reads the disks from the output directory through a script variable: a path it
-  // would split or expand is refused before it starts (it exits the process on a bad command).
-  const std::string out = fs::absolute(options.out_dir).string();
+// LIGGGHTS reads the disks from the output directory through a script variable: a path it would
+// split or expand is refused before it starts (it exits the process on a bad command).
+void checkOutputForLiggghts(const Scene &scene, const std::string &dir) {
+  const std::string out = fs::absolute(dir).string();
   if (scene.run.grains && scene.run.representation != Representation::fe &&
       out.find_first_of(" \t\n\"'$#&") != std::string::npos)
-    throw InputError(options.scene + ": run.representation = \"" +
+    throw InputError(scene.path + ": run.representation = \"" +
                      nameOf(scene.run.representation, representation_names) +
                      "\" needs an output directory without spaces or any of \"'$#& (LIGGGHTS "
                      "reads the disks from it); it is '" +
                      out + "'");
+}
+
+// The scene, checked for what a run needs, and the warnings about it: SCENE with --seed, or with
+// --resume DIR the one its last checkpoint holds. Throws InputError.
+Scene prepareRun(const RunOptions &options, std::vector<std::string> &warnings) {
+  if (!options.resume.empty()) {
+    if (!options.scene.empty() || !options.out_dir.empty() || options.seed)
+      throw InputError("--resume " + options.resume +
+                       " continues a run with its checkpoint's scene, seed and directory; "
+                       "allowed: --resume DIR without SCENE, -o or --seed (with --threads, "
+                       "--quiet)");
+    Scene scene = checkpointScene(options.resume);
+    checkRunnable(scene, scene.path);
+    checkOutputForLiggghts(scene, options.resume);
+    return scene;
+  }
+  if (options.scene.empty() || options.out_dir.empty())
+    throw InputError(std::string(options.scene.empty() ? "a scene is required"
+                                                       : "--output is required (-o DIR)") +
+                     "; allowed: mesopen run SCENE -o DIR, or mesopen run --resume DIR");
+  Scene scene = readScene(options.scene);
+  if (options.seed)
+    scene.target.seed = *options.seed;
+  checkRunnable(scene, options.scene);
+  checkOutputForLiggghts(scene, options.out_dir);
   warnings = idleKeys(scene, options.scene);
   return scene;
 }
@@ -104,13 +126,17 @@ int reportEnd(const RunReport &r, const std::string &dir, bool writer, CommandLo
 
 } // namespace
 
-int runCommand(const RunOptions &options) {
+int runCommand(const RunOptions &given) {
   const auto start = Clock::now();
+  const bool resume = !given.resume.empty();
+  RunOptions options = given;
+  if (resume)
+    options.out_dir = given.resume;
   Scene scene;
   std::vector<std::string> warnings;
   parallel::World world;
   try {
-    scene = prepareRun(options, warnings);
+    scene = prepareRun(given, warnings);
     // Under mpirun every rank runs the scene; rank 0 writes the files.
     world = parallel::world(scene.run.grains && scene.run.representation != Representation::fe);
   } catch (const InputError &e) {
@@ -122,7 +148,8 @@ int runCommand(const RunOptions &options) {
   int refused = 0;
   if (world.rank == 0) {
     try {
-      if (!takeRunDirectory(scene, options.out_dir)) {
+      if (resume ? !takeResumedDirectory(options.out_dir)
+                 : !takeRunDirectory(scene, options.out_dir)) {
         std::cerr << "mesopen run: " << options.out_dir
                   << " is in use by another mesopen run; allowed: another output directory, or "
                      "this one once that run has ended\n";
@@ -140,10 +167,10 @@ int runCommand(const RunOptions &options) {
     for (const std::string &warning : warnings)
       std::cerr << "mesopen run: " << warning << '\n';
     try {
-      log = CommandLog(options.out_dir, options.command_line);
-      log.line("scene " + options.scene + " (composed: scene.toml), seed " +
-               std::to_string(scene.target.seed) + ", " + std::to_string(world.size) + " MPI rank" +
-               (world.size > 1 ? "s" : ""));
+      log = CommandLog(options.out_dir, options.command_line, resume);
+      log.line(std::string(resume ? "resumed from the checkpoint: " : "") + "scene " + scene.path +
+               " (composed: scene.toml), seed " + std::to_string(scene.target.seed) + ", " +
+               std::to_string(world.size) + " MPI rank" + (world.size > 1 ? "s" : ""));
       for (const std::string &warning : warnings)
         log.line(warning);
     } catch (const std::exception &e) {
@@ -159,19 +186,22 @@ int runCommand(const RunOptions &options) {
   const RunPlace place{options.out_dir, shareDirectory() + "/liggghts-inputs/dem.in",
                        !options.quiet && isatty(STDERR_FILENO), start, &log};
   try {
-    return reportEnd(simulate(scene, place, world), options.out_dir, world.rank == 0, log);
+    return reportEnd(simulate(scene, place, world, resume), options.out_dir, world.rank == 0, log);
   } catch (const Interrupted &e) {
     // during the set-up: no run.h5, a summary saying so
     std::cerr << "mesopen run: " << e.what() << '\n';
     logQuietly(log, std::string("interrupted: ") + e.what());
     if (world.rank == 0)
-      writeUnstartedSummary(options.out_dir, options.scene, "interrupted", e.what());
+      writeUnstartedSummary(options.out_dir, scene.path, "interrupted", e.what());
     return 128 + stopSignal();
   } catch (const InputError &e) {
-    // found once the target or LIGGGHTS is made (dem.step against the disks' stable step): bad
-    // input all the same; no run.h5 or summary.json is written
+    // found once the target or LIGGGHTS is made (dem.step against the disks' stable step), or a
+    // checkpoint not of this run: bad input all the same; no run.h5 or summary.json is written
     std::cerr << "mesopen run: " << e.what() << '\n';
     logQuietly(log, std::string("bad input: ") + e.what());
+    std::error_code ec;
+    if (world.rank == 0)
+      fs::remove(options.out_dir + "/run.h5.tmp", ec);
     return 2;
   } catch (const std::exception &e) {
     // Before the time loop (target, model) or while writing the files: no run.h5, a summary
@@ -183,7 +213,7 @@ int runCommand(const RunOptions &options) {
     std::error_code ec;
     fs::remove(options.out_dir + "/run.h5.tmp", ec);
     try {
-      writeUnstartedSummary(options.out_dir, options.scene, "failed", e.what());
+      writeUnstartedSummary(options.out_dir, scene.path, "failed", e.what());
     } catch (const std::exception &) {
       // the directory itself cannot be written: the message above is all there is
     }
