@@ -6,8 +6,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <span>
 #include <stdexcept>
 #include <tuple>
+#include <utility>
 
 namespace mesopen::fem {
 
@@ -15,228 +17,135 @@ namespace {
 using narrow::no_node;
 constexpr double touching = 1e-6; // penetration (this fraction of an element) taken as touching
 constexpr double deep = 0.5;      // penetration beyond this fraction of an element counts as deep
-constexpr double check_depth = 0.05;  // penetration from which a contact is checked by crossings
-constexpr double list_margin = 0.5;   // a pair's lists: margin / the smaller body's element size
-constexpr double search_margin = 1.0; // pairs of bodies: margin / the median element size
+constexpr double check_depth = 0.05; // penetration from which a contact is checked by crossings
+constexpr double list_margin = 0.5;  // a pair's lists: margin / the smaller body's element size
 constexpr std::size_t runs_per_thread = 4; // runs of pairs: a thread takes the next one free
 constexpr std::size_t owner_blocks = 16;   // blocks of bodies, each adding its nodes' forces
 constexpr std::size_t prefetch_ahead = 8;  // contacts and loads ahead whose nodes are fetched
 
 double sq(double x) { return x * x; }
+
+// The settings with one friction coefficient per pair of materials.
+ContactSettings frictionPerPair(ContactSettings s, std::size_t n_materials) {
+  if (s.friction.size() == 1)
+    s.friction.assign(n_materials * n_materials, s.friction[0]);
+  if (s.friction.size() != n_materials * n_materials)
+    throw std::invalid_argument("contact: friction needs one value or one per pair of materials");
+  return s;
+}
 } // namespace
 
-Contact::Contact(const Model &model, ContactSettings settings) : s_(std::move(settings)) {
-  n_materials_ = model.materials.size();
-  for (const Body &body : model.bodies)
-    material_.push_back(static_cast<std::uint16_t>(body.material));
+Contact::Contact(const Model &model, ContactSettings settings)
+    : s_(frictionPerPair(std::move(settings), model.materials.size())),
+      n_materials_(model.materials.size()), boundaries_(model),
+      pairs_(model, boundaries_, runs_per_thread * static_cast<std::size_t>(omp_get_max_threads())),
+      allowances_(model.nodes.size()) {
   for (int wall = 0; wall < 2; ++wall) // kappa doubled at a wall (see hit)
     damping_[wall] = dampingCoefficient(s_.damping, wall ? 2.0 * s_.stiffness : s_.stiffness);
-  if (s_.friction.size() == 1)
-    s_.friction.assign(n_materials_ * n_materials_, s_.friction[0]);
-  if (s_.friction.size() != n_materials_ * n_materials_)
-    throw std::invalid_argument("contact: friction needs one value or one per pair of materials");
-  const std::size_t n_bodies = model.bodies.size();
-  takeBoundaries(model);
-  // Each body's element size: its longest boundary edge at the start (the contact's reach and
-  // depths are measured in it, through erosion too).
-  for (const Body &body : model.bodies) {
-    double longest = 0.0;
-    for (std::size_t k = 0; k + 1 < body.boundary.size(); k += 2) {
-      const std::uint32_t a = body.boundary[k], b = body.boundary[k + 1];
-      longest = std::max(longest, std::sqrt(sq(model.nodes.x[b] - model.nodes.x[a]) +
-                                            sq(model.nodes.y[b] - model.nodes.y[a])));
-    }
-    size_.push_back(longest);
-  }
-  boxes_.resize(n_bodies);
-  pushed_.assign(model.nodes.size(), 0.0);
-  travel_.assign(n_bodies, 0.0);
-  travel_searched_.assign(n_bodies, 0.0);
-  listed_.assign(n_bodies, 0);
-  for (std::size_t b = 0; b < n_bodies; ++b)
-    measure(model, b);
-  // Grid cells about twice the typical body: a grain sits in at most four cells.
-  std::vector<double> extents;
-  for (std::size_t b = 0; b < n_bodies; ++b)
-    if (node_begin_[b] < node_begin_[b + 1])
-      extents.push_back(std::max(boxes_[b].x1 - boxes_[b].x0, boxes_[b].y1 - boxes_[b].y0));
-  if (!extents.empty()) {
-    std::nth_element(extents.begin(), extents.begin() + extents.size() / 2, extents.end());
-    cell_ = 2.0 * extents[extents.size() / 2];
-  }
-  std::vector<double> sizes;
-  for (double h : size_)
-    if (h > 0.0)
-      sizes.push_back(h);
-  if (!sizes.empty()) {
-    std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());
-    search_margin_ = search_margin * sizes[sizes.size() / 2];
-  }
-  // The bodies at rest now, in a grid that stays: a body at rest does not move.
-  std::vector<std::uint32_t> resting;
-  for (std::size_t b = 0; b < n_bodies; ++b)
-    if (model.at_rest[b] && node_begin_[b] < node_begin_[b + 1])
-      resting.push_back(static_cast<std::uint32_t>(b));
-  gridBodies(rest_grid_, boxes_, resting);
-  const std::size_t runs = runs_per_thread * static_cast<std::size_t>(omp_get_max_threads());
-  run_hits_.resize(runs);
+  run_hits_.resize(pairs_.runs());
   for (Hits &hits : run_hits_)
     hits.loads.resize(owner_blocks);
-  arenas_.resize(runs);
   scratch_.resize(static_cast<std::size_t>(omp_get_max_threads()));
-  block_loaded_.resize(owner_blocks);
-  block_pushed_.resize(owner_blocks);
+  const std::size_t n_bodies = model.bodies.size();
   for (std::size_t b = 0; b < n_bodies; ++b)
     block_.push_back(static_cast<std::uint8_t>(b * owner_blocks / n_bodies));
-}
-
-// The bodies' boundary nodes and segments from Body::boundary, at their positions now. Nodes
-// that erosion left without elements are not among them: held by contact springs alone, a free
-// node squeezed between several grains is stiffer than the step allows (as in explicit codes'
-// usual practice, eroded nodes leave the contact; they keep their mass and momentum).
-void Contact::takeBoundaries(const Model &model) {
-  const Nodes &nd = model.nodes;
-  node_begin_.assign(1, 0), segment_begin_.assign(1, 0);
-  nodes_.clear(), segment_ends_.clear();
-  for (const Body &body : model.bodies) {
-    std::vector<std::uint32_t> nodes(body.boundary.begin(), body.boundary.end());
-    std::sort(nodes.begin(), nodes.end());
-    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
-    for (std::uint32_t p : body.boundary)
-      segment_ends_.push_back(static_cast<std::uint32_t>(
-          nodes_.size() + (std::lower_bound(nodes.begin(), nodes.end(), p) - nodes.begin())));
-    nodes_.insert(nodes_.end(), nodes.begin(), nodes.end());
-    node_begin_.push_back(nodes_.size());
-    segment_begin_.push_back(segment_ends_.size() / 2);
-  }
-  points_.resize(nodes_.size());
-  for (std::size_t k = 0; k < nodes_.size(); ++k)
-    points_[k] = {nd.x[nodes_[k]], nd.y[nodes_[k]]};
-  // A vertex is the start of one segment and the end of one, unless the boundary touches itself
-  // there (erosion can leave two elements joined at a corner alone).
-  std::vector<std::uint32_t> starts(nodes_.size(), 0);
-  for (std::size_t k = 0; k < segment_ends_.size(); k += 2)
-    ++starts[segment_ends_[k]];
-  pinched_.resize(nodes_.size());
-  for (std::size_t k = 0; k < nodes_.size(); ++k)
-    pinched_[k] = starts[k] != 1;
+  block_loaded_.resize(owner_blocks);
+  block_pushed_.resize(owner_blocks);
+  pushed_.assign(model.nodes.size(), 0.0);
 }
 
 // Erosion changed the boundaries of `bodies`: the lists, which hold indices into the boundaries,
 // are all taken anew at the next step with a new search for pairs. The overlaps the new
 // boundaries have with their neighbours are allowed for (allowOverlaps).
 void Contact::boundaryChanged(const Model &model, const std::vector<std::uint32_t> &bodies) {
-  const std::vector<std::uint32_t> before = nodes_;
-  const std::vector<std::size_t> before_begin = node_begin_;
-  takeBoundaries(model);
-  for (std::size_t b = 0; b < model.bodies.size(); ++b)
-    measure(model, b);
+  const std::vector<std::uint32_t> before = boundaries_.nodes;
+  const std::vector<std::size_t> before_begin = boundaries_.node_begin;
+  boundaries_.take(model);
   for (std::uint32_t C : bodies)
     allowOverlaps(C, std::vector<std::uint32_t>(before.begin() + before_begin[C],
                                                 before.begin() + before_begin[C + 1]));
-  run_pairs_.clear();
+  pairs_.forget();
 }
 
 // The overlaps of body C's new boundary with the bodies of its pairs: their nodes inside C, and
 // C's newly bare nodes (not in `before`, its boundary nodes before) inside them, deeper than a
 // contact gets in a step (check_depth of an element): each such node's depth is allowed for.
 void Contact::allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &before) {
+  const ContactBoundaries &bd = boundaries_;
+  const std::vector<Point> &points = bd.points;
   Scratch scratch;
-  for (const Pair &pair : pairs_) {
+  for (const Pair &pair : pairs_.pairs()) {
     if (pair.a != C && pair.b != C)
       continue;
     const std::size_t B = pair.a == C ? pair.b : pair.a;
-    const Box region = boxes_[C].overlap(boxes_[B]);
-    for (std::size_t k = node_begin_[B]; k < node_begin_[B + 1]; ++k)
-      if (region.contains(points_[k].x, points_[k].y))
-        if (const double d = penetration(C, points_[k].x, points_[k].y, scratch);
-            d > check_depth * size_[C])
-          allow(nodes_[k], d);
-    for (std::size_t k = node_begin_[C]; k < node_begin_[C + 1]; ++k)
-      if (region.contains(points_[k].x, points_[k].y) &&
-          !std::binary_search(before.begin(), before.end(), nodes_[k]))
-        if (const double d = penetration(B, points_[k].x, points_[k].y, scratch);
-            d > check_depth * size_[B])
-          allow(nodes_[k], d);
+    const Box region = bd.boxes[C].overlap(bd.boxes[B]);
+    for (std::size_t k = bd.node_begin[B]; k < bd.node_begin[B + 1]; ++k)
+      if (region.contains(points[k].x, points[k].y))
+        if (const double d = penetration(C, points[k].x, points[k].y, scratch);
+            d > check_depth * bd.size[C])
+          allowances_.allow(bd.nodes[k], d);
+    for (std::size_t k = bd.node_begin[C]; k < bd.node_begin[C + 1]; ++k)
+      if (region.contains(points[k].x, points[k].y) &&
+          !std::binary_search(before.begin(), before.end(), bd.nodes[k]))
+        if (const double d = penetration(B, points[k].x, points[k].y, scratch);
+            d > check_depth * bd.size[B])
+          allowances_.allow(bd.nodes[k], d);
   }
-}
-
-// Node's depth up to `depth` is allowed for, and let go over release_steps steps.
-void Contact::allow(std::uint32_t node, double depth) {
-  if (allowance_.empty())
-    allowance_.assign(pushed_.size(), 0.0);
-  if (depth <= allowance_[node])
-    return;
-  if (allowance_[node] == 0.0)
-    allowed_.push_back({node, 0.0});
-  allowance_[node] = depth;
-  for (Allowance &a : allowed_)
-    if (a.node == node)
-      a.rate = depth / release_steps;
 }
 
 // How deep (px, py) lies inside body B: its distance to B's boundary, 0 outside.
 double Contact::penetration(std::size_t B, double px, double py, Scratch &scratch) const {
-  if (!inside(B, px, py))
+  if (!boundaries_.inside(B, px, py))
     return 0.0;
   // every segment of B lies in its box
-  nearSegments(B, segment_ends_.data() + 2 * segment_begin_[B],
-               segment_ends_.data() + 2 * segment_begin_[B + 1], boxes_[B], scratch);
+  nearSegments(B, boundaries_.ends(B), boundaries_.endsEnd(B), boundaries_.boxes[B], scratch);
   return std::sqrt(narrow::closest(scratch.near, px, py, nullptr).distance);
 }
 
+// A step: the allowances let go by a step's share, the pairs of bodies (broad phase), the contacts
+// of each pair and their forces (narrow phase), the walls' contacts, the forces into the nodes.
 void Contact::addForces(Model &model, double, double dt) {
   const auto start = std::chrono::steady_clock::now();
-  // The overlaps erosion laid bare open step by step.
-  std::erase_if(allowed_, [&](const Allowance &a) {
-    allowance_[a.node] = std::max(0.0, allowance_[a.node] - a.rate);
-    return allowance_[a.node] == 0.0;
-  });
-  moving_.clear();
-  for (std::size_t b = 0; b < model.bodies.size(); ++b)
-    if (!model.at_rest[b] && node_begin_[b] < node_begin_[b + 1])
-      moving_.push_back(static_cast<std::uint32_t>(b));
-  const long n_moving = static_cast<long>(moving_.size());
-  double farthest = 0.0; // the largest travel since the last search for pairs
-#pragma omp parallel for schedule(static) reduction(max : farthest) if (n_moving > 64)
-  for (long i = 0; i < n_moving; ++i) {
-    measure(model, moving_[i]);
-    farthest = std::max(farthest, travel_[moving_[i]] - travel_searched_[moving_[i]]);
-  }
-  // The pairs of bodies: all anew when a body may have closed half the margin, else those of the
-  // bodies that woke since the last step.
-  if (run_pairs_.empty() || 2.0 * farthest > search_margin_)
-    findPairs();
-  else
-    addPairsOfWoken(model);
+  allowances_.release();
+  if (pairs_.update(model, boundaries_))
+    ++stats_.searches;
+  narrowPhase(model, dt);
+  walls(model, dt, run_hits_.back());
+  addHits(model);
+  stats_.max_depth = std::max(stats_.max_depth, stats_.depth);
+  stats_.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
 
-  // Narrow phase over the runs of pairs, each with its lists and its hits: taken run by run, the
-  // hits come in pair order whatever the number of threads.
-  const long runs = static_cast<long>(arenas_.size());
+// The narrow phase over the runs of pairs, each with its lists and its hits: taken run by run, the
+// hits come in pair order whatever the number of threads.
+void Contact::narrowPhase(const Model &model, double dt) {
+  const ContactBoundaries &bd = boundaries_;
+  const long runs = static_cast<long>(pairs_.runs());
   std::size_t refreshed = 0, overlapping = 0, skipped = 0, partial = 0;
 #pragma omp parallel if (pairs_.size() > 64) reduction(+ : refreshed, overlapping, skipped, partial)
   {
     Scratch &scratch = scratch_[omp_get_thread_num()];
 #pragma omp for schedule(dynamic, 1)
     for (long r = 0; r < runs; ++r) {
-      std::vector<std::uint32_t> &arena = arenas_[r];
+      std::vector<std::uint32_t> &arena = pairs_.arena(r);
+      const std::span<Pair> run = pairs_.run(r);
       Hits &hits = run_hits_[r];
       hits.clear();
-      for (std::size_t i = run_pairs_[r]; i < run_pairs_[r + 1]; ++i) {
-        if (i + prefetch_ahead < run_pairs_[r + 1])
-          prefetchPair(pairs_[i + prefetch_ahead], arena);
-        Pair &pair = pairs_[i];
-        if (!boxes_[pair.a].overlaps(boxes_[pair.b]))
+      for (std::size_t i = 0; i < run.size(); ++i) {
+        if (i + prefetch_ahead < run.size())
+          prefetchPair(run[i + prefetch_ahead], arena);
+        Pair &pair = run[i];
+        if (!bd.boxes[pair.a].overlaps(bd.boxes[pair.b]))
           continue;
         ++overlapping;
         // Each boundary node has moved by at most its body's travel since the lists were
         // taken; the overlap by as much as either body; a segment's box by its body's.
-        if (2.0 * ((travel_[pair.a] - pair.travel_a) + (travel_[pair.b] - pair.travel_b)) >
+        if (2.0 * ((bd.travel[pair.a] - pair.travel_a) + (bd.travel[pair.b] - pair.travel_b)) >
             pair.margin)
           refresh(pair, arena, scratch), ++refreshed;
         // A side is looked at if some of its nodes are hot, or the clear ones may have come
         // into contact (see touch).
-        const double travel = travel_[pair.a] + travel_[pair.b];
+        const double travel = bd.travel[pair.a] + bd.travel[pair.b];
         const std::uint32_t *items = arena.data() + pair.begin;
         const std::uint32_t part[5] = {0, pair.end[0], pair.end[1], pair.end[2], pair.end[3]};
         std::uint32_t *hot = arena.data() + pair.begin + pair.end[3];
@@ -266,10 +175,6 @@ void Contact::addForces(Model &model, double, double dt) {
   stats_.refreshed += refreshed;
   stats_.sides += 2 * overlapping, stats_.skipped += skipped, stats_.partial += partial;
   stats_.pairs = overlapping;
-  walls(model, dt, run_hits_.back());
-  addHits(model);
-  stats_.max_depth = std::max(stats_.max_depth, stats_.depth);
-  stats_.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void Contact::Hits::clear() {
@@ -313,7 +218,7 @@ void Contact::addHits(Model &model) {
   // The sudden depths are allowed for, run by run.
   for (const Hits &hits : run_hits_) {
     for (auto [p, excess] : hits.sudden)
-      allow(p, excess);
+      allowances_.allow(p, excess);
     stats_.sudden += hits.sudden.size();
   }
   stats_.contacts = contacts;
@@ -350,9 +255,10 @@ void Contact::addBlock(Model &model, std::size_t k) {
 // may be the closest to one of them until the lists are taken again. In place in the arena if they
 // fit, else at its end with room to grow.
 void Contact::refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &scratch) const {
+  const ContactBoundaries &bd = boundaries_;
   const std::size_t a = pair.a, b = pair.b;
-  const double margin = list_margin * std::min(size_[a], size_[b]);
-  const Box region = boxes_[a].overlap(boxes_[b]).widened(margin);
+  const double margin = list_margin * std::min(bd.size[a], bd.size[b]);
+  const Box region = bd.boxes[a].overlap(bd.boxes[b]).widened(margin);
   std::vector<std::uint32_t> &items = scratch.items;
   items.clear();
   pair.end[0] = listNear(a, b, region, margin, scratch);
@@ -367,7 +273,7 @@ void Contact::refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &sc
     arena.resize(arena.size() + pair.capacity);
   }
   std::copy(items.begin(), items.end(), arena.begin() + pair.begin);
-  pair.travel_a = travel_[a], pair.travel_b = travel_[b], pair.margin = margin;
+  pair.travel_a = bd.travel[a], pair.travel_b = bd.travel[b], pair.margin = margin;
   pair.until[0] = pair.until[1] = 0.0, pair.hot[0] = pair.hot[1] = 0; // all to be looked at
 }
 
@@ -378,15 +284,15 @@ void Contact::refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &sc
 // Returns the end of the nodes.
 std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region, double margin,
                                 Scratch &scratch) const {
-  nearSegments(B, segment_ends_.data() + 2 * segment_begin_[B],
-               segment_ends_.data() + 2 * segment_begin_[B + 1], region, scratch);
+  const ContactBoundaries &bd = boundaries_;
+  nearSegments(B, bd.ends(B), bd.endsEnd(B), region, scratch);
   const Near &near = scratch.near;
   std::vector<std::uint32_t> &items = scratch.items;
   std::vector<double> &distance = scratch.distance;
   distance.resize(near.size);
   scratch.keep.assign(near.size, 0);
-  for (std::size_t k = node_begin_[A]; k < node_begin_[A + 1] && near.count > 0; ++k) {
-    const double px = points_[k].x, py = points_[k].y;
+  for (std::size_t k = bd.node_begin[A]; k < bd.node_begin[A + 1] && near.count > 0; ++k) {
+    const double px = bd.points[k].x, py = bd.points[k].y;
     if (!region.contains(px, py))
       continue;
     const narrow::Closest c = narrow::closest(near, px, py, distance.data());
@@ -409,8 +315,8 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region,
 MESOPEN_INLINE Contact::Box Contact::nearSegments(std::size_t body, const std::uint32_t *ends,
                                                   const std::uint32_t *ends_end, const Box &region,
                                                   Scratch &scratch) const {
-  const Box wide = region.widened(check_depth * size_[body]);
-  narrow::nearSegments(points_.data(), ends, ends_end, wide, scratch.near);
+  const Box wide = region.widened(check_depth * boundaries_.size[body]);
+  narrow::nearSegments(boundaries_.points.data(), ends, ends_end, wide, scratch.near);
   return wide;
 }
 
@@ -431,18 +337,19 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
                                    const std::uint32_t *ends, const std::uint32_t *ends_end,
                                    double travel, double &until, std::uint32_t *hot,
                                    std::uint32_t &n_hot, Hits &hits, Scratch &scratch) const {
+  const ContactBoundaries &bd = boundaries_;
   // A node inside B is in the overlap of the two boxes: the listed nodes there, if any, are
   // checked against the segments within `reach` of the overlap (a node behind one of them by less
   // than `reach` finds its closest segment among them; deeper contacts are checked by the crossing
   // count).
-  const Box &box = boxes_[B];
-  const Box region = boxes_[A].overlap(box);
+  const Box &box = bd.boxes[B];
+  const Box region = bd.boxes[A].overlap(box);
   std::vector<std::uint32_t> &candidates = scratch.candidates; // positions in `nodes`
   candidates.clear();
   const bool all = !(travel < until);
   double clear = all ? HUGE_VAL : until;
   auto look = [&](std::uint32_t i) {
-    const Point &p = points_[nodes[i]];
+    const Point &p = bd.points[nodes[i]];
     if (region.contains(p.x, p.y))
       candidates.push_back(i);
     else // outside B's box: at least as far from B as the largest of the coordinate gaps
@@ -459,7 +366,7 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
   until = clear;
   if (candidates.empty())
     return;
-  const double h = size_[B];
+  const double h = bd.size[B];
   const Box wide = nearSegments(B, ends, ends_end, region, scratch);
   const Near &near = scratch.near;
   if (near.count == 0) {
@@ -467,10 +374,10 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
     n_hot = static_cast<std::uint32_t>(candidates.size());
     return;
   }
-  const double mu = s_.friction[material_[A] * n_materials_ + material_[B]];
+  const double mu = s_.friction[bd.material[A] * n_materials_ + bd.material[B]];
   for (const std::uint32_t i : candidates) {
     const std::uint32_t k = nodes[i];
-    const double px = points_[k].x, py = points_[k].y;
+    const double px = bd.points[k].x, py = bd.points[k].y;
     // The closest point of B's boundary: on a segment's inside (the node is in contact when behind
     // it) or a vertex (when behind its vertex normal; see atVertex).
     narrow::Closest c = narrow::closest(near, px, py, nullptr);
@@ -481,10 +388,10 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
     // w2: the weight of the segment's end, set if the node meets a vertex, else along / length
     double depth = 0.0, nx = 0.0, ny = 0.0, w2 = -1.0;
     using narrow::At;
-    const At at =
-        narrow::atInside(near, c)
-            ? At::segment
-            : narrow::atVertex(near, points_.data(), pinched_.data(), c, px, py, depth, nx, ny, w2);
+    const At at = narrow::atInside(near, c)
+                      ? At::segment
+                      : narrow::atVertex(near, bd.points.data(), bd.pinched.data(), c, px, py,
+                                         depth, nx, ny, w2);
     if (at == At::unknown) { // beyond a segment's end, the other segment there not near
       hot[n_hot++] = i;
       continue;
@@ -503,7 +410,7 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
       outside();
       continue;
     }
-    if (depth <= touching * h || (depth > check_depth * h && !inside(B, px, py))) {
+    if (depth <= touching * h || (depth > check_depth * h && !bd.inside(B, px, py))) {
       // touching only; or deeper than a few percent of an element, where a dented grain can put
       // a node outside it behind one of its segments: the crossing count decides
       if (depth > check_depth * h)
@@ -513,34 +420,30 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
       continue;
     }
     hot[n_hot++] = i;
-    if (!allowed_.empty() && allowance_[nodes_[k]] > 0.0 && // (none most steps: no look-up)
-        (depth -= allowance_[nodes_[k]]) <= touching * h)
-      continue; // an overlap erosion laid bare, still opening
+    if (const double allowed = allowances_.of(bd.nodes[k]);
+        allowed > 0.0 && (depth -= allowed) <= touching * h)
+      continue; // a depth allowed for (erosion's overlap, a sudden depth), still opening
     hits.found.push_back({static_cast<std::uint32_t>(A), k, static_cast<std::uint32_t>(B),
                           near.ends[2 * c.segment], near.ends[2 * c.segment + 1],
                           w2 < 0.0 ? c.along / s.length : w2, nx, ny, depth, h, mu});
   }
 }
 
-bool Contact::inside(std::size_t B, double px, double py) const {
-  return narrow::inside(points_.data(), segment_ends_.data() + 2 * segment_begin_[B],
-                        segment_ends_.data() + 2 * segment_begin_[B + 1], px, py);
-}
-
 // The rigid walls: a boundary node of a moving body beyond a wall is pushed back along its normal.
 void Contact::walls(const Model &model, double dt, Hits &hits) const {
+  const ContactBoundaries &bd = boundaries_;
   const bool left = !std::isnan(s_.wall_left), right = !std::isnan(s_.wall_right),
              bottom = !std::isnan(s_.wall_bottom);
   if (!left && !right && !bottom)
     return;
-  for (std::uint32_t b : moving_) {
-    const Box &box = boxes_[b];
+  for (std::uint32_t b : pairs_.moving()) {
+    const Box &box = bd.boxes[b];
     if (!(left && box.x0 < s_.wall_left) && !(right && box.x1 > s_.wall_right) &&
         !(bottom && box.y0 < s_.wall_bottom))
       continue;
-    const double h = size_[b];
-    for (std::size_t k = node_begin_[b]; k < node_begin_[b + 1]; ++k) {
-      const double x = points_[k].x, y = points_[k].y;
+    const double h = bd.size[b];
+    for (std::size_t k = bd.node_begin[b]; k < bd.node_begin[b + 1]; ++k) {
+      const double x = bd.points[k].x, y = bd.points[k].y;
       for (auto [on, depth, nx, ny] : {std::tuple{left, s_.wall_left - x, 1.0, 0.0},
                                        {right, x - s_.wall_right, -1.0, 0.0},
                                        {bottom, s_.wall_bottom - y, 0.0, 1.0}})
@@ -556,7 +459,7 @@ void Contact::walls(const Model &model, double dt, Hits &hits) const {
 // Prefetching (a fast path: without it the results are the same). The lists of a pair ahead, its
 // second body's box (scattered in memory).
 void Contact::prefetchPair(const Pair &pair, const std::vector<std::uint32_t> &arena) const {
-  __builtin_prefetch(&boxes_[pair.b]);
+  __builtin_prefetch(&boundaries_.boxes[pair.b]);
   __builtin_prefetch(arena.data() + pair.begin);
   __builtin_prefetch(arena.data() + pair.begin + pair.end[3]);
 }
@@ -569,27 +472,29 @@ void Contact::prefetchLoad(const Nodes &nd, const Load &load) {
 
 // The nodal data a contact's force reads (scattered: one line per node and array), fetched ahead.
 void Contact::prefetchHit(const Model &model, const Found &f) const {
+  const ContactBoundaries &bd = boundaries_;
   const Nodes &nd = model.nodes;
   for (std::uint32_t k : {f.k, f.k1, f.k2}) {
     if (k == no_node)
       break;
-    const std::uint32_t p = nodes_[k];
+    const std::uint32_t p = bd.nodes[k];
     __builtin_prefetch(&nd.mass[p]), __builtin_prefetch(&nd.vx[p]), __builtin_prefetch(&nd.vy[p]);
   }
-  __builtin_prefetch(&pushed_[nodes_[f.k]]);
+  __builtin_prefetch(&pushed_[bd.nodes[f.k]]);
 }
 
 // The force of a contact (the first `touching` h of the depth is free), relative velocities at
 // mid-step; the reaction goes to the segment's nodes by weights 1 - w2, w2.
 MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, Hits &hits) const {
+  const ContactBoundaries &bd = boundaries_;
   const auto [A, k, B, k1, k2, w2, nx, ny, found_depth, h, mu] = f;
   double depth = found_depth;
   const Nodes &nd = model.nodes;
   const double w1 = 1.0 - w2;
-  const std::uint32_t p = nodes_[k];
+  const std::uint32_t p = bd.nodes[k];
   double m_eff = nd.mass[p], vx = nd.vx[p], vy = nd.vy[p];
   if (k1 != no_node) {
-    const std::uint32_t s1 = nodes_[k1], s2 = nodes_[k2];
+    const std::uint32_t s1 = bd.nodes[k1], s2 = bd.nodes[k2];
     const double m_seg = w1 * nd.mass[s1] + w2 * nd.mass[s2];
     m_eff = reducedMass(m_eff, m_seg);
     vx -= w1 * nd.vx[s1] + w2 * nd.vx[s2];
@@ -616,7 +521,7 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
   if (k1 != no_node) {
     std::vector<Load> &loads = hits.loads[block_[B]];
     for (auto [s, w] : {std::pair{k1, w1}, {k2, w2}})
-      loads.push_back({nodes_[s], B, -w * fx, -w * fy, -w * friction_x, -w * friction_y, 0.0});
+      loads.push_back({bd.nodes[s], B, -w * fx, -w * fy, -w * friction_x, -w * friction_y, 0.0});
   }
   ++hits.count;
   hits.depth = std::max(hits.depth, found_depth / h);
@@ -625,17 +530,17 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
 
 Contact::State Contact::state() const {
   State st;
-  for (const Pair &p : pairs_)
+  for (const BodyPairs::Pair &p : pairs_.pairs())
     st.pairs.insert(st.pairs.end(), {p.a, p.b});
-  st.search_due = run_pairs_.empty();
-  st.travel = travel_, st.travel_searched = travel_searched_;
-  st.listed.assign(listed_.begin(), listed_.end());
-  for (const Box &b : boxes_)
+  st.search_due = pairs_.searchDue();
+  st.travel = boundaries_.travel, st.travel_searched = pairs_.travelSearched();
+  st.listed.assign(pairs_.listed().begin(), pairs_.listed().end());
+  for (const Box &b : boundaries_.boxes)
     st.boxes.insert(st.boxes.end(), {b.x0, b.y0, b.x1, b.y1});
-  for (const Point &p : points_)
+  for (const Point &p : boundaries_.points)
     st.points.insert(st.points.end(), {p.x, p.y});
-  for (const Allowance &a : allowed_)
-    st.allowed.push_back(a.node), st.allowance.push_back(allowance_[a.node]),
+  for (const ContactAllowances::Allowed &a : allowances_.allowed())
+    st.allowed.push_back(a.node), st.allowance.push_back(allowances_.of(a.node)),
         st.rate.push_back(a.rate);
   for (const auto &nodes : block_pushed_)
     for (std::uint32_t p : nodes)
@@ -645,11 +550,11 @@ Contact::State Contact::state() const {
 }
 
 void Contact::restore(const Model &model, const State &st) {
-  takeBoundaries(model);
+  boundaries_.take(model);
   const std::size_t n_bodies = model.bodies.size();
   if (st.travel.size() != n_bodies || st.travel_searched.size() != n_bodies ||
       st.listed.size() != n_bodies || st.boxes.size() != 4 * n_bodies ||
-      st.points.size() != 2 * points_.size() || st.pairs.size() % 2 != 0 ||
+      st.points.size() != 2 * boundaries_.points.size() || st.pairs.size() % 2 != 0 ||
       st.allowance.size() != st.allowed.size() || st.rate.size() != st.allowed.size() ||
       st.pushed_depth.size() != st.pushed.size())
     throw std::invalid_argument("contact state: sizes not of this model");
@@ -660,33 +565,18 @@ void Contact::restore(const Model &model, const State &st) {
   for (std::uint32_t b : st.pairs)
     if (b >= n_bodies)
       throw std::invalid_argument("contact state: a body not of this model");
-  travel_ = st.travel, travel_searched_ = st.travel_searched;
-  listed_.assign(st.listed.begin(), st.listed.end());
+  boundaries_.travel = st.travel;
   for (std::size_t b = 0; b < n_bodies; ++b)
-    boxes_[b] = {st.boxes[4 * b], st.boxes[4 * b + 1], st.boxes[4 * b + 2], st.boxes[4 * b + 3]};
-  for (std::size_t k = 0; k < points_.size(); ++k)
-    points_[k] = {st.points[2 * k], st.points[2 * k + 1]};
-  // The pairs in their order, their lists to be taken at their first look; the runs of pairs
-  // split anew (the hits come in pair order whatever the split).
-  pairs_.clear();
-  for (std::size_t k = 0; k < st.pairs.size(); k += 2)
-    pairs_.emplace_back(st.pairs[k], st.pairs[k + 1]);
-  for (auto &arena : arenas_)
-    arena.clear();
-  run_pairs_.clear();
-  if (!st.search_due) {
-    const std::size_t runs = arenas_.size();
-    run_pairs_.resize(runs + 1);
-    for (std::size_t r = 0; r <= runs; ++r)
-      run_pairs_[r] = pairs_.size() * r / runs;
-  }
-  allowance_.clear(), allowed_.clear();
-  for (std::size_t k = 0; k < st.allowed.size(); ++k) {
-    if (allowance_.empty())
-      allowance_.assign(pushed_.size(), 0.0);
-    allowance_[st.allowed[k]] = st.allowance[k];
-    allowed_.push_back({st.allowed[k], st.rate[k]});
-  }
+    boundaries_.boxes[b] = {st.boxes[4 * b], st.boxes[4 * b + 1], st.boxes[4 * b + 2],
+                            st.boxes[4 * b + 3]};
+  for (std::size_t k = 0; k < boundaries_.points.size(); ++k)
+    boundaries_.points[k] = {st.points[2 * k], st.points[2 * k + 1]};
+  pairs_.restore(st.pairs, st.search_due, st.travel_searched,
+                 std::vector<char>(st.listed.begin(), st.listed.end()));
+  std::vector<ContactAllowances::Allowed> allowed;
+  for (std::size_t k = 0; k < st.allowed.size(); ++k)
+    allowed.push_back({st.allowed[k], st.rate[k]});
+  allowances_.restore(allowed, st.allowance);
   std::fill(pushed_.begin(), pushed_.end(), 0.0);
   for (auto &nodes : block_pushed_)
     nodes.clear();

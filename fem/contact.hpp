@@ -1,6 +1,6 @@
 // Frictional contact between bodies and with the rigid walls of the box (thesis section 3).
-// Every step, at x(n+1), in three pieces:
-//   - broad phase (contact_broad.cpp): the bodies' bounding boxes in a cell grid
+// Every step, at x(n+1), on the bodies' boundaries (contact_boundaries.hpp), in three pieces:
+//   - broad phase (contact_broad.hpp, BodyPairs): the bodies' bounding boxes in a cell grid
 //     (grid/cell_grid.hpp) give the pairs of bodies whose boxes overlap (at least one of them
 //     moving);
 //   - narrow phase (contact_narrow.hpp), node to segment both ways: a boundary node of one body
@@ -28,16 +28,17 @@
 //   - a depth no step's approach can make (deeper than the node's depth the step before plus twice
 //     its approach, -2 v_n dt, or 0.005 of an element: a boundary folded over it, a closest segment
 //     changed in a dented body) is not pushed out at once, at depth / dt: the excess is allowed for
-//     and let go over 200 steps, as the overlaps erosion lays bare (see hit);
+//     and let go over 200 steps, as the overlaps erosion lays bare (see hit and
+//     contact_allowances.hpp);
 //   - Coulomb friction against the relative tangential velocity v_t:
 //       f_t = min(mu f_n, m_eff |v_t| / dt)
 //     (sliding at mu f_n; the second term is the force that stops the slip in one step: sticking).
 // Forces go into the nodes by Nodes::addExternal (with their frictional part),
 // so that the solver accounts their work as contact and friction energy. Bodies that are loaded
 // are woken; pairs of bodies that both rest are not searched.
-// The pairs of bodies are kept from step to step (a Verlet list of bodies): found with the boxes
-// widened by a margin, and found anew only when some body may have moved by half of it; a body
-// that wakes in between adds its pairs with bodies at rest. Each pair keeps the lists of its
+// The pairs of bodies are kept from step to step (a Verlet list of bodies, BodyPairs): found with
+// the boxes widened by a margin, and found anew only when some body may have moved by half of it;
+// a body that wakes in between adds its pairs with bodies at rest. Each pair keeps the lists of its
 // boundary nodes and segments near the overlap of the two boxes, taken with a margin of its own
 // and refreshed when the two bodies may have moved by a quarter of that (a bound on the
 // displacement of every boundary node, summed step by step), not when the pairs are searched anew
@@ -50,14 +51,17 @@
 // Equations: docs/models.md §8.
 #pragma once
 
-#include "cell_grid.hpp"
+#include "contact_allowances.hpp"
+#include "contact_boundaries.hpp"
+#include "contact_broad.hpp"
 #include "contact_law.hpp"
 #include "contact_narrow.hpp"
 #include "solver.hpp"
 
-#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 namespace mesopen::fem {
@@ -102,48 +106,17 @@ private:
   using Box = narrow::Box;
   using Point = narrow::Point;
   using Near = narrow::Near;
-  // A pair of bodies (a, b) whose boxes widened by the margin overlapped, and what it looks at:
-  // a's boundary nodes (indices into nodes_), b's segments (their two nodes, as indices into
-  // nodes_), b's nodes, a's segments, near the boxes' overlap; in its run's arena from `begin`.
-  struct Pair {
-    Pair(std::uint32_t p, std::uint32_t q) : a(std::min(p, q)), b(std::max(p, q)) {}
-    std::uint32_t a, b;
-    std::uint32_t begin = 0, capacity = 0;
-    std::uint32_t end[4] = {}; // ends of the four parts, from `begin`
-    double travel_a = -std::numeric_limits<double>::infinity(), travel_b = 0.0; // when listed
-    double margin = 0.0;
-    // Per side (a's nodes against b, b's against a; see touch): the travel of the two bodies
-    // together up to which its clear nodes need no look, and how many nodes are not clear (hot,
-    // listed in the arena after the pair's lists).
-    double until[2] = {};
-    std::uint32_t hot[2] = {};
-  };
-  void takeBoundaries(const Model &model);
-  void allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &before);
-  void allow(std::uint32_t node, double depth);
-  void addHits(Model &model);
-  void addBlock(Model &model, std::size_t k);
+  using Pair = BodyPairs::Pair;
 
-  // Broad phase (contact_broad.cpp).
-  void measure(const Model &model, std::size_t body);
-  void findPairs();
-  // Bodies `which` in the cells their boxes meet, in cells of cell_.
-  void gridBodies(CellGrid<> &grid, const std::vector<Box> &boxes,
-                  const std::vector<std::uint32_t> &which) const;
-  void addPairsOfWoken(const Model &model);
-  template <class Wanted, class Add>
-  void restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add add) const;
-
-  // Narrow phase (on the geometry of contact_narrow.hpp) and forces (the law of contact_law.hpp).
   // A contact force on a node (or a segment's node's share of the reaction), with its frictional
   // part; `body` is the node's; the depth the node was pushed at (0 for a reaction).
   struct Load {
     std::uint32_t node, body;
     double fx, fy, friction_x, friction_y, depth;
   };
-  // A contact: boundary node k (index into nodes_) of body A, pushed out along (nx, ny) by
-  // `depth` from the segment k1-k2 of body B (at weight w2 from k1) or from a wall (k1 = no_node);
-  // h the element size, mu the friction coefficient.
+  // A contact: boundary node k (index into the boundary nodes) of body A, pushed out along
+  // (nx, ny) by `depth` from the segment k1-k2 of body B (at weight w2 from k1) or from a wall
+  // (k1 = no_node); h the element size, mu the friction coefficient.
   struct Found {
     std::uint32_t A, k, B, k1, k2;
     double w2, nx, ny, depth, h, mu;
@@ -167,73 +140,48 @@ private:
     std::vector<double> distance;
     std::vector<char> keep;
   };
+
+  // The phases of a step after the broad phase (see addForces).
+  void narrowPhase(const Model &model, double dt);
+  void walls(const Model &model, double dt, Hits &hits) const;
+  void addHits(Model &model);
+  void addBlock(Model &model, std::size_t k);
+
+  // Narrow phase (on the geometry of contact_narrow.hpp) and forces (the law of contact_law.hpp).
   // The segments of `body` given by their ends that come within its reach (check_depth of an
   // element) of `region`, into scratch.near; returns the region widened by that reach.
   Box nearSegments(std::size_t body, const std::uint32_t *ends, const std::uint32_t *ends_end,
                    const Box &region, Scratch &scratch) const;
   void refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &scratch) const;
-  double penetration(std::size_t B, double px, double py, Scratch &scratch) const;
   std::uint32_t listNear(std::size_t A, std::size_t B, const Box &region, double margin,
                          Scratch &scratch) const;
   void touch(const Model &model, std::size_t A, std::size_t B, const std::uint32_t *nodes,
              const std::uint32_t *nodes_end, const std::uint32_t *ends,
              const std::uint32_t *ends_end, double travel, double &until, std::uint32_t *hot,
              std::uint32_t &n_hot, Hits &hits, Scratch &scratch) const;
-  // Whether (px, py) lies inside body B's boundary polygon.
-  bool inside(std::size_t B, double px, double py) const;
-  void walls(const Model &model, double dt, Hits &hits) const;
   void hit(const Model &model, const Found &f, double dt, Hits &hits) const;
+  double penetration(std::size_t B, double px, double py, Scratch &scratch) const;
+  void allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &before);
   // Prefetching ahead in the loops over the pairs, the contacts and the loads.
   void prefetchPair(const Pair &pair, const std::vector<std::uint32_t> &arena) const;
   void prefetchHit(const Model &model, const Found &f) const;
   static void prefetchLoad(const Nodes &nd, const Load &load);
 
-  ContactSettings s_;
+  ContactSettings s_;      // with a friction coefficient per pair of materials
   double damping_[2] = {}; // the damping coefficient c of hit, between bodies and at a wall
   std::size_t n_materials_;
-  std::vector<std::uint16_t> material_; // per body: its material (Model::materials index)
-  std::vector<std::size_t> node_begin_,
-      segment_begin_;                // per body, into nodes_ and segment_ends_ / 2
-  std::vector<std::uint32_t> nodes_; // boundary nodes, body by body
-  std::vector<Point> points_;        // per boundary node (as nodes_): its position this step
-  std::vector<std::uint32_t>
-      segment_ends_;                  // boundary edges (ccw), their nodes as indices into nodes_
-  std::vector<std::uint8_t> pinched_; // per boundary node: not the start of exactly one edge
-  std::vector<double> size_;          // per body: longest boundary edge [m]
-  std::vector<Box> boxes_;            // per body, this step
-  std::vector<double> travel_; // per body: sum over steps of its boundary nodes' largest move
-  std::vector<double> travel_searched_; // per body: travel_ at the last search for pairs
-  std::vector<char> listed_;            // per body: its pairs are in pairs_ (it moved then)
-  std::vector<std::uint32_t> woken_;    // bodies moving since this step
-  std::vector<std::uint32_t> moving_;   // bodies not at rest, this step
-  double cell_ = 0.0;
-  CellGrid<> rest_grid_, moving_grid_;
-  double search_margin_ = 0.0;
-  std::vector<Pair> pairs_;
-  // The pairs in runs (a few per thread, taken in turn by free threads): run r holds pairs_
-  // [run_pairs_[r], run_pairs_[r + 1]) (the last also those added since the search), their lists,
-  // their hits.
-  std::vector<std::size_t> run_pairs_;
-  std::vector<std::vector<std::uint32_t>> arenas_;
-  std::vector<Hits> run_hits_;
-  std::vector<Scratch> scratch_;                         // per thread
-  std::vector<std::uint8_t> block_;                      // per body: its block of bodies
+  ContactBoundaries boundaries_;
+  BodyPairs pairs_;
+  ContactAllowances allowances_;    // depths not pushed against, let go step by step
+  std::vector<Hits> run_hits_;      // per run of pairs (the last also the walls')
+  std::vector<Scratch> scratch_;    // per thread
+  std::vector<std::uint8_t> block_; // per body: its block of bodies
   std::vector<std::vector<std::uint32_t>> block_loaded_; // per block of bodies: nodes it loaded
   std::vector<std::vector<std::uint32_t>> block_pushed_; // per block of bodies: nodes pushed_ holds
-  ContactStatistics stats_;
-  // Overlaps that erosion laid bare (a node already inside another body when the elements that
-  // held it out left), and contacts found deeper than a step's approach can make (see hit): the
-  // node's depth then [m] is not pushed against (per model node), and is let go over
-  // release_steps steps, so that the overlap opens at a bounded speed instead of in one step.
-  struct Allowance {
-    std::uint32_t node;
-    double rate; // [m per step]
-  };
-  std::vector<double> allowance_;
-  std::vector<Allowance> allowed_;
   // The depth each model node was pushed at in the last step (the deepest of its contacts; 0 if
   // none; the nodes where it is not 0 are in block_pushed_).
   std::vector<double> pushed_;
+  ContactStatistics stats_;
 
 public:
   // What the steps to come depend on beyond the model's state (a run's checkpoint,

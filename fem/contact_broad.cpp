@@ -1,6 +1,7 @@
-// The broad phase of FE-FE contact (fem/contact.hpp): the bodies' boxes, their cell grids, the
-// pairs of bodies whose boxes come within the search margin.
-#include "contact.hpp"
+// The broad phase of FE-FE contact (contact_broad.hpp).
+#include "contact_broad.hpp"
+
+#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,31 +11,64 @@
 namespace mesopen::fem {
 
 namespace {
-double sq(double x) { return x * x; }
+constexpr double search_margin = 1.0; // pairs of bodies: margin / the median element size
 } // namespace
 
-// A body's boundary node positions and its bounding box now, and how far its nodes
-// moved since the last call (the largest distance, added to travel_).
-void Contact::measure(const Model &model, std::size_t b) {
-  const Nodes &nd = model.nodes;
-  Box box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-  double moved2 = 0.0;
-  for (std::size_t k = node_begin_[b]; k < node_begin_[b + 1]; ++k) {
-    const std::uint32_t a = nodes_[k];
-    const double x = nd.x[a], y = nd.y[a];
-    moved2 = std::max(moved2, sq(x - points_[k].x) + sq(y - points_[k].y));
-    points_[k] = {x, y};
-    box.x0 = std::min(box.x0, x), box.x1 = std::max(box.x1, x);
-    box.y0 = std::min(box.y0, y), box.y1 = std::max(box.y1, y);
+BodyPairs::BodyPairs(const Model &model, const ContactBoundaries &boundaries, std::size_t runs) {
+  const std::size_t n_bodies = model.bodies.size();
+  const std::vector<Box> &boxes = boundaries.boxes;
+  travel_searched_.assign(n_bodies, 0.0);
+  listed_.assign(n_bodies, 0);
+  // Grid cells about twice the typical body: a grain sits in at most four cells.
+  std::vector<double> extents;
+  for (std::size_t b = 0; b < n_bodies; ++b)
+    if (boundaries.hasNodes(b))
+      extents.push_back(std::max(boxes[b].x1 - boxes[b].x0, boxes[b].y1 - boxes[b].y0));
+  if (!extents.empty()) {
+    std::nth_element(extents.begin(), extents.begin() + extents.size() / 2, extents.end());
+    cell_ = 2.0 * extents[extents.size() / 2];
   }
-  boxes_[b] = box;
-  travel_[b] += std::sqrt(moved2);
+  std::vector<double> sizes;
+  for (double h : boundaries.size)
+    if (h > 0.0)
+      sizes.push_back(h);
+  if (!sizes.empty()) {
+    std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());
+    search_margin_ = search_margin * sizes[sizes.size() / 2];
+  }
+  // The bodies at rest now, in a grid that stays: a body at rest does not move.
+  std::vector<std::uint32_t> resting;
+  for (std::size_t b = 0; b < n_bodies; ++b)
+    if (model.at_rest[b] && boundaries.hasNodes(b))
+      resting.push_back(static_cast<std::uint32_t>(b));
+  gridBodies(rest_grid_, boxes, resting);
+  arenas_.resize(runs);
+}
+
+bool BodyPairs::update(const Model &model, ContactBoundaries &boundaries) {
+  moving_.clear();
+  for (std::size_t b = 0; b < model.bodies.size(); ++b)
+    if (!model.at_rest[b] && boundaries.hasNodes(b))
+      moving_.push_back(static_cast<std::uint32_t>(b));
+  const long n_moving = static_cast<long>(moving_.size());
+  double farthest = 0.0; // the largest travel since the last search for pairs
+#pragma omp parallel for schedule(static) reduction(max : farthest) if (n_moving > 64)
+  for (long i = 0; i < n_moving; ++i) {
+    boundaries.measure(model, moving_[i]);
+    farthest = std::max(farthest, boundaries.travel[moving_[i]] - travel_searched_[moving_[i]]);
+  }
+  if (run_pairs_.empty() || 2.0 * farthest > search_margin_) {
+    findPairs(boundaries);
+    return true;
+  }
+  addPairsOfWoken(model, boundaries.boxes);
+  return false;
 }
 
 // Cell lists of the bodies `which` over the rectangle their boxes cover (counting sort: cell by
 // cell, bodies in the given order).
-void Contact::gridBodies(CellGrid<> &grid, const std::vector<Box> &boxes,
-                         const std::vector<std::uint32_t> &which) const {
+void BodyPairs::gridBodies(CellGrid<> &grid, const std::vector<Box> &boxes,
+                           const std::vector<std::uint32_t> &which) const {
   grid = {};
   if (which.empty() || !(cell_ > 0.0))
     return;
@@ -53,15 +87,15 @@ void Contact::gridBodies(CellGrid<> &grid, const std::vector<Box> &boxes,
       [&](std::size_t k) { return which[k]; });
 }
 
-// Broad phase: the pairs of bodies whose boxes come closer than the search margin, at least one
+// The pairs of bodies whose boxes come closer than the search margin, at least one
 // of them moving, in the order of their numbers; each pair found once, in the cell that holds
 // the lower-left corner of the overlap. Moving bodies meet each other in a grid of their boxes
 // widened by half the margin, built here; the bodies at rest in the grid built at the start.
 // The runs of pairs are shared evenly among the threads. A pair found before keeps its lists (they
 // hold what they must while its two bodies move less than their margin, whatever the search), the
 // others' are taken when first needed; after a change of the boundaries all are taken anew.
-void Contact::findPairs() {
-  ++stats_.searches;
+void BodyPairs::findPairs(const ContactBoundaries &boundaries) {
+  const std::vector<Box> &boxes = boundaries.boxes;
   std::vector<Pair> before;
   std::vector<std::vector<std::uint32_t>> arenas_before(arenas_.size());
   std::vector<std::uint32_t> run_before; // per pair before: its run
@@ -74,10 +108,10 @@ void Contact::findPairs() {
     }
   }
   pairs_.clear();
-  std::vector<Box> wide(boxes_.size());
+  std::vector<Box> wide(boxes.size());
   for (std::uint32_t b : moving_) {
-    wide[b] = boxes_[b].widened(0.5 * search_margin_);
-    travel_searched_[b] = travel_[b];
+    wide[b] = boxes[b].widened(0.5 * search_margin_);
+    travel_searched_[b] = boundaries.travel[b];
     listed_[b] = 1;
   }
   auto add = [&](std::uint32_t a, std::uint32_t b) { pairs_.emplace_back(a, b); };
@@ -94,7 +128,7 @@ void Contact::findPairs() {
   }
   for (std::uint32_t a : moving_)
     restNeighbours(
-        a, search_margin_, [&](std::uint32_t b) { return !listed_[b]; }, add);
+        boxes, a, search_margin_, [&](std::uint32_t b) { return !listed_[b]; }, add);
   auto earlier = [](const Pair &p, const Pair &q) {
     return std::tie(p.a, p.b) < std::tie(q.a, q.b);
   };
@@ -133,7 +167,7 @@ void Contact::findPairs() {
 
 // The pairs of the bodies that woke since the last step with the bodies at rest (or woken now):
 // they were not searched while both rested. Added to the last run of pairs.
-void Contact::addPairsOfWoken(const Model &model) {
+void BodyPairs::addPairsOfWoken(const Model &model, const std::vector<Box> &boxes) {
   woken_.clear();
   for (std::uint32_t b : moving_)
     if (!listed_[b])
@@ -142,7 +176,7 @@ void Contact::addPairsOfWoken(const Model &model) {
     return;
   for (std::uint32_t a : woken_)
     restNeighbours(
-        a, search_margin_,
+        boxes, a, search_margin_,
         [&](std::uint32_t b) { return !listed_[b] && (model.at_rest[b] || a < b); },
         [&](std::uint32_t a, std::uint32_t b) { pairs_.emplace_back(a, b); });
   for (std::uint32_t a : woken_)
@@ -153,21 +187,40 @@ void Contact::addPairsOfWoken(const Model &model) {
 // The bodies of the grid of bodies at rest whose boxes come closer to body a's than `margin` and
 // that `wanted` accepts, each once: add(a, b).
 template <class Wanted, class Add>
-void Contact::restNeighbours(std::uint32_t a, double margin, Wanted wanted, Add add) const {
+void BodyPairs::restNeighbours(const std::vector<Box> &boxes, std::uint32_t a, double margin,
+                               Wanted wanted, Add add) const {
   const CellGrid<> &r = rest_grid_;
   if (r.size() == 0)
     return;
-  const Box A = boxes_[a].widened(margin);
+  const Box A = boxes[a].widened(margin);
   const CellRange cells = r.cells(A.x0, A.y0, A.x1, A.y1);
   for (std::size_t j = cells.j0; j <= cells.j1; ++j)
     for (std::size_t i = cells.i0; i <= cells.i1; ++i)
       for (const std::uint32_t b : r.cell(j * r.columns() + i)) {
-        const Box &B = boxes_[b];
+        const Box &B = boxes[b];
         if (b != a && A.overlaps(B) &&
             r.cellOf(std::max(A.x0, B.x0), std::max(A.y0, B.y0)) == j * r.columns() + i &&
             wanted(b))
           add(a, b);
       }
+}
+
+void BodyPairs::restore(const std::vector<std::uint32_t> &pairs, bool search_due,
+                        const std::vector<double> &travel_searched,
+                        const std::vector<char> &listed) {
+  travel_searched_ = travel_searched, listed_ = listed;
+  pairs_.clear();
+  for (std::size_t k = 0; k + 1 < pairs.size(); k += 2)
+    pairs_.emplace_back(pairs[k], pairs[k + 1]);
+  for (auto &arena : arenas_)
+    arena.clear();
+  run_pairs_.clear();
+  if (!search_due) { // the runs split anew (the hits come in pair order whatever the split)
+    const std::size_t runs = arenas_.size();
+    run_pairs_.resize(runs + 1);
+    for (std::size_t r = 0; r <= runs; ++r)
+      run_pairs_[r] = pairs_.size() * r / runs;
+  }
 }
 
 } // namespace mesopen::fem
