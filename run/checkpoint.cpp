@@ -94,20 +94,29 @@ void syncFile(const std::string &path) {
 
 // --- the model's state ---------------------------------------------------------------------
 
+// The nodes' and the elements' arrays a checkpoint holds, by name (/model/nodes/NAME,
+// /model/elements/NAME).
+const std::pair<const char *, std::vector<double> fem::Nodes::*> node_arrays[] = {
+    {"x", &fem::Nodes::x},       {"y", &fem::Nodes::y},        {"vx", &fem::Nodes::vx},
+    {"vy", &fem::Nodes::vy},     {"fx", &fem::Nodes::fx},      {"fy", &fem::Nodes::fy},
+    {"mass", &fem::Nodes::mass}, {"area0", &fem::Nodes::area0}};
+const std::pair<const char *, std::vector<double> fem::Elements::*> element_arrays[] = {
+    {"area", &fem::Elements::area},
+    {"sxx", &fem::Elements::sxx},
+    {"syy", &fem::Elements::syy},
+    {"sxy", &fem::Elements::sxy},
+    {"pressure", &fem::Elements::pressure},
+    {"energy", &fem::Elements::energy},
+    {"plastic_strain", &fem::Elements::plastic_strain},
+    {"viscosity", &fem::Elements::viscosity}};
+
 void writeModel(H5File &h5, const fem::Model &model) {
   const fem::Nodes &nd = model.nodes;
   const fem::Elements &el = model.elements;
   for (const char *g : {"/model", "/model/nodes", "/model/elements", "/model/bodies"})
     h5.createGroup(g);
-  for (auto [name, v] : {std::pair{"x", &nd.x},
-                         {"y", &nd.y},
-                         {"vx", &nd.vx},
-                         {"vy", &nd.vy},
-                         {"fx", &nd.fx},
-                         {"fy", &nd.fy},
-                         {"mass", &nd.mass},
-                         {"area0", &nd.area0}})
-    h5.write(std::string("/model/nodes/") + name, *v);
+  for (auto [name, array] : node_arrays)
+    h5.write(std::string("/model/nodes/") + name, nd.*array);
   h5.write("/model/nodes/detached", nd.detached);
   std::vector<double> external;
   for (std::uint32_t a : nd.loaded) {
@@ -116,15 +125,8 @@ void writeModel(H5File &h5, const fem::Model &model) {
   }
   h5.write("/model/nodes/loaded", nd.loaded);
   h5.write("/model/nodes/external", external, nd.loaded.size(), 4);
-  for (auto [name, v] : {std::pair{"area", &el.area},
-                         {"sxx", &el.sxx},
-                         {"syy", &el.syy},
-                         {"sxy", &el.sxy},
-                         {"pressure", &el.pressure},
-                         {"energy", &el.energy},
-                         {"plastic_strain", &el.plastic_strain},
-                         {"viscosity", &el.viscosity}})
-    h5.write(std::string("/model/elements/") + name, *v);
+  for (auto [name, array] : element_arrays)
+    h5.write(std::string("/model/elements/") + name, el.*array);
   h5.write("/model/elements/eroded", el.eroded);
   std::vector<std::uint64_t> eroded, offset{0};
   std::vector<std::uint32_t> boundary;
@@ -143,15 +145,8 @@ void readModel(const H5File &h5, fem::Model &model) {
   fem::Nodes &nd = model.nodes;
   fem::Elements &el = model.elements;
   const std::size_t n = nd.size(), m = el.size(), b = model.bodies.size();
-  for (auto [name, v] : {std::pair{"x", &nd.x},
-                         {"y", &nd.y},
-                         {"vx", &nd.vx},
-                         {"vy", &nd.vy},
-                         {"fx", &nd.fx},
-                         {"fy", &nd.fy},
-                         {"mass", &nd.mass},
-                         {"area0", &nd.area0}})
-    *v = readSized<double>(h5, std::string("/model/nodes/") + name, n);
+  for (auto [name, array] : node_arrays)
+    nd.*array = readSized<double>(h5, std::string("/model/nodes/") + name, n);
   nd.detached = readSized<std::uint8_t>(h5, "/model/nodes/detached", n);
   const std::vector<std::uint32_t> loaded = h5.read<std::uint32_t>("/model/nodes/loaded");
   const std::vector<double> external =
@@ -165,15 +160,8 @@ void readModel(const H5File &h5, fem::Model &model) {
     nd.external[a] = {external[4 * k], external[4 * k + 1], external[4 * k + 2],
                       external[4 * k + 3]};
   }
-  for (auto [name, v] : {std::pair{"area", &el.area},
-                         {"sxx", &el.sxx},
-                         {"syy", &el.syy},
-                         {"sxy", &el.sxy},
-                         {"pressure", &el.pressure},
-                         {"energy", &el.energy},
-                         {"plastic_strain", &el.plastic_strain},
-                         {"viscosity", &el.viscosity}})
-    *v = readSized<double>(h5, std::string("/model/elements/") + name, m);
+  for (auto [name, array] : element_arrays)
+    el.*array = readSized<double>(h5, std::string("/model/elements/") + name, m);
   el.eroded = readSized<std::uint8_t>(h5, "/model/elements/eroded", m);
   const auto eroded = readSized<std::uint64_t>(h5, "/model/bodies/eroded", b);
   model.at_rest = readSized<std::uint8_t>(h5, "/model/bodies/at_rest", b);
