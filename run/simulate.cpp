@@ -77,7 +77,7 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
   // continued).
   Checkpoints checkpoints(scene, dir, assembly, series, frames, h5 ? &*h5 : nullptr, world, resume);
   Progress progress(writer && place.progress, writer ? place.log : nullptr, run.end_time,
-                    run.end_depth * scene.projectile.length);
+                    run.end_depth * scene.projectile.length, run.frame_interval);
   RunReport report;
   report.loop = timeLoop(scene, model, *assembly.solver, series, frames, progress, checkpoints);
   catchStopSignals(false);

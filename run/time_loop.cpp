@@ -15,12 +15,13 @@ bool Progress::due() const {
   return (terminal_ || log_) && Clock::now() - last_ >= std::chrono::milliseconds(250);
 }
 
-void Progress::update(const fem::Solver &solver, double depth, double speed) {
+void Progress::update(const fem::Solver &solver, double depth, double speed, std::size_t frames,
+                      double output) {
   last_ = Clock::now();
   const double wall = secondsSince(start_), t = solver.time();
   if (marks_.empty())
     first_step_ = solver.steps();
-  marks_.push_back({wall, t, depth, speed});
+  marks_.push_back({wall, t, depth, speed, output, frames});
   const double done =
       std::min(1.0, std::max(t / end_time_, end_depth_ > 0.0 ? depth / end_depth_ : 0.0));
   char line[240];
@@ -30,7 +31,7 @@ void Progress::update(const fem::Solver &solver, double depth, double speed) {
                 solver.steps(), 1e9 * t, 1e3 * depth, 1e12 * solver.dt(),
                 static_cast<double>(solver.steps() - first_step_) /
                     std::max(wall - marks_.front().wall, 1e-9),
-                100.0 * done, wallLeft(marks_, end_time_, end_depth_));
+                100.0 * done, wallLeft(marks_, end_time_, end_depth_, frame_interval_));
   if (terminal_)
     std::fprintf(stderr, "\r\033[Kmesopen run: %s", line);
   if (log_ && static_cast<int>(20.0 * done) > logged_) {
@@ -39,7 +40,8 @@ void Progress::update(const fem::Solver &solver, double depth, double speed) {
   }
 }
 
-double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double end_depth) {
+double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double end_depth,
+                double frame_interval) {
   if (marks.empty())
     return 0.0;
   const ProgressMark &now = marks.back();
@@ -78,7 +80,7 @@ double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double 
     for (int k = 0; k < 5; ++k, xk *= x) {
       sx[k] += xk;
       if (k < 3)
-        sw[k] += marks[i].wall * xk;
+        sw[k] += (marks[i].wall - marks[i].output) * xk;
     }
   }
   auto det3 = [](double a, double b, double c, double d, double e, double f, double g, double h,
@@ -94,10 +96,17 @@ double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double 
   if (!(c2 >= 0.0)) {
     c2 = 0.0;
     const double d2 = sx[0] * sx[2] - sx[1] * sx[1];
-    c1 = d2 != 0.0 ? (sx[0] * sw[1] - sx[1] * sw[0]) / d2 : now.wall - marks[first].wall;
+    c1 = d2 != 0.0 ? (sx[0] * sw[1] - sx[1] * sw[0]) / d2
+                   : (now.wall - now.output) - (marks[first].wall - marks[first].output);
   }
   const double X = time_left / span;
-  return std::max(0.0, c1 * X + c2 * X * X);
+  // the frames to come: one per frame_interval to the end, and the last
+  double frames_left = 0.0;
+  if (frame_interval > 0.0 && now.frames > 0)
+    frames_left = std::floor((now.time + time_left) / frame_interval) -
+                  std::floor(now.time / frame_interval) + 1.0;
+  const double frame_cost = now.frames > 0 ? now.output / static_cast<double>(now.frames) : 0.0;
+  return std::max(0.0, c1 * X + c2 * X * X) + frames_left * frame_cost;
 }
 
 void Progress::clear() const {
@@ -134,6 +143,9 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
       series.sample(model, solver);
       frames.offer(model, solver, true);
     }
+    // the frames of the loop and the wall time they take, for the time left (Progress)
+    const std::size_t frames_before = frames.size();
+    double output_seconds = 0.0;
     for (bool last = !checkpoints.resumed() && ended(true); !last;) {
       if (checkpoints.stopBySignal(result)) {
         result.interrupted = true;
@@ -160,11 +172,14 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
       last = ended(due);
       if (last && !due)
         series.sample(model, solver);
+      const auto output_start = Clock::now();
       frames.offer(model, solver, last);
+      output_seconds += secondsSince(output_start);
       if (!last)
         checkpoints.afterStep(result);
       if (progress.due())
-        progress.update(solver, series.depth(model), -series.last("projectile/vy"));
+        progress.update(solver, series.depth(model), -series.last("projectile/vy"),
+                        frames.size() - frames_before, output_seconds);
     }
   } catch (const std::exception &e) {
     result.failure = e.what();
