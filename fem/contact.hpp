@@ -42,10 +42,10 @@
 // boundary nodes and segments near the overlap of the two boxes, taken with a margin of its own
 // and refreshed when the two bodies may have moved by a quarter of that (a bound on the
 // displacement of every boundary node, summed step by step), not when the pairs are searched anew
-// (the projectile's pace sets that: run 6, 47 % fewer lists taken): a step looks at a handful of
-// nodes and segments per pair, in one stream of memory per run of pairs, and finds exactly what a
-// search of the whole boundaries would. Of those nodes, one found outside the other body by a gap g
-// stays outside while the two bodies move by less than g together: such clear nodes are looked at
+// (the projectile's pace sets that, and most pairs move far more slowly): a step looks at a handful
+// of nodes and segments per pair, in one stream of memory per run of pairs, and finds exactly what
+// a search of the whole boundaries would. Of those nodes, one found outside the other body by a gap
+// g stays outside while the two bodies move by less than g together: such clear nodes are looked at
 // again only then, the others (hot: in contact, touching) every step; a side of a pair with no hot
 // node and no clear node due is skipped.
 // Equations: docs/models.md §8.

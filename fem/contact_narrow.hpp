@@ -28,8 +28,7 @@
 #endif
 
 // The narrow phase's steps are inlined into the loop over the pairs: called out of line, each
-// call passed its results through memory and the loop waited on them (up to 12 % of the loop's
-// time on run 6).
+// call would pass its results through memory and the loop wait on them.
 #define MESOPEN_INLINE [[gnu::always_inline]] inline
 
 namespace mesopen::fem::narrow {
