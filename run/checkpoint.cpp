@@ -293,6 +293,16 @@ std::vector<coupling::DiskForce> readDiskForces(const H5File &h5, const std::str
   return forces;
 }
 
+// The FE-DEM contact's arrays a checkpoint holds, by name.
+const std::pair<const char *, std::vector<double> coupling::DiskContact::State::*>
+    disk_contact_arrays[] = {{"/last", &coupling::DiskContact::State::last},
+                             {"/now", &coupling::DiskContact::State::now},
+                             {"/allowance", &coupling::DiskContact::State::allowance},
+                             {"/rate", &coupling::DiskContact::State::rate},
+                             {"/grid_box", &coupling::DiskContact::State::grid_box},
+                             {"/grid_x", &coupling::DiskContact::State::grid_x},
+                             {"/grid_y", &coupling::DiskContact::State::grid_y}};
+
 void writeCoupling(const std::string &path, const coupling::FeDemCoupling::State &st) {
   writeAtomically(path, [&](const std::string &temp) {
     H5File h5 = H5File::create(temp);
@@ -302,14 +312,8 @@ void writeCoupling(const std::string &path, const coupling::FeDemCoupling::State
     const coupling::DiskContact::State &c = st.contact;
     h5.write("/size", c.size);
     h5.write("/held", c.held);
-    for (auto [name, v] : {std::pair{"/last", &c.last},
-                           {"/now", &c.now},
-                           {"/allowance", &c.allowance},
-                           {"/rate", &c.rate},
-                           {"/grid_box", &c.grid_box},
-                           {"/grid_x", &c.grid_x},
-                           {"/grid_y", &c.grid_y}})
-      h5.write(name, *v);
+    for (auto [name, array] : disk_contact_arrays)
+      h5.write(name, c.*array);
     h5.write("/grid_body", c.grid_body);
     h5.write("/statistics", bytesOf(c.statistics));
     h5.close();
@@ -326,14 +330,8 @@ coupling::FeDemCoupling::State readCoupling(const std::string &path) {
   coupling::DiskContact::State &c = st.contact;
   c.size = h5.read<double>("/size");
   c.held = h5.read<std::int64_t>("/held");
-  for (auto [name, v] : {std::pair{"/last", &c.last},
-                         {"/now", &c.now},
-                         {"/allowance", &c.allowance},
-                         {"/rate", &c.rate},
-                         {"/grid_box", &c.grid_box},
-                         {"/grid_x", &c.grid_x},
-                         {"/grid_y", &c.grid_y}})
-    *v = h5.read<double>(name);
+  for (auto [name, array] : disk_contact_arrays)
+    c.*array = h5.read<double>(name);
   c.grid_body = h5.read<std::uint32_t>("/grid_body");
   c.statistics = fromBytes<coupling::DiskContactStatistics>(h5, "/statistics");
   return st;
