@@ -1,8 +1,8 @@
 // Layout of DIR/checkpoint/state.h5 (SI units, per metre of depth as run.h5):
-//   attributes of /: format = "mesopen-checkpoint", version, number (N), scene_path, seed, ranks,
+//   attributes of /: format = "mesopen-checkpoint", version, number (N), scene_path, ranks,
 //     fingerprint (of the model's mesh), time, step, wall (seconds of the run so far), liggghts
 //     (its restart file's name, or "")
-//   /scene (uint8): the scene file's text as the run read it
+//   /scene (uint8): the scene composed (scene.toml's text: every key, the seed among them)
 //   /model/nodes/{x, y, vx, vy, fx, fy, mass, area0, detached, loaded, external (loaded x 4:
 //     fx, fy, friction_x, friction_y)}
 //   /model/elements/{area, sxx, syy, sxy, pressure, energy, plastic_strain, viscosity, eroded}
@@ -26,8 +26,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <type_traits>
 
 #include <fcntl.h>
@@ -39,7 +37,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr int format_version = 1;
+constexpr int format_version = 2;
 
 std::string statePath(const std::string &dir) { return dir + "/checkpoint/state.h5"; }
 
@@ -349,7 +347,6 @@ Scene checkpointScene(const std::string &dir) {
                      " not found); allowed: the output directory of a run with "
                      "run.checkpoint_interval or run.checkpoint_time that did not complete");
   std::string text, scene_path;
-  std::uint64_t seed = 0;
   try {
     const H5File h5 = H5File::open(path);
     if (!h5.hasAttribute("/", "format") ||
@@ -360,7 +357,6 @@ Scene checkpointScene(const std::string &dir) {
     const std::vector<std::uint8_t> bytes = h5.read<std::uint8_t>("/scene");
     text.assign(bytes.begin(), bytes.end());
     scene_path = h5.readStringAttribute("/", "scene_path");
-    seed = h5.readAttribute<std::uint64_t>("/", "seed");
   } catch (const std::runtime_error &e) {
     throw InputError(path + ": not a whole checkpoint: " + e.what());
   }
@@ -371,9 +367,7 @@ Scene checkpointScene(const std::string &dir) {
     throw InputError(path + ": its scene (" + scene_path +
                      ") is not valid TOML: " + std::string(e.description()));
   }
-  Scene scene = readScene(root, scene_path);
-  scene.target.seed = seed;
-  return scene;
+  return readScene(root, scene_path);
 }
 
 std::string checkpointRestart(const std::string &dir) {
@@ -417,15 +411,8 @@ Checkpoints::Checkpoints(const Scene &scene, const std::string &dir, RunAssembly
     // An earlier run's checkpoints would continue that run, over this one's files.
     std::error_code ec;
     fs::remove_all(checkpoint_dir_, ec);
-    if (on_) {
+    if (on_)
       fs::create_directories(checkpoint_dir_);
-      std::ifstream in(scene.path, std::ios::binary);
-      std::ostringstream text;
-      text << in.rdbuf();
-      if (!in)
-        throw std::runtime_error("cannot read the scene " + scene.path + " for its checkpoints");
-      scene_text_ = text.str();
-    }
   }
   if (on_ && h5_)
     openJournal();
@@ -507,9 +494,9 @@ void Checkpoints::write(const LoopResult &loop) {
       h5.attribute("/", "format", std::string("mesopen-checkpoint"));
       h5.attribute("/", "version", format_version);
       h5.attribute("/", "number", n);
-      h5.write("/scene", std::vector<std::uint8_t>(scene_text_.begin(), scene_text_.end()));
+      const std::string scene = composedScene(scene_);
+      h5.write("/scene", std::vector<std::uint8_t>(scene.begin(), scene.end()));
       h5.attribute("/", "scene_path", scene_.path);
-      h5.attribute("/", "seed", static_cast<std::uint64_t>(scene_.target.seed));
       h5.attribute("/", "ranks", world_.size);
       h5.attribute("/", "fingerprint", fingerprint(run_.model));
       h5.attribute("/", "time", solver.time());
@@ -583,8 +570,6 @@ void Checkpoints::resume() {
                      " MPI ranks; allowed with disks: the same number of ranks (now " +
                      std::to_string(world_.size) + ")");
   number_ = h5.readAttribute<std::uint64_t>("/", "number");
-  const std::vector<std::uint8_t> scene_text = h5.read<std::uint8_t>("/scene");
-  scene_text_.assign(scene_text.begin(), scene_text.end());
   wall_before_ = h5.readAttribute<double>("/", "wall");
   readModel(h5, model);
   run_.solver->restore(readSolver(h5));

@@ -49,8 +49,8 @@
 
 namespace mesopen {
 
-// The scene of the last checkpoint in `dir` as its run took it (its text, and the seed it ran
-// with). Throws InputError naming the file when there is no checkpoint or it is not whole.
+// The scene of the last checkpoint in `dir` as its run took it (composed, the seed among its
+// keys). Throws InputError naming the file when there is no checkpoint or it is not whole.
 Scene checkpointScene(const std::string &dir);
 
 // The LIGGGHTS restart file of the last checkpoint in `dir` ("" without disks); checkpointScene
@@ -107,7 +107,6 @@ private:
   H5File *h5_;
   const parallel::World &world_;
   bool on_, resumed_;
-  std::string scene_text_;          // the scene file as the run read it
   std::uint64_t number_ = 0;        // checkpoints written (the last one's number)
   std::uint64_t last_step_ = ~0ull; // the step of the last checkpoint
   std::uint64_t stop_at_ = 0;       // MESOPEN_STOP_AT_STEP, 0: none

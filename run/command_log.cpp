@@ -43,6 +43,13 @@ void CommandLog::line(const std::string &text) {
   writeText(path_, text_);
 }
 
+void CommandLog::lastLine(const std::string &text) noexcept {
+  try {
+    line(text);
+  } catch (const std::exception &) {
+  }
+}
+
 std::string shellWords(int argc, const char *const *argv) {
   std::string line;
   for (int i = 0; i < argc; ++i) {

@@ -19,6 +19,9 @@ public:
   bool on() const { return !path_.empty(); }
   // Appends "[    12.345 s] text" and writes the file. Throws std::runtime_error when it cannot.
   void line(const std::string &text);
+  // The same at a command's end, where a log that cannot be written must not change how the
+  // command ended (its message on stderr says what happened): a failure to write is ignored.
+  void lastLine(const std::string &text) noexcept;
 
 private:
   std::string path_, text_;

@@ -6,7 +6,6 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <filesystem>
 
@@ -27,10 +26,6 @@ std::size_t fixedNodes(const fem::Model &model) {
 
 std::string absoluteScenePath(const std::string &path) {
   return fs::absolute(path).lexically_normal().string();
-}
-
-std::array<std::pair<const char *, const MaterialChoice *>, 2> materialGroups(const Scene &scene) {
-  return {{{"projectile", &scene.projectile_material}, {"grains", &scene.grain_material}}};
 }
 
 } // namespace
@@ -78,7 +73,7 @@ void writeRunAttributes(H5File &h5, const Scene &scene, const std::string &statu
   for (const auto &[group, choice] : materialGroups(scene)) {
     const std::string g = std::string("/materials/") + group;
     h5.createGroup(g);
-    h5.attribute(g, fem::findMaterialPreset(choice->name) ? "preset" : "type", choice->name);
+    h5.attribute(g, materialKey(*choice), choice->name);
     for (const auto &[name, value] : resolvedParameters(*choice))
       h5.attribute(g, name, value);
   }
@@ -110,9 +105,8 @@ nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Seri
   j["scene"] = absoluteScenePath(scene.path);
   j["composed_scene"] = composedScene(scene);
   for (const auto &[group, choice] : materialGroups(scene))
-    j["materials"][group] = {
-        {fem::findMaterialPreset(choice->name) ? "preset" : "type", choice->name},
-        {"parameters", resolvedParameters(*choice)}};
+    j["materials"][group] = {{materialKey(*choice), choice->name},
+                             {"parameters", resolvedParameters(*choice)}};
   j["seed"] = scene.target.seed;
   j["status"] = runStatus(loop);
   if (!loop.failure.empty())

@@ -3,6 +3,7 @@
 #include "writers.hpp"
 
 #include "atomic_file.hpp"
+#include "output.hpp"
 
 #include <vtkCellData.h>
 #include <vtkCellType.h>
@@ -284,7 +285,9 @@ Frames::Frames(H5File *h5, const fem::Model &model, double interval, std::string
 void Frames::offer(const fem::Model &model, const fem::Solver &solver, bool force) {
   if (interval_ <= 0 || (!force && solver.time() < next_))
     return;
+  const auto start = Clock::now();
   take(model, solver);
+  seconds_ += secondsSince(start);
   // The next multiple of the interval after now: one frame per interval even when a step is longer.
   next_ = interval_ * (std::floor(solver.time() / interval_) + 1.0);
 }

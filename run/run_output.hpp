@@ -83,6 +83,8 @@ public:
   void writeCollection() const;
   std::size_t size() const { return times_.size(); }
   bool vtk() const { return !vtk_dir_.empty() && !times_.empty(); }
+  // The wall seconds taking the frames took in this process.
+  double seconds() const { return seconds_; }
 
 private:
   friend class Checkpoints; // keeps and restores the frames' times (checkpoint.hpp)
@@ -93,6 +95,7 @@ private:
   std::string vtk_dir_;
   std::vector<double> times_;
   const coupling::FeDemCoupling *coupled_ = nullptr;
+  double seconds_ = 0.0;
 };
 
 } // namespace mesopen

@@ -720,17 +720,24 @@ std::string composedScene(const Scene &scene) {
     if (k.name != "preset")
       text += k.name + " = " + k.get(scene) + "\n";
   }
-  for (const auto &[group, choice] :
-       {std::pair{"projectile", &scene.projectile_material}, {"grains", &scene.grain_material}}) {
+  for (const auto &[group, choice] : materialGroups(scene)) {
     const fem::MaterialPreset *preset = fem::findMaterialPreset(choice->name);
     const fem::MaterialType &type = *fem::findMaterialType(preset ? preset->type : choice->name);
-    text += std::string("\n[materials.") + group + "]\n" + (preset ? "preset" : "type") + " = \"" +
+    text += std::string("\n[materials.") + group + "]\n" + materialKey(*choice) + " = \"" +
             choice->name + "\"\n";
     const fem::Parameters values = resolvedParameters(*choice);
     for (const fem::ParameterInfo &info : type.parameters)
       text += info.name + " = " + parameterText(info, values.at(info.name)) + "\n";
   }
   return text;
+}
+
+std::array<std::pair<const char *, const MaterialChoice *>, 2> materialGroups(const Scene &scene) {
+  return {{{"projectile", &scene.projectile_material}, {"grains", &scene.grain_material}}};
+}
+
+const char *materialKey(const MaterialChoice &choice) {
+  return fem::findMaterialPreset(choice.name) ? "preset" : "type";
 }
 
 fem::Parameters resolvedParameters(const MaterialChoice &choice) {

@@ -13,6 +13,7 @@
 
 #include <toml++/toml.h>
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <stdexcept>
@@ -174,6 +175,10 @@ std::string tomlText(const toml::node &n);
 std::string composedScene(const Scene &scene);
 // A material choice's parameters: the type's defaults, the preset's values, the scene's.
 fem::Parameters resolvedParameters(const MaterialChoice &choice);
+// The scene's material tables by name ([materials.NAME]): projectile, grains.
+std::array<std::pair<const char *, const MaterialChoice *>, 2> materialGroups(const Scene &scene);
+// How a scene names the choice: "preset" (a preset's name) or "type".
+const char *materialKey(const MaterialChoice &choice);
 
 // The reference of every key (Markdown): table, key, type, default, allowed, meaning.
 std::string sceneKeysMarkdown();

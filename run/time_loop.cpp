@@ -145,7 +145,7 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
     }
     // the frames of the loop and the wall time they take, for the time left (Progress)
     const std::size_t frames_before = frames.size();
-    double output_seconds = 0.0;
+    const double output_before = frames.seconds();
     for (bool last = !checkpoints.resumed() && ended(true); !last;) {
       if (checkpoints.stopBySignal(result)) {
         result.interrupted = true;
@@ -172,14 +172,12 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
       last = ended(due);
       if (last && !due)
         series.sample(model, solver);
-      const auto output_start = Clock::now();
       frames.offer(model, solver, last);
-      output_seconds += secondsSince(output_start);
       if (!last)
         checkpoints.afterStep(result);
       if (progress.due())
         progress.update(solver, series.depth(model), -series.last("projectile/vy"),
-                        frames.size() - frames_before, output_seconds);
+                        frames.size() - frames_before, frames.seconds() - output_before);
     }
   } catch (const std::exception &e) {
     result.failure = e.what();

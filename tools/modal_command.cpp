@@ -317,12 +317,6 @@ int modalCommand(const ModalOptions &options) {
     std::cerr << "mesopen modal: " << options.out_dir << ": cannot write: " << e.what() << '\n';
     return 1;
   }
-  auto logEnd = [&](const std::string &text) { // (a log that cannot be written is not a failure)
-    try {
-      log.line(text);
-    } catch (const std::exception &) {
-    }
-  };
   if (options.threads)
     omp_set_num_threads(*options.threads);
   try {
@@ -344,8 +338,8 @@ int modalCommand(const ModalOptions &options) {
     if (!problem.scene.empty())
       summary["files"].push_back("scene.toml");
     writeJson(options.out_dir + "/summary.json", summary);
-    logEnd("completed: " + std::to_string(result.omega.size()) + " modes, " +
-           std::to_string(problem.mesh.nodes()) + " nodes, " + std::to_string(wall) + " s");
+    log.lastLine("completed: " + std::to_string(result.omega.size()) + " modes, " +
+                 std::to_string(problem.mesh.nodes()) + " nodes, " + std::to_string(wall) + " s");
     std::cout << "mesopen modal: " << problem.body << ", " << problem.mesh.nodes() << " nodes, "
               << result.omega.size() << " modes in " << wall << " s\n";
     for (std::size_t k = 0; k < result.omega.size(); ++k)
@@ -356,11 +350,11 @@ int modalCommand(const ModalOptions &options) {
     return 0;
   } catch (const std::invalid_argument &e) {
     std::cerr << "mesopen modal: " << options.input << ": " << e.what() << '\n';
-    logEnd(std::string("bad input: ") + e.what());
+    log.lastLine(std::string("bad input: ") + e.what());
     return 2;
   } catch (const std::exception &e) {
     std::cerr << "mesopen modal: failed: " << e.what() << '\n';
-    logEnd(std::string("failed: ") + e.what());
+    log.lastLine(std::string("failed: ") + e.what());
     return 1;
   }
 }

@@ -83,15 +83,6 @@ Scene prepareRun(const RunOptions &options, std::vector<std::string> &warnings) 
   return scene;
 }
 
-// A line in the log at the run's end: a log that cannot be written then does not change how the
-// run ended (the message on stderr says what happened).
-void logQuietly(CommandLog &log, const std::string &text) {
-  try {
-    log.line(text);
-  } catch (const std::exception &) {
-  }
-}
-
 // The run's end on the terminal and in the log (rank 0) and as the exit code: 0 completed, 1
 // failed, 128 + the signal when stopped by one.
 int reportEnd(const RunReport &r, const std::string &dir, bool writer, CommandLog &log) {
@@ -101,13 +92,13 @@ int reportEnd(const RunReport &r, const std::string &dir, bool writer, CommandLo
   std::ostringstream text;
   text << "t = " << r.time << " s, step " << r.steps;
   if (loop.interrupted) {
-    logQuietly(log, "interrupted: " + loop.failure + ", " + text.str());
+    log.lastLine("interrupted: " + loop.failure + ", " + text.str());
     std::cerr << "mesopen run: " << loop.failure << ", t = " << r.time
               << " s\n  what was computed up to there is in " << dir << " (run.h5, summary.json)\n";
     return 128 + stopSignal();
   }
   if (!loop.failure.empty()) {
-    logQuietly(log, "failed at " + text.str() + ": " + loop.failure);
+    log.lastLine("failed at " + text.str() + ": " + loop.failure);
     std::cerr << "mesopen run: failed at t = " << r.time << " s, step " << r.steps << ": "
               << loop.failure << "\n  what was computed up to there is in " << dir
               << " (run.h5, summary.json)\n";
@@ -117,7 +108,7 @@ int reportEnd(const RunReport &r, const std::string &dir, bool writer, CommandLo
   text << r.steps << " steps to t = " << r.time << " s, " << r.elements << " elements in "
        << r.bodies << " bodies, " << r.wall << " s (" << r.steps / std::max(loop.seconds, 1e-9)
        << " steps/s); energy balance error " << r.balance_error;
-  logQuietly(log, "completed: " + text.str());
+  log.lastLine("completed: " + text.str());
   std::cout << "mesopen run: " << text.str() << "\n  files in " << dir
             << ": run.h5 summary.json scene.toml mesopen.log"
             << (r.vtk ? " vtk/run.pvd (ParaView)" : "") << "\n";
@@ -190,7 +181,7 @@ int runCommand(const RunOptions &given) {
   } catch (const Interrupted &e) {
     // during the set-up: no run.h5, a summary saying so
     std::cerr << "mesopen run: " << e.what() << '\n';
-    logQuietly(log, std::string("interrupted: ") + e.what());
+    log.lastLine(std::string("interrupted: ") + e.what());
     if (world.rank == 0)
       writeUnstartedSummary(options.out_dir, scene.path, "interrupted", e.what());
     return 128 + stopSignal();
@@ -198,7 +189,7 @@ int runCommand(const RunOptions &given) {
     // found once the target or LIGGGHTS is made (dem.step against the disks' stable step), or a
     // checkpoint not of this run: bad input all the same; no run.h5 or summary.json is written
     std::cerr << "mesopen run: " << e.what() << '\n';
-    logQuietly(log, std::string("bad input: ") + e.what());
+    log.lastLine(std::string("bad input: ") + e.what());
     std::error_code ec;
     if (world.rank == 0)
       fs::remove(options.out_dir + "/run.h5.tmp", ec);
@@ -209,7 +200,7 @@ int runCommand(const RunOptions &given) {
     std::cerr << "mesopen run: failed: " << e.what() << '\n';
     if (world.rank != 0)
       return 1;
-    logQuietly(log, std::string("failed: ") + e.what());
+    log.lastLine(std::string("failed: ") + e.what());
     std::error_code ec;
     fs::remove(options.out_dir + "/run.h5.tmp", ec);
     try {

@@ -135,13 +135,6 @@ int targetCommand(const TargetOptions &options) {
     std::cerr << "mesopen target: " << options.out_dir << ": cannot write: " << e.what() << '\n';
     return 1;
   }
-  // The log's last line: a log that cannot be written then does not change how the command ended.
-  auto logEnd = [&](const std::string &text) {
-    try {
-      log.line(text);
-    } catch (const std::exception &) {
-    }
-  };
   if (options.threads)
     omp_set_num_threads(*options.threads);
 
@@ -153,7 +146,7 @@ int targetCommand(const TargetOptions &options) {
   auto interrupted = [&] {
     const std::string what = stopSignalName() + " while " + phase;
     std::cerr << "mesopen target: " << what << "\n";
-    logEnd("interrupted: " + what);
+    log.lastLine("interrupted: " + what);
     writeJson(options.out_dir + "/summary.json",
               {{"command", "target"},
                {"scene", fs::absolute(options.scene).lexically_normal().string()},
@@ -293,11 +286,11 @@ int targetCommand(const TargetOptions &options) {
     summary["wall_seconds"] = seconds;
     writeJson(dir + "/summary.json", summary);
     for (const auto &warning : warnings)
-      logEnd("warning: " + warning);
+      log.lastLine("warning: " + warning);
     std::ostringstream done;
     done << m.grains << " grains, porosity " << m.porosity << ", " << target.mesh.triangles()
          << " triangles, " << seconds << " s";
-    logEnd("completed: " + done.str());
+    log.lastLine("completed: " + done.str());
 
     std::cout << "mesopen target: " << m.grains << " grains, porosity " << 100 * m.porosity
               << " %, mean diameter " << 1e6 * m.mean_diameter << " um, std "
@@ -308,7 +301,7 @@ int targetCommand(const TargetOptions &options) {
     return 0;
   } catch (const std::exception &e) {
     std::cerr << "mesopen target: failed while " << phase << ": " << e.what() << '\n';
-    logEnd("failed while " + phase + ": " + e.what());
+    log.lastLine("failed while " + phase + ": " + e.what());
     try { // the files it wrote are whole (each renamed when complete); the summary says what failed
       writeJson(options.out_dir + "/summary.json",
                 {{"command", "target"},
