@@ -19,9 +19,8 @@ void Progress::update(const fem::Solver &solver, double depth, double speed, std
                       double output) {
   last_ = Clock::now();
   const double wall = secondsSince(start_), t = solver.time();
-  if (marks_.empty())
-    first_step_ = solver.steps();
-  marks_.push_back({wall, t, depth, speed, output, frames});
+  marks_.push_back({wall, t, depth, speed, output, frames, solver.steps(),
+                    static_cast<double>(solver.activeElements())});
   const double done =
       std::min(1.0, std::max(t / end_time_, end_depth_ > 0.0 ? depth / end_depth_ : 0.0));
   char line[240];
@@ -29,7 +28,7 @@ void Progress::update(const fem::Solver &solver, double depth, double speed, std
                 "step %zu, t = %.3f ns, depth %.3f mm, dt = %.3g ps, %.0f steps/s, %.0f %% done, "
                 "ETA %.3g s",
                 solver.steps(), 1e9 * t, 1e3 * depth, 1e12 * solver.dt(),
-                static_cast<double>(solver.steps() - first_step_) /
+                static_cast<double>(solver.steps() - marks_.front().steps) /
                     std::max(wall - marks_.front().wall, 1e-9),
                 100.0 * done, wallLeft(marks_, end_time_, end_depth_, frame_interval_));
   if (terminal_)
@@ -49,12 +48,12 @@ double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double 
   while (first > 0 && marks[first - 1].wall >= 0.5 * now.wall)
     --first;
   const double span = now.time - marks[first].time;
-  if (marks.size() - first < 4 || !(span > 0.0)) {
+  if (marks.size() - first < 5 || !(span > 0.0) || now.steps <= marks[first].steps) {
     auto done = [&](const ProgressMark &m) {
       return std::max(m.time / end_time, end_depth > 0.0 ? m.depth / end_depth : 0.0);
     };
     // the share left at the pace since the first mark (a resumed run's first is not at 0)
-    const ProgressMark &start = marks.size() > 1 ? marks.front() : ProgressMark{0.0, 0.0, 0.0, 0.0};
+    const ProgressMark &start = marks.size() > 1 ? marks.front() : ProgressMark{};
     const double gained = done(now) - done(start);
     return gained > 0.0 ? std::max(0.0, (now.wall - start.wall) * (1.0 - done(now)) / gained) : 0.0;
   }
@@ -70,43 +69,41 @@ double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double 
                                          : time_left;
     time_left = std::min(time_left, tau);
   }
-  // wall = c0 + c1 x + c2 x^2 by least squares, x = (t - t_now) / span in [-1, 0]: the normal
-  // equations' sums of x^k (k = 0..4) and of wall x^k (k = 0..2), solved by Cramer's rule; a
-  // falling pace (c2 < 0) is fitted again as a line.
-  double sx[5] = {}, sw[3] = {};
+  // Element-steps left: time_left / dt steps at the step's mean over the half, of the active
+  // elements fitted as a line in the simulated time (they grow as grains start to move),
+  // n(t_now + tau) = n0 + g tau, so n0 + g time_left / 2 on average.
+  double st = 0.0, sn = 0.0, stt = 0.0, stn = 0.0;
+  const double count = static_cast<double>(marks.size() - first);
   for (std::size_t i = first; i < marks.size(); ++i) {
-    const double x = (marks[i].time - now.time) / span;
-    double xk = 1.0;
-    for (int k = 0; k < 5; ++k, xk *= x) {
-      sx[k] += xk;
-      if (k < 3)
-        sw[k] += (marks[i].wall - marks[i].output) * xk;
-    }
+    const double x = marks[i].time - now.time, n = marks[i].elements;
+    st += x, sn += n, stt += x * x, stn += x * n;
   }
-  auto det3 = [](double a, double b, double c, double d, double e, double f, double g, double h,
-                 double i) {
-    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g);
-  };
-  const double d = det3(sx[0], sx[1], sx[2], sx[1], sx[2], sx[3], sx[2], sx[3], sx[4]);
-  double c1 = 0.0, c2 = -1.0;
-  if (d != 0.0) {
-    c1 = det3(sx[0], sw[0], sx[2], sx[1], sw[1], sx[3], sx[2], sw[2], sx[4]) / d;
-    c2 = det3(sx[0], sx[1], sw[0], sx[1], sx[2], sw[1], sx[2], sx[3], sw[2]) / d;
+  const double d = count * stt - st * st;
+  const double g = d > 0.0 ? (count * stn - st * sn) / d : 0.0, n0 = (sn - g * st) / count;
+  const double dt = span / static_cast<double>(now.steps - marks[first].steps);
+  const double element_steps_left = time_left / dt * std::max(0.0, n0 + 0.5 * g * time_left);
+  // Wall seconds per element-step: the lower quartile over the intervals between marks. Other
+  // processes on the machine only ever lengthen an interval, so a burst of them (the mean's
+  // undoing) is left out, while a pace that changes for good moves the quartile.
+  std::vector<double> pace;
+  for (std::size_t i = first + 1; i < marks.size(); ++i) {
+    const ProgressMark &m = marks[i], &p = marks[i - 1];
+    const double work = 0.5 * (std::max(m.elements, 1.0) + std::max(p.elements, 1.0)) *
+                        static_cast<double>(m.steps - p.steps);
+    if (work > 0.0)
+      pace.push_back(((m.wall - m.output) - (p.wall - p.output)) / work);
   }
-  if (!(c2 >= 0.0)) {
-    c2 = 0.0;
-    const double d2 = sx[0] * sx[2] - sx[1] * sx[1];
-    c1 = d2 != 0.0 ? (sx[0] * sw[1] - sx[1] * sw[0]) / d2
-                   : (now.wall - now.output) - (marks[first].wall - marks[first].output);
-  }
-  const double X = time_left / span;
+  if (pace.empty())
+    return 0.0;
+  const auto quartile = pace.begin() + static_cast<std::ptrdiff_t>(pace.size() / 4);
+  std::nth_element(pace.begin(), quartile, pace.end());
   // the frames to come: one per frame_interval to the end, and the last
   double frames_left = 0.0;
   if (frame_interval > 0.0 && now.frames > 0)
     frames_left = std::floor((now.time + time_left) / frame_interval) -
                   std::floor(now.time / frame_interval) + 1.0;
   const double frame_cost = now.frames > 0 ? now.output / static_cast<double>(now.frames) : 0.0;
-  return std::max(0.0, c1 * X + c2 * X * X) + frames_left * frame_cost;
+  return *quartile * element_steps_left + frames_left * frame_cost;
 }
 
 void Progress::clear() const {

@@ -17,22 +17,23 @@ namespace mesopen {
 class Checkpoints;
 
 // A moment of a run, for the estimate of the time left: wall seconds since the loop's start,
-// simulated time [s], the projectile's depth [m] and downward speed [m/s], and the frames written
-// so far and the wall seconds they took (within `wall`).
+// simulated time [s], the projectile's depth [m] and downward speed [m/s], the frames written so
+// far and the wall seconds they took (within `wall`), the steps taken and the active elements.
 struct ProgressMark {
-  double wall, time, depth, speed;
+  double wall = 0.0, time = 0.0, depth = 0.0, speed = 0.0;
   double output = 0.0;
-  std::size_t frames = 0;
+  std::size_t frames = 0, steps = 0;
+  double elements = 0.0;
 };
 
 // The wall seconds left until end_time, or end_depth [m] (0: none) if the projectile gets there
-// first, from the marks so far (the last is now). Over the last half of the run so far the wall
-// time of the steps (less the frames') is fitted by least squares as a quadratic in the simulated
-// time (its pace, wall seconds per simulated second, growing as more grains move and the step
-// shrinks; a pace falling is taken as constant), and the depth as reached at the projectile's
-// speed now and its mean deceleration over that half; the frames to come, one per
-// frame_interval [s] (0: none) and the last, at their mean cost so far. With fewer than four
-// marks in that half: the share left at the pace so far.
+// first, from the marks so far (the last is now). The work left is counted in element-steps: the
+// depth is reached at the projectile's speed now and its mean deceleration over the last half of
+// the run so far, in steps of the mean step over that half, with the active elements growing as
+// a line fitted over it. An element-step costs the lower quartile of its wall time over the
+// intervals of that half (the frames' time taken out); the frames to come, one per
+// frame_interval [s] (0: none) and the last, cost their mean so far. With fewer than five marks
+// in that half: the share left at the pace so far.
 double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double end_depth,
                 double frame_interval = 0.0);
 
@@ -59,7 +60,6 @@ private:
   Clock::time_point start_ = Clock::now(), last_ = Clock::now();
   std::vector<ProgressMark> marks_; // one per update
   int logged_ = 0;                  // 5 % steps logged
-  std::size_t first_step_ = 0;      // the step at the first update
 };
 
 struct LoopResult {
