@@ -8,6 +8,7 @@
 #include "library.h"
 #include "modify.h"
 #include "neighbor.h"
+#include "universe.h"
 #include "update.h"
 
 #include <algorithm>
@@ -69,12 +70,13 @@ private:
 
 LiggghtsDem::LiggghtsDem(const std::string &script,
                          std::vector<std::pair<std::string, std::string>> variables,
-                         const std::string &log, MPI_Comm comm)
+                         const std::string &log, MPI_Comm comm, bool append_log)
     : comm_(comm) {
   namespace fs = std::filesystem;
   if (!fs::is_regular_file(script))
     throw std::invalid_argument("LIGGGHTS input script " + script + " not found");
-  std::vector<std::string> args = {"liggghts", "-screen", "none", "-log", log};
+  const bool append = append_log && log != "none";
+  std::vector<std::string> args = {"liggghts", "-screen", "none", "-log", append ? "none" : log};
   for (const auto &[name, value] : variables) {
     if (!isName(name))
       throw std::invalid_argument("LIGGGHTS variable name '" + name + "': only a-z, 0-9 and _");
@@ -93,6 +95,24 @@ LiggghtsDem::LiggghtsDem(const std::string &script,
   for (std::string &a : args)
     argv.push_back(a.data());
   lammps_open(static_cast<int>(argv.size()), argv.data(), comm, &lmp_);
+  if (append) {
+    // LIGGGHTS's -log opens its file anew; its own `log FILE append` would need the path quoted
+    // through its parser. Its log is the first process's (LAMMPS's logfile, closed with it).
+    int rank = 0, opened = 1;
+    MPI_Comm_rank(comm, &rank);
+    if (rank == 0) {
+      LAMMPS_NS::LAMMPS *lmp = lammps(lmp_);
+      lmp->logfile = lmp->universe->ulogfile = std::fopen(log.c_str(), "a");
+      opened = lmp->logfile != nullptr;
+      if (opened)
+        std::fprintf(lmp->logfile, "\n# continued from a checkpoint\n");
+    }
+    MPI_Allreduce(MPI_IN_PLACE, &opened, 1, MPI_INT, MPI_MIN, comm); // every process stops
+    if (!opened) {
+      lammps_close(lmp_);
+      throw std::runtime_error("cannot append to the LIGGGHTS log " + log);
+    }
+  }
   {
     const QuietStdout quiet;
     lammps_file(lmp_, const_cast<char *>(script.c_str()));

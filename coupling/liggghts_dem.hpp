@@ -23,9 +23,10 @@ class LiggghtsDem : public DemParticipant {
 public:
   // `variables` as the script's -var name value pairs; every value a finite number or an existing
   // file, checked here (std::invalid_argument) before anything reaches LIGGGHTS, which exits the
-  // process on a bad command. LIGGGHTS writes its log to `log` ("none": nowhere).
+  // process on a bad command. LIGGGHTS writes its log to `log` ("none": nowhere), after what the
+  // file holds if `append_log` (a run continued).
   LiggghtsDem(const std::string &script, std::vector<std::pair<std::string, std::string>> variables,
-              const std::string &log, MPI_Comm comm);
+              const std::string &log, MPI_Comm comm, bool append_log = false);
   ~LiggghtsDem() override;
   LiggghtsDem(const LiggghtsDem &) = delete;
   LiggghtsDem &operator=(const LiggghtsDem &) = delete;

@@ -189,7 +189,7 @@ RunAssembly::RunAssembly(const Scene &scene, const std::string &dir,
     world.barrier();
     dem = std::make_unique<coupling::LiggghtsDem>(
         liggghts_script, liggghtsVariables(scene, dir + "/dem.data", liggghts_restart),
-        dir + "/liggghts.log", MPI_COMM_WORLD);
+        dir + "/liggghts.log", MPI_COMM_WORLD, !liggghts_restart.empty());
   }
   target.reset();
   const double dem_step = dem ? dem->stableStep() : HUGE_VAL; // every rank calls it

@@ -1,7 +1,8 @@
 // Checkpoints of runs with disks (run/checkpoint.hpp): a dem or hybrid run stopped at a
 // checkpoint and continued with `mesopen run --resume` writes the run.h5 of the run not stopped,
-// byte for byte, on one and two threads; and the run's bytes do not depend on when it took its
-// checkpoints (LIGGGHTS's restart file and set-up leave it as it was).
+// byte for byte, on one and two threads, and LIGGGHTS's log goes on from the stopped run's; and the
+// run's bytes do not depend on when it took its checkpoints (LIGGGHTS's restart file and set-up
+// leave it as it was).
 #include "checkpoint.hpp"
 #include "h5file.hpp"
 #include "run.hpp"
@@ -52,8 +53,14 @@ void stopAndResume(const std::string &representation) {
     EXPECT_GE(step, static_cast<std::uint64_t>(stop));
     EXPECT_LT(step, static_cast<std::uint64_t>(stop) + 50);
     EXPECT_FALSE(fs::exists(out + "/run.h5.tmp"));
+    const std::string log_stopped = test::readFile(out + "/liggghts.log");
     const auto resumed = test::resume(out, 3 - threads);
     ASSERT_EQ(resumed.code, 0) << resumed.output;
+    // LIGGGHTS's log goes on after the stopped run's
+    const std::string log = test::readFile(out + "/liggghts.log");
+    EXPECT_NE(log_stopped.find("LIGGGHTS"), std::string::npos);
+    EXPECT_EQ(log.substr(0, log_stopped.size()), log_stopped);
+    EXPECT_NE(log.find("# continued from a checkpoint", log_stopped.size()), std::string::npos);
     EXPECT_TRUE(test::sameBytes(dir / "whole/run.h5", out + "/run.h5"));
     EXPECT_FALSE(fs::exists(out + "/checkpoint"));
   }
