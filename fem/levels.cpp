@@ -76,7 +76,9 @@ void LevelCensus::sample(const Model &model, double time, std::size_t step,
 
   std::vector<int> level(n_bodies);
   for (int L = 1; L <= max_level_; ++L) {
-    const std::string p = "L" + std::to_string(L) + "/";
+    std::string p("L"); // the columns of largest level L: "L<L>/..."
+    p += std::to_string(L);
+    p += '/';
     for (std::size_t b = 0; b < n_bodies; ++b)
       level[b] = stepLevel(body_steps[b], base_step, L);
     // The bodies' elements by level, and their work per base step, sum of 2^-l.
@@ -132,11 +134,11 @@ void LevelCensus::sample(const Model &model, double time, std::size_t step,
 
     for (int l = 0; l <= L; ++l)
       column(p + "elements_level_" + std::to_string(l), "",
-             "active elements of the bodies at level " + std::to_string(l))
+             std::string("active elements of the bodies at level ") + std::to_string(l))
           .values.push_back(by_level[l]);
     for (int l = 0; l < L; ++l)
       column(p + "ring_elements_to_level_" + std::to_string(l), "",
-             "elements of coarser bodies promoted to level " + std::to_string(l) +
+             std::string("elements of coarser bodies promoted to level ") + std::to_string(l) +
                  " by a contact with a body at that level")
           .values.push_back(promoted[l]);
     column(p + "ring_elements", "", "elements promoted by contacts across levels")
@@ -144,7 +146,7 @@ void LevelCensus::sample(const Model &model, double time, std::size_t step,
     for (int l = 0; l <= L; ++l)
       for (int m = l; m <= L; ++m)
         column(p + "pairs_" + std::to_string(l) + "_" + std::to_string(m), "",
-               "overlapping pairs of bodies at levels " + std::to_string(l) + " and " +
+               std::string("overlapping pairs of bodies at levels ") + std::to_string(l) + " and " +
                    std::to_string(m))
             .values.push_back(pair_count[l * (L + 1) + m]);
     column(p + "element_work", "",

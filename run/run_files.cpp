@@ -97,7 +97,7 @@ void writeLevels(H5File &h5, const fem::LevelCensus &census) {
   h5.createGroup("/levels");
   h5.attribute("/levels", "samples", static_cast<std::uint64_t>(census.samples()));
   for (int L = 1; L <= census.maxLevel(); ++L)
-    h5.createGroup("/levels/L" + std::to_string(L));
+    h5.createGroup(std::string("/levels/L") + std::to_string(L));
   for (const auto &c : census.columns()) {
     const std::string name = "/levels/" + c.name;
     h5.write(name, c.values);
@@ -117,7 +117,9 @@ nlohmann::json levelFigures(const fem::LevelCensus &census, const LoopResult &lo
   j["mean_pairs"] = pairs / std::max<double>(census.samples(), 1.0);
   j["contact_share_of_steps"] = contact_share;
   for (int L = 1; L <= census.maxLevel(); ++L) {
-    const std::string p = "L" + std::to_string(L) + "/";
+    std::string p("L"); // the census's columns of largest level L: "L<L>/..."
+    p += std::to_string(L);
+    p += '/';
     nlohmann::json l;
     std::vector<double> share, promoted;
     for (int k = 0; k <= L; ++k)
