@@ -103,5 +103,6 @@ TEST(Levels, CensusCountsLevelsRingsAndWork) {
   census.sample(model, 2e-9, 8, {8.5, 8.5}, 1.0, {{0, 1}}, contacts);
   EXPECT_EQ(census.total("L3/ring_elements"), 6.0);
   EXPECT_EQ(census.total("L3/pairs_3_3"), 1.0);
-  EXPECT_EQ(census.total("L3/element_work"), 4.0 + 8.0 / 8.0 + 6.0 * (1.0 - 1.0 / 8.0) + 12.0 / 8.0);
+  EXPECT_EQ(census.total("L3/element_work"),
+            4.0 + 8.0 / 8.0 + 6.0 * (1.0 - 1.0 / 8.0) + 12.0 / 8.0);
 }
