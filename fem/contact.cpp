@@ -177,6 +177,24 @@ void Contact::narrowPhase(const Model &model, double dt) {
   stats_.pairs = overlapping;
 }
 
+std::vector<Contact::BodyContact> Contact::lastContacts() const {
+  const ContactBoundaries &bd = boundaries_;
+  std::vector<BodyContact> contacts;
+  for (const Hits &hits : run_hits_)
+    for (const Found &f : hits.found)
+      if (f.k1 != no_node)
+        contacts.push_back({f.A, bd.nodes[f.k], f.B, {bd.nodes[f.k1], bd.nodes[f.k2]}});
+  return contacts;
+}
+
+std::vector<std::pair<std::uint32_t, std::uint32_t>> Contact::overlappingPairs() const {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> overlapping;
+  for (const Pair &pair : pairs_.pairs())
+    if (boundaries_.boxes[pair.a].overlaps(boundaries_.boxes[pair.b]))
+      overlapping.emplace_back(pair.a, pair.b);
+  return overlapping;
+}
+
 void Contact::Hits::clear() {
   found.clear();
   sudden.clear();

@@ -101,6 +101,15 @@ public:
   double stepStiffness() const override { return 2.0 * s_.stiffness; }
   void boundaryChanged(const Model &model, const std::vector<std::uint32_t> &bodies) override;
   const ContactStatistics &statistics() const { return stats_; }
+  // The last step's contacts between bodies (the walls' left out), in pair order: a boundary node
+  // of `node_body` pushed out of `segment_body` through the segment between two of its nodes
+  // (model node indices).
+  struct BodyContact {
+    std::uint32_t node_body, node, segment_body, segment_node[2];
+  };
+  std::vector<BodyContact> lastContacts() const;
+  // The last step's pairs of bodies whose boxes overlap (those the narrow phase looked at).
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> overlappingPairs() const;
 
 private:
   using Box = narrow::Box;

@@ -99,7 +99,10 @@ double shapeStiffness(double P, double Q, double R, double g) {
 // convex in g (T is affine in g after a change of basis), so the larger of its values at g = 0 and
 // g = 3/4 bounds it. About 1.34 for an equilateral quartz triangle (1.19 steel, 1 at g = 0) and up
 // to sqrt(2) for slivers, the elements that set the step.
-double criticalStepGain(const double gx[3], const double gy[3], double area, double ls, double g) {
+// (always inlined: the element pass calls it at two places, and its arithmetic there is the same
+// as with one)
+[[gnu::always_inline]] inline double criticalStepGain(const double gx[3], const double gy[3],
+                                                      double area, double ls, double g) {
   const double inv = 1.0 / (2.0 * area);
   double P = 0.0, Q = 0.0, R = 0.0;
   for (int k = 0; k < 3; ++k)
@@ -488,6 +491,8 @@ void Solver::forces(double dt, bool kick) {
   const bool gravity = gx != 0.0 || gy != 0.0;
   const long units = static_cast<long>(units_.size());
   kick_sums_.assign(kick ? units : 0, KickSums{});
+  if (measure_body_steps_)
+    element_step_.assign(m_.elements.size(), HUGE_VAL);
 #pragma omp parallel if (units > 1)
   {
     std::vector<NodeState> state; // this thread's copies of a unit's nodes (cache-resident)
@@ -570,6 +575,24 @@ void Solver::forces(double dt, bool kick) {
   next_dt_ = s_.safety * step_scale_ * dt_min;
   shortest_step_ = dt_min;
   shareNodes();
+  if (measure_body_steps_)
+    bodyStepsFromElements();
+}
+
+// Each active body's own step from the elements' exact steps of the pass (every process's, from
+// their owners), with the factors of the solver's step: safety and the providers' scaling.
+void Solver::bodyStepsFromElements() {
+  measure_body_steps_ = false;
+  shareOwned<1>(&Body::element_begin, &Body::element_end, {&element_step_});
+  body_step_.assign(m_.bodies.size(), HUGE_VAL);
+  for (std::uint32_t b : active_bodies_) {
+    const Body &body = m_.bodies[b];
+    double shortest = HUGE_VAL;
+    for (std::size_t e = body.element_begin; e < body.element_end; ++e)
+      shortest = std::min(shortest, element_step_[e]);
+    body_step_[b] = s_.safety * step_scale_ * shortest;
+  }
+  body_steps_at_ = steps_ + 1;
 }
 
 // The element state a process keeps of its own elements and the others read: what output and
@@ -833,6 +856,11 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   if (failing > 0)
     for (std::size_t i = 0; i < n; ++i)
       failed_[e0 + i] = fail[i];
+  // measureBodySteps: the steps before the refinement below, to tell which it left as they were.
+  alignas(64) double unrefined[max_chunk];
+  const bool measuring = measure_body_steps_;
+  if (measuring)
+    std::copy(step, step + n, unrefined);
   // The elements whose step is near the shortest of the last pass (refine_below) take the exact
   // element bound for their material's state: L_s / c times criticalStepGain, the damping factor
   // unchanged.
@@ -866,6 +894,19 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
           step[i] *= std::sqrt(1.0 + added / mass);
       }
       dt_min = std::min(dt_min, step[i]);
+    }
+  }
+  // measureBodySteps: every element's step as the refinement and the mass scaling above make it,
+  // the exact bound (criticalStepGain) also for those the refinement left.
+  if (measuring) {
+    double *exact = element_step_.data() + e0;
+    for (std::size_t i = 0; i < n; ++i) {
+      exact[i] = step[i];
+      if (step[i] == unrefined[i] && step[i] < HUGE_VAL) {
+        const double g_x[3] = {gx[0][i], gx[1][i], gx[2][i]},
+                     g_y[3] = {gy[0][i], gy[1][i], gy[2][i]};
+        exact[i] *= criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i], shear_share[i]);
+      }
     }
   }
   // Into the unit's nodes, in element order.

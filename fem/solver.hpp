@@ -123,6 +123,15 @@ public:
   std::size_t massScaledElements() const { return added_mass_.size(); }
   double addedMass(std::size_t body = all_bodies) const;
 
+  // Each active body's own stable step (safety and the providers' scaling applied, as dt()): the
+  // smallest over its elements of the exact lumped-triangle bound (criticalStepGain), measured by
+  // the element pass of the next step when asked, for multiple time stepping's levels
+  // (fem/levels.hpp). Infinity for a body at rest; bodyStepsAt() is the step that measured them
+  // (0: never). Asking costs an eigenvalue per element in that pass; not asking, nothing.
+  void measureBodySteps() { measure_body_steps_ = true; }
+  const std::vector<double> &bodySteps() const { return body_step_; }
+  std::size_t bodyStepsAt() const { return body_steps_at_; }
+
   // The element pass alone, as the time loop calls it: stresses and forces at the current
   // positions with the current velocities over a step dt (for benchmarks).
   void internalForces(double dt);
@@ -208,6 +217,7 @@ private:
                   const std::array<std::vector<double> *, N> &fields) const;
   void shareNodes();
   void accountEnergy();
+  void bodyStepsFromElements();
 
   Model &m_;
   SolverSettings s_;
@@ -244,6 +254,11 @@ private:
   // providers' scaling (elementPass refines the steps near it)
   double shortest_step_ = std::numeric_limits<double>::infinity();
   std::size_t steps_ = 0;
+  // measureBodySteps: asked for the next pass; each element's exact step in it (of the active
+  // bodies), its minimum per body, and the step that measured them.
+  bool measure_body_steps_ = false;
+  std::vector<double> element_step_, body_step_;
+  std::size_t body_steps_at_ = 0;
   Energy energy_;
   // Work of this step: constraints and gravity; providers' forces; their frictional part.
   double kick_work_ = 0.0, provider_work_ = 0.0, friction_work_ = 0.0;

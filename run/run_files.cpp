@@ -93,6 +93,62 @@ nlohmann::json demFigures(const RunAssembly &run, const parallel::World &world) 
           {"seconds", coupled.seconds()}};
 }
 
+void writeLevels(H5File &h5, const fem::LevelCensus &census) {
+  h5.createGroup("/levels");
+  h5.attribute("/levels", "samples", static_cast<std::uint64_t>(census.samples()));
+  for (int L = 1; L <= census.maxLevel(); ++L)
+    h5.createGroup(std::string("/levels/L") + std::to_string(L));
+  for (const auto &c : census.columns()) {
+    const std::string name = "/levels/" + c.name;
+    h5.write(name, c.values);
+    h5.attribute(name, "unit", c.unit);
+    h5.attribute(name, "meaning", c.meaning);
+  }
+}
+
+nlohmann::json levelFigures(const fem::LevelCensus &census, const LoopResult &loop,
+                            const fem::Contact *contact) {
+  nlohmann::json j;
+  const double elements = census.total("active_elements"), pairs = census.total("pairs");
+  const double contact_seconds = contact ? contact->statistics().seconds : 0.0;
+  const double contact_share = contact_seconds / std::max(loop.solver_seconds, 1e-300);
+  j["samples"] = census.samples();
+  j["mean_active_elements"] = elements / std::max<double>(census.samples(), 1.0);
+  j["mean_pairs"] = pairs / std::max<double>(census.samples(), 1.0);
+  j["contact_share_of_steps"] = contact_share;
+  for (int L = 1; L <= census.maxLevel(); ++L) {
+    std::string p("L"); // the census's columns of largest level L: "L<L>/..."
+    p += std::to_string(L);
+    p += '/';
+    nlohmann::json l;
+    std::vector<double> share, promoted;
+    for (int k = 0; k <= L; ++k)
+      share.push_back(census.total(p + "elements_level_" + std::to_string(k)) /
+                      std::max(elements, 1.0));
+    for (int k = 0; k < L; ++k)
+      promoted.push_back(census.total(p + "ring_elements_to_level_" + std::to_string(k)) /
+                         std::max(elements, 1.0));
+    l["element_share_by_level"] = share;
+    l["ring_share_by_level"] = promoted;
+    l["mean_ring_elements"] =
+        census.total(p + "ring_elements") / std::max<double>(census.samples(), 1.0);
+    nlohmann::json by_levels;
+    for (int a = 0; a <= L; ++a)
+      for (int b = a; b <= L; ++b)
+        by_levels[std::to_string(a) + "_" + std::to_string(b)] =
+            census.total(p + "pairs_" + std::to_string(a) + "_" + std::to_string(b)) /
+            std::max(pairs, 1.0);
+    l["pair_share_by_levels"] = by_levels;
+    const double element_ratio = census.total(p + "element_work") / std::max(elements, 1.0);
+    const double pair_ratio = pairs > 0.0 ? census.total(p + "pair_work") / pairs : 1.0;
+    l["element_work_ratio"] = element_ratio;
+    l["pair_work_ratio"] = pair_ratio;
+    l["projected_cost_ratio"] = (1.0 - contact_share) * element_ratio + contact_share * pair_ratio;
+    j[p.substr(0, p.size() - 1)] = l;
+  }
+  return j;
+}
+
 nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Series &series,
                           const Frames &frames, const LoopResult &loop, double wall, int ranks,
                           const nlohmann::json &dem) {

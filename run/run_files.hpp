@@ -26,6 +26,18 @@ bool takeRunDirectory(const Scene &scene, const std::string &dir);
 // parameters in /materials/{projectile, grains}.
 void writeRunAttributes(H5File &h5, const Scene &scene, const std::string &status);
 
+// The census of multiple time stepping's levels (run.level_census_interval) into run.h5's /levels,
+// a dataset per column (fem::LevelCensus::columns).
+void writeLevels(H5File &h5, const fem::LevelCensus &census);
+// Its figures for summary.json, per largest level L: the shares of the active element-steps by
+// level (the bodies' own, and with the rings promoted), the ring, the pairs by their two levels,
+// the element and pair work against single rate, and the projected cost ratio
+//   R = (1 - s_c) W_e,MTS / W_e + s_c W_p,MTS / W_p,
+// s_c the contact's share of the steps' wall time (the unit costs of an element update and a pair
+// update from the run's own timing), W the summed work of the samples.
+nlohmann::json levelFigures(const fem::LevelCensus &census, const LoopResult &loop,
+                            const fem::Contact *contact);
+
 // The disks' figures over all ranks (every rank takes part): disks, contacts with the FE bodies,
 // work on the disks, windows.
 nlohmann::json demFigures(const RunAssembly &run, const parallel::World &world);

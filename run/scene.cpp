@@ -317,6 +317,11 @@ const std::vector<Key> &keys() {
             "step back to it (docs/solver.md); 0: never"),
         integer("run", "series_interval", r, &R::series_interval, 1, 1e9,
                 "steps between samples of the series in run.h5"),
+        integer("run", "level_census_interval", r, &R::level_census_interval, 0, 1e9,
+                "steps between samples of the census of multiple time stepping's levels: each "
+                "body's own stable step, its level on the step taken, the pairs and rings across "
+                "levels and the work they would take (/levels in run.h5, `levels` in "
+                "summary.json; docs/solver.md); 0: none"),
         real("run", "end_depth", r, &R::end_depth, "", 0, false, 100,
              "stop when the projectile's depth reaches this many projectile lengths (thesis: 1); "
              "0: run to end_time"),

@@ -57,9 +57,12 @@ struct RunSpec {
   // mass; 0: never
   double mass_scaling_step_ratio = fem::SolverSettings{}.mass_scaling_step_ratio;
   std::int64_t series_interval = 1; // steps between series samples
-  double end_depth = 0.0;           // stop when the depth reaches this many projectile lengths
-  double frame_interval = 1e-7;     // simulated time between frames [s]; 0: no frames
-  bool vtk = true;                  // frames also as VTK files for ParaView
+  // steps between samples of the census of multiple time stepping's levels (fem/levels.hpp); 0:
+  // none
+  std::int64_t level_census_interval = 0;
+  double end_depth = 0.0;       // stop when the depth reaches this many projectile lengths
+  double frame_interval = 1e-7; // simulated time between frames [s]; 0: no frames
+  bool vtk = true;              // frames also as VTK files for ParaView
   std::int64_t max_steps = 100000000;
   // Checkpoints (run/checkpoint.hpp): wall-clock seconds between them, simulated time between
   // them [s]; 0: none of that kind. Either on: also one on SIGINT or SIGTERM.

@@ -14,6 +14,9 @@
 
 namespace mesopen {
 
+// The census of levels (run.level_census_interval) for every largest level from 1 to this.
+constexpr int census_max_level = 4;
+
 void checkRunnable(const Scene &scene, const std::string &where) {
   if (scene.run.grains && scene.target.mesh == MeshKind::none)
     throw InputError(where + ": target.mesh = \"none\" leaves the grains without elements; "
@@ -78,8 +81,13 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
   Checkpoints checkpoints(scene, dir, assembly, series, frames, h5 ? &*h5 : nullptr, world, resume);
   Progress progress(writer && place.progress, writer ? place.log : nullptr, run.end_time,
                     run.end_depth * scene.projectile.length, run.frame_interval);
+  // The census of levels covers the steps this process takes (not those before a checkpoint).
+  std::optional<fem::LevelCensus> census;
+  if (run.level_census_interval > 0)
+    census.emplace(model, census_max_level);
   RunReport report;
-  report.loop = timeLoop(scene, model, *assembly.solver, series, frames, progress, checkpoints);
+  report.loop = timeLoop(scene, model, *assembly.solver, series, frames, progress, checkpoints,
+                         census ? &*census : nullptr, assembly.contact.get());
   catchStopSignals(false);
   report.steps = solver.steps();
   report.time = solver.time();
@@ -91,6 +99,8 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
   if (writer) {
     h5->record(nullptr); // (the checkpoints' journal holds the loop's calls)
     series.write(*h5);
+    if (census)
+      writeLevels(*h5, *census);
     writeRunAttributes(*h5, scene, runStatus(report.loop));
     h5->close();
   }
@@ -103,6 +113,8 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
   report.vtk = frames.vtk();
   nlohmann::json summary =
       runSummary(scene, assembly, series, frames, report.loop, report.wall, world.size, dem);
+  if (census)
+    summary["levels"] = levelFigures(*census, report.loop, assembly.contact.get());
   if (checkpoints.on() || checkpoints.resumed())
     summary["checkpoints"] = {{"written", checkpoints.written()},
                               {"resumed", checkpoints.resumed()},

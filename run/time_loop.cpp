@@ -116,7 +116,8 @@ std::string runStatus(const LoopResult &loop) {
 }
 
 LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &solver,
-                    Series &series, Frames &frames, Progress &progress, Checkpoints &checkpoints) {
+                    Series &series, Frames &frames, Progress &progress, Checkpoints &checkpoints,
+                    fem::LevelCensus *census, const fem::Contact *contact) {
   const RunSpec &run = scene.run;
   LoopResult result = checkpoints.before();
   const auto start = Clock::now();
@@ -150,6 +151,9 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
                          std::to_string(solver.steps());
         break;
       }
+      const auto census_every = static_cast<std::size_t>(run.level_census_interval);
+      if (census && (solver.steps() + 1) % census_every == 0)
+        solver.measureBodySteps();
       const auto step_start = Clock::now();
       const double before = solver.time();
       solver.step();
@@ -163,6 +167,12 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
       }
       result.solver_seconds += secondsSince(step_start);
       result.element_steps += static_cast<double>(solver.activeElements());
+      if (census && solver.bodyStepsAt() == solver.steps())
+        census->sample(model, solver.time(), solver.steps(), solver.bodySteps(), solver.dt(),
+                       contact ? contact->overlappingPairs()
+                               : std::vector<std::pair<std::uint32_t, std::uint32_t>>{},
+                       contact ? contact->lastContacts()
+                               : std::vector<fem::Contact::BodyContact>{});
       const bool due = solver.steps() % every == 0;
       if (due)
         series.sample(model, solver);

@@ -3,6 +3,8 @@
 #pragma once
 
 #include "command_log.hpp"
+#include "contact.hpp"
+#include "levels.hpp"
 #include "model.hpp"
 #include "output.hpp"
 #include "run_output.hpp"
@@ -77,8 +79,11 @@ std::string runStatus(const LoopResult &loop);
 // run.end_time, run.end_depth or run.max_steps, a failure (an inverted element, a frame or a
 // checkpoint that cannot be written) or SIGINT or SIGTERM (caught by catchStopSignals; the loop
 // ends after its step, with a checkpoint when they are on). A run continued from a checkpoint
-// goes on from its step, its figures added to the checkpoint's.
+// goes on from its step, its figures added to the checkpoint's. With `census` (run.level_census_
+// interval), the bodies' own steps are measured every so many steps and `census` samples them with
+// `contact`'s pairs and contacts of that step (none without contact).
 LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &solver,
-                    Series &series, Frames &frames, Progress &progress, Checkpoints &checkpoints);
+                    Series &series, Frames &frames, Progress &progress, Checkpoints &checkpoints,
+                    fem::LevelCensus *census = nullptr, const fem::Contact *contact = nullptr);
 
 } // namespace mesopen

@@ -1,0 +1,62 @@
+// Multiple time stepping by body: power-of-two levels on a base step h0. A body at level l would
+// take steps of 2^l h0, the longest such step within its own stable step (Solver::bodySteps), up
+// to a largest level L. A contact pair runs at the finer of its two bodies' levels, and the
+// elements of the coarser body that share a node with a node the finer body touches (the ring)
+// are promoted to that level. LevelCensus measures what this would give a run, sample by sample:
+// the active elements by level, the pairs by their two levels, the rings, and the element and
+// pair work against the single-rate run (docs/solver.md, "Multiple time stepping: levels").
+#pragma once
+
+#include "contact.hpp"
+#include "model.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace mesopen::fem {
+
+// The level of a body whose own stable step is `body_step` on the base step `base_step`:
+//   l = min(max_level, floor(log2(body_step / base_step))),
+// 0 when the body's step is not twice the base step; max_level for a body at rest (infinite step).
+int stepLevel(double body_step, double base_step, int max_level);
+
+class LevelCensus {
+public:
+  // Censuses for every largest level from 1 to max_level.
+  LevelCensus(const Model &model, int max_level);
+
+  // One sample: the bodies' own steps on the base step, and the contact's last step (its pairs of
+  // bodies with overlapping boxes, its node-to-segment contacts).
+  void sample(const Model &model, double time, std::size_t step,
+              const std::vector<double> &body_steps, double base_step,
+              const std::vector<std::pair<std::uint32_t, std::uint32_t>> &pairs,
+              const std::vector<Contact::BodyContact> &contacts);
+
+  // A quantity per sample, its unit and meaning (run.h5's /levels).
+  struct Column {
+    std::string name, unit, meaning;
+    std::vector<double> values;
+  };
+  const std::vector<Column> &columns() const { return columns_; }
+  std::size_t samples() const { return samples_; }
+  int maxLevel() const { return max_level_; }
+  // Sum over the samples of column `name`.
+  double total(const std::string &name) const;
+
+private:
+  Column &column(const std::string &name, const std::string &unit, const std::string &meaning);
+
+  int max_level_;
+  std::size_t samples_ = 0;
+  std::vector<Column> columns_;
+  // Node-to-element adjacency (CSR): the elements of node a are
+  // node_elements_[node_element_begin_[a] .. node_element_begin_[a + 1]).
+  std::vector<std::uint32_t> node_element_begin_, node_elements_;
+  std::vector<std::int8_t> node_level_, element_level_; // promotion of a sample (-1: none)
+  std::vector<std::uint32_t> marked_nodes_, marked_elements_;
+};
+
+} // namespace mesopen::fem

@@ -1,0 +1,108 @@
+// Multiple time stepping's levels: a body's level from its own stable step, the bodies' own steps
+// the solver measures when asked (and only then, without changing the run), and the census's
+// counts of elements, rings and pairs by level and of the work they would take.
+#include "levels.hpp"
+#include "meshes.hpp"
+#include "solver.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+using namespace mesopen;
+using test::TestMesh;
+
+TEST(Levels, PowerOfTwoBelowTheBodysStep) {
+  EXPECT_EQ(fem::stepLevel(1.0, 1.0, 3), 0);
+  EXPECT_EQ(fem::stepLevel(1.99, 1.0, 3), 0);
+  EXPECT_EQ(fem::stepLevel(2.0, 1.0, 3), 1);
+  EXPECT_EQ(fem::stepLevel(4.2, 1.0, 3), 2);
+  EXPECT_EQ(fem::stepLevel(4.2, 1.0, 1), 1);
+  EXPECT_EQ(fem::stepLevel(100.0, 1.0, 3), 3);
+  EXPECT_EQ(fem::stepLevel(0.5, 1.0, 3), 0);
+  EXPECT_EQ(fem::stepLevel(HUGE_VAL, 1.0, 2), 2); // at rest
+}
+
+// Two free bodies in translation, of the same shape, one with cells four times smaller: their own
+// steps are in the ratio of their sizes (4, to round-off: the exact bound is linear in the element
+// size at the same shape and sound speed), the step the solver takes is within the finer one's
+// (below it while the step rises by windows, Solver::step), and measuring them changes nothing of
+// the run, to the bit.
+TEST(Levels, BodyStepsMeasuredWithoutChangingTheRun) {
+  auto run = [](bool measure) {
+    TestMesh mesh;
+    mesh.addRectangle(0, 0, 1e-3, 1e-3, 4, 4);
+    mesh.addRectangle(2e-3, 0, 1e-3, 1e-3, 16, 16);
+    fem::Model model = mesh.model(test::oneMaterial("quartz"));
+    fem::setBodyVelocity(model, 0, 10.0, 0.0);
+    fem::setBodyVelocity(model, 1, -10.0, 5.0);
+    fem::Solver solver(model, {});
+    std::vector<double> steps;
+    for (int i = 0; i < 20; ++i) {
+      if (measure && i == 10)
+        solver.measureBodySteps();
+      solver.step();
+      if (measure && i == 10) {
+        EXPECT_EQ(solver.bodyStepsAt(), solver.steps());
+        steps = solver.bodySteps();
+      }
+    }
+    return std::tuple{model.nodes.x, model.nodes.vx, solver.energy().internal, steps, solver.dt()};
+  };
+  const auto [x0, v0, e0, s0, dt0] = run(false);
+  const auto [x1, v1, e1, s1, dt1] = run(true);
+  EXPECT_EQ(x0, x1);
+  EXPECT_EQ(v0, v1);
+  EXPECT_EQ(e0, e1);
+  ASSERT_EQ(s1.size(), 2u);
+  EXPECT_NEAR(s1[0] / s1[1], 4.0, 1e-9);
+  EXPECT_GE(s1[1], dt1);
+  EXPECT_EQ(fem::stepLevel(s1[0], dt1, 3), 2);
+  EXPECT_EQ(fem::stepLevel(s1[1], dt1, 3), 0);
+}
+
+// Body 0 (2 x 1 cells, 4 elements) at level 0 and body 1 (2 x 2 cells, 8 elements) at level 3
+// (L = 3), one contact each way: body 0's node pushed out of body 1 through a segment of body 1's
+// two bottom-left nodes, and body 1's top-right node pushed out of body 0. Body 1's six elements
+// on those three nodes are its ring, promoted to level 0; the element work per base step is
+// 4 + 8 / 8 + ring (1 - 1/8), and the pair runs at level 0.
+TEST(Levels, CensusCountsLevelsRingsAndWork) {
+  TestMesh mesh;
+  mesh.addRectangle(0, 0, 2e-3, 1e-3, 2, 1);
+  mesh.addRectangle(0, 1e-3, 2e-3, 2e-3, 2, 2);
+  fem::Model model = mesh.model(test::oneMaterial("quartz"));
+  const std::uint32_t b1 = static_cast<std::uint32_t>(model.bodies[1].node_begin);
+  const std::uint32_t corner = b1 + 8; // body 1's node (2, 2) of its 3 x 3 nodes
+  std::vector<fem::Contact::BodyContact> contacts = {{0, 3, 1, {b1, b1 + 1}},
+                                                     {1, corner, 0, {4, 5}}};
+  std::set<std::size_t> ring;
+  for (std::size_t e = model.bodies[1].element_begin; e < model.bodies[1].element_end; ++e)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = model.elements.node[3 * e + k];
+      if (a == b1 || a == b1 + 1 || a == corner)
+        ring.insert(e);
+    }
+  ASSERT_EQ(ring.size(), 6u); // two cells on the bottom-left nodes, one on the corner
+  fem::LevelCensus census(model, 3);
+  census.sample(model, 1e-9, 7, {1.5, 8.5}, 1.0, {{0, 1}}, contacts);
+  EXPECT_EQ(census.samples(), 1u);
+  EXPECT_EQ(census.total("active_elements"), 12.0);
+  EXPECT_EQ(census.total("L3/elements_level_0"), 4.0);
+  EXPECT_EQ(census.total("L3/elements_level_3"), 8.0);
+  EXPECT_EQ(census.total("L3/ring_elements"), 6.0);
+  EXPECT_EQ(census.total("L3/ring_elements_to_level_0"), 6.0);
+  EXPECT_EQ(census.total("L3/element_work"), 4.0 + 8.0 / 8.0 + 6.0 * (1.0 - 1.0 / 8.0));
+  EXPECT_EQ(census.total("L3/pairs_0_3"), 1.0);
+  EXPECT_EQ(census.total("L3/pair_work"), 1.0);
+  EXPECT_EQ(census.total("L3/projectile_level"), 0.0);
+  // L = 1: body 1 at level 1.
+  EXPECT_EQ(census.total("L1/elements_level_1"), 8.0);
+  EXPECT_EQ(census.total("L1/element_work"), 4.0 + 8.0 / 2.0 + 6.0 * (1.0 - 1.0 / 2.0));
+  // At one level no ring: a second sample with both bodies' steps alike.
+  census.sample(model, 2e-9, 8, {8.5, 8.5}, 1.0, {{0, 1}}, contacts);
+  EXPECT_EQ(census.total("L3/ring_elements"), 6.0);
+  EXPECT_EQ(census.total("L3/pairs_3_3"), 1.0);
+  EXPECT_EQ(census.total("L3/element_work"),
+            4.0 + 8.0 / 8.0 + 6.0 * (1.0 - 1.0 / 8.0) + 12.0 / 8.0);
+}
