@@ -34,6 +34,7 @@ struct Job {
   toml::table tables; // the scene's
   std::int64_t seed = 0;
   bool reused = false;  // completed before, with the same scene
+  bool resumed = false; // interrupted before, with the same scene, at a checkpoint: continued
   bool selected = true; // to run (see --only)
   std::string status;   // completed, failed, interrupted, not run
   std::string failure;
@@ -267,6 +268,11 @@ int campaignCommand(const CampaignOptions &options) {
       const bool same_scene = readSceneText(j.dir + "/scene.toml") == j.tables;
       j.reused = same_scene && done.is_object() && done.value("status", "") == "completed" &&
                  readsWhole(j.dir + "/run.h5");
+      // Interrupted with a checkpoint written (run.checkpoint_interval or checkpoint_time in its
+      // scene): continued from it (mesopen run --resume), not made anew.
+      j.resumed = !j.reused && same_scene && done.is_object() &&
+                  done.value("status", "") == "interrupted" &&
+                  fs::is_regular_file(j.dir + "/checkpoint/state.h5");
       j.status = "not run";
       // Not to run now (--only) but run before with this scene: as it ended then.
       if (!j.selected && !j.reused && same_scene && done.is_object() && done.contains("status")) {
@@ -288,11 +294,14 @@ int campaignCommand(const CampaignOptions &options) {
   const std::string exe = fs::read_symlink("/proc/self/exe", ec).string();
   const bool terminal = !options.quiet && isatty(STDERR_FILENO);
   std::size_t pending = 0;
-  std::size_t reused = 0;
+  std::size_t reused = 0, to_resume = 0;
   for (const Job &j : jobs)
-    pending += j.selected && !j.reused, reused += j.reused;
-  std::printf("mesopen campaign: %zu runs, %d replicates each: %zu to run now, %zu done before\n",
-              c.runs.size(), c.replicates, pending, reused);
+    pending += j.selected && !j.reused, reused += j.reused, to_resume += j.selected && j.resumed;
+  std::printf("mesopen campaign: %zu runs, %d replicates each: %zu to run now, %zu done before%s\n",
+              c.runs.size(), c.replicates, pending, reused,
+              to_resume > 0
+                  ? (" (" + std::to_string(to_resume) + " to continue from a checkpoint)").c_str()
+                  : "");
   std::fflush(stdout);
   stop_signal = 0;
   for (int s : {SIGINT, SIGTERM})
@@ -302,14 +311,6 @@ int campaignCommand(const CampaignOptions &options) {
   for (Job &j : jobs) {
     if (j.selected && !j.reused && stop_signal == 0) {
       try {
-        // Nothing of an earlier run may pass for this one's if it fails before writing its own.
-        fs::create_directories(j.dir);
-        for (const char *f : {"summary.json", "run.h5", "run.h5.tmp", "instability.json"})
-          fs::remove(fs::path(j.dir) / f);
-        writeText(j.dir + "/scene.toml", j.scene);
-        std::vector<std::string> words{exe, "run", j.dir + "/scene.toml", "-o", j.dir, "--quiet"};
-        if (options.threads)
-          words.insert(words.end(), {"--threads", std::to_string(*options.threads)});
         const auto run_start = Clock::now();
         bool passed_on = false;
         auto show_progress = [&]() -> int {
@@ -330,7 +331,31 @@ int campaignCommand(const CampaignOptions &options) {
                                        : (", ETA " + show(std::max(eta, 0.0), 3) + " s").c_str());
           return 0;
         };
-        const int code = runProgram(words, j.dir + "/log.txt", show_progress);
+        int code = 0;
+        for (bool resume = j.resumed;; resume = false) {
+          std::vector<std::string> words{exe, "run", "--resume", j.dir, "--quiet"};
+          if (!resume) {
+            // Nothing of an earlier run may pass for this one's if it fails before writing its
+            // own (a run continued keeps its files: `mesopen run --resume` rewrites them).
+            fs::create_directories(j.dir);
+            for (const char *f : {"summary.json", "run.h5", "run.h5.tmp", "instability.json"})
+              fs::remove(fs::path(j.dir) / f);
+            fs::remove_all(fs::path(j.dir) / "checkpoint");
+            writeText(j.dir + "/scene.toml", j.scene);
+            words = {exe, "run", j.dir + "/scene.toml", "-o", j.dir, "--quiet"};
+          }
+          if (options.threads)
+            words.insert(words.end(), {"--threads", std::to_string(*options.threads)});
+          code = runProgram(words, j.dir + "/log.txt", show_progress, resume);
+          // A checkpoint that cannot be continued (exit 2: another version's, or damaged): the
+          // run is made anew.
+          if (!resume || code != 2 || stop_signal != 0)
+            break;
+          std::printf("mesopen campaign: %s replicate %d: its checkpoint cannot be continued (%s); "
+                      "made anew\n",
+                      j.run->name.c_str(), j.replicate + 1, (j.dir + "/log.txt").c_str());
+          j.resumed = false;
+        }
         ran_seconds += secondsSince(run_start);
         ++ran;
         if (terminal)
@@ -344,8 +369,9 @@ int campaignCommand(const CampaignOptions &options) {
                           ? summary["failure"].get<std::string>()
                           : "exit code " + std::to_string(code) + " (see " + j.dir + "/log.txt)";
         if (!terminal || j.status != "completed")
-          std::printf("mesopen campaign: %s replicate %d: %s in %.0f s%s\n", j.run->name.c_str(),
-                      j.replicate + 1, j.status.c_str(), secondsSince(run_start),
+          std::printf("mesopen campaign: %s replicate %d%s: %s in %.0f s%s\n", j.run->name.c_str(),
+                      j.replicate + 1, j.resumed ? " (continued from its checkpoint)" : "",
+                      j.status.c_str(), secondsSince(run_start),
                       j.failure.empty() ? "" : (": " + j.failure).c_str());
         std::fflush(stdout);
       } catch (const std::exception &e) {

@@ -74,12 +74,12 @@ int campaignCommand(const CampaignOptions &options);
 std::string shareDirectory();
 
 // Runs a program (words[0], a path) with its arguments, without a shell, its standard output and
-// error into the file `output` (made anew); while it runs, `waiting` (if given) is called about
-// five times a second, and a signal it returns (not 0) is sent to the program. The program runs in
-// a process group of its own (a terminal's Ctrl-C does not reach it). Returns its exit code (128 +
-// the signal if one ended it), -1 if it did not start.
+// error into the file `output` (made anew, or appended to if `append`); while it runs, `waiting`
+// (if given) is called about five times a second, and a signal it returns (not 0) is sent to the
+// program. The program runs in a process group of its own (a terminal's Ctrl-C does not reach it).
+// Returns its exit code (128 + the signal if one ended it), -1 if it did not start.
 int runProgram(const std::vector<std::string> &words, const std::string &output,
-               const std::function<int()> &waiting = {});
+               const std::function<int()> &waiting = {}, bool append = false);
 
 // Runs /usr/bin/python3 with a plot script of shareDirectory() and its arguments, without a shell
 // (paths stay paths) and with its output discarded; true when it exits with 0.

@@ -41,7 +41,7 @@ std::string shareDirectory() {
 }
 
 int runProgram(const std::vector<std::string> &words, const std::string &output,
-               const std::function<int()> &waiting) {
+               const std::function<int()> &waiting, bool append) {
   std::vector<std::string> copy = words;
   std::vector<char *> argv;
   for (std::string &w : copy)
@@ -60,7 +60,7 @@ int runProgram(const std::vector<std::string> &words, const std::string &output,
     prctl(PR_SET_PDEATHSIG, SIGTERM);
     if (getppid() != parent) // the caller died before prctl took effect
       _exit(128 + SIGTERM);
-    const int fd = open(output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int fd = open(output.c_str(), O_WRONLY | O_CREAT | (append ? O_APPEND : O_TRUNC), 0644);
     if (fd < 0 || dup2(fd, STDOUT_FILENO) < 0 || dup2(fd, STDERR_FILENO) < 0)
       _exit(127);
     execv(argv[0], argv.data());

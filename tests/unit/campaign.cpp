@@ -2,6 +2,7 @@
 // base with the runs' keys, the statistics match published tables, and `mesopen campaign` runs
 // every replicate once (a second call reruns nothing, a changed run alone is rerun).
 #include "campaign.hpp"
+#include "checkpoint.hpp"
 #include "run.hpp"
 
 #include <gtest/gtest.h>
@@ -264,4 +265,62 @@ TEST(Campaign, RunEndsWithItsKilledCampaign) {
     ::usleep(50000);
   EXPECT_TRUE(free);
   close(lock);
+}
+
+// A campaign stopped (SIGTERM) while its run, with checkpoints on, has written one: at the next
+// call the run goes on from its checkpoint (`mesopen run --resume`), its log.txt appended to, and
+// its run.h5 is the bytes of the same campaign never stopped. A checkpoint that cannot be
+// continued (cut short here) is left and the run made anew, to the same bytes.
+TEST(Campaign, InterruptedRunContinuesFromItsCheckpoint) {
+  ScratchDir dir("campaign-resume");
+  std::string base = tiny_base;
+  base.replace(base.find("end_time = 1e-8"), 15, "end_time = 1e-6\ncheckpoint_time = 1e-7");
+  mesopen::test::writeFile(dir / "base.toml", base);
+  mesopen::test::writeFile(dir / "c.toml",
+                           "[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\n");
+  const std::string campaign = dir / "c.toml";
+  auto r =
+      mesopen::test::runMesopen("campaign " + campaign + " -o " + (dir / "whole") + " --threads 1");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const std::string whole = dir / "whole/runs/a/r1/run.h5";
+
+  for (const bool damaged : {false, true}) {
+    SCOPED_TRACE(damaged ? "damaged checkpoint" : "checkpoint");
+    const std::string out = dir / (damaged ? "damaged" : "stopped");
+    const std::string replicate = out + "/runs/a/r1";
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      ::execl(MESOPEN_BINARY, MESOPEN_BINARY, "campaign", campaign.c_str(), "-o", out.c_str(),
+              "--threads", "1", static_cast<char *>(nullptr));
+      ::_exit(127);
+    }
+    for (int i = 0; i < 1200 && !std::filesystem::exists(replicate + "/checkpoint/state.h5"); ++i)
+      ::usleep(25000);
+    ::kill(pid, SIGTERM);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    ASSERT_TRUE(WIFEXITED(status));
+    ASSERT_EQ(WEXITSTATUS(status), 128 + SIGTERM);
+    ASSERT_EQ(nlohmann::json::parse(mesopen::test::readFile(replicate + "/summary.json"))["status"],
+              "interrupted");
+    ASSERT_TRUE(std::filesystem::exists(replicate + "/checkpoint/state.h5"));
+    const std::string log_before = mesopen::test::readFile(replicate + "/log.txt");
+    if (damaged)
+      std::filesystem::resize_file(replicate + "/checkpoint/state.h5", 1000);
+
+    r = mesopen::test::runMesopen("campaign " + campaign + " -o " + out + " --threads 1");
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_NE(r.output.find("1 to run now, 0 done before (1 to continue from a checkpoint)"),
+              std::string::npos)
+        << r.output;
+    EXPECT_EQ(r.output.find("cannot be continued") != std::string::npos, damaged) << r.output;
+    EXPECT_TRUE(mesopen::test::sameBytes(whole, replicate + "/run.h5"));
+    EXPECT_FALSE(std::filesystem::exists(replicate + "/checkpoint"));
+    if (!damaged) { // the stopped run's output kept before the continued run's
+      const std::string log = mesopen::test::readFile(replicate + "/log.txt");
+      EXPECT_GT(log.size(), log_before.size());
+      EXPECT_EQ(log.substr(0, log_before.size()), log_before);
+    }
+  }
 }
