@@ -429,16 +429,19 @@ void Solver::balanceLoad(bool forced) {
                best -
            1.0;
   };
-  if (partitioned_ && !forced && !(excess() > rebalance_above_))
+  // A partition that could not reach rebalance_imbalance (a body heavier than a rank's share in
+  // the middle of the others: no straight cut balances it) is made again only once the load is
+  // that much worse than it achieved, or the total load has changed by that fraction since.
+  const double out_of_balance = excess(), tol = s_.rebalance_imbalance;
+  const bool worth_trying = out_of_balance > last_achieved_ + tol ||
+                            std::abs(static_cast<double>(total) - last_total_) > tol * last_total_;
+  if (partitioned_ && !forced && !(out_of_balance > tol && worth_trying))
     return;
   const double before = imbalance(asDoubles(rank_elements_));
   repartition(load);
   rank_elements_ = rankLoads();
-  // A partition that cannot reach rebalance_imbalance (bodies too coarse for the ranks) is not
-  // made again at every change of the load, only once it is that much worse again.
-  const double achieved = excess();
-  rebalance_above_ = achieved > s_.rebalance_imbalance ? achieved + s_.rebalance_imbalance
-                                                       : s_.rebalance_imbalance;
+  last_achieved_ = excess();
+  last_total_ = static_cast<double>(total);
   if (partitioned_) {
     ++partition_.rebalances;
     partition_.forced += forced;

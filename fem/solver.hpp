@@ -245,9 +245,8 @@ private:
   std::vector<int> owner_;
   bool partitioned_ = false;   // owner_ is a partition (it starts as body b on rank b mod size)
   bool rebalance_due_ = false; // rebalance_every: at the next updateActivity
-  // A rebalance is made when the imbalance (balanceLoad) passes this: rebalance_imbalance, or that
-  // above what the last partition achieved when it could not go below rebalance_imbalance.
-  double rebalance_above_ = 0.0;
+  // The last partition's imbalance (as balanceLoad measures it) and total active elements.
+  double last_achieved_ = 0.0, last_total_ = 0.0;
   std::vector<std::size_t> rank_elements_; // each rank's active elements, as laid out
   std::vector<double> rank_element_steps_; // over the run
   PartitionReport partition_;              // the counts and the last rebalance's imbalances
