@@ -164,9 +164,21 @@ void elementMean(const double *value, std::size_t base, const std::uint32_t *con
 }
 } // namespace
 
-Solver::Solver(Model &model, SolverSettings settings, const parallel::Communicator &processes)
-    : m_(model), s_(settings), comm_(processes) {
+Solver::Solver(Model &model, SolverSettings settings, const parallel::Communicator &processes,
+               const parallel::Partitioner &partitioner)
+    : m_(model), s_(settings), comm_(processes), partitioner_(partitioner) {
   s_.chunk = std::clamp<std::size_t>(s_.chunk, 1, max_chunk);
+  // The partitioner's ids are 32-bit: body numbers are (Elements::body, active_bodies_).
+  if (m_.bodies.size() > std::numeric_limits<std::uint32_t>::max())
+    throw std::length_error("a model of " + std::to_string(m_.bodies.size()) +
+                            " bodies: at most 2^32 - 1 can be numbered");
+  // Until the first partition (balanceLoad), body b is rank b mod size's: the partitioner's
+  // starting distribution.
+  owner_.resize(m_.bodies.size());
+  for (std::size_t b = 0; b < owner_.size(); ++b)
+    owner_[b] = static_cast<int>(b % comm_.size());
+  rank_elements_.assign(comm_.size(), 0);
+  rank_element_steps_.assign(comm_.size(), 0.0);
   const Nodes &nd = m_.nodes;
   inv_mass_.resize(nd.size());
   for (std::size_t a = 0; a < nd.size(); ++a)
@@ -244,12 +256,16 @@ void Solver::step() {
   const bool last = steps_left == 1.0;
   const double dt = steps_left > 0.0 ? remaining / steps_left : stable;
   kick_work_ = provider_work_ = friction_work_ = 0.0;
+  if (comm_.size() > 1 && s_.rebalance_every > 0 && steps_ > 0 && steps_ % s_.rebalance_every == 0)
+    rebalance_due_ = true;
   kickAndDrift(dt); // v(n+1/2) = v(n) + dt/2 f(n) / m, the imposed velocities;
                     // x(n+1) = x(n) + dt v(n+1/2)
   m_.nodes.clearExternal();
   for (auto *provider : providers_) // external forces at x(n+1): contact, coupling
     provider->addForces(m_, time_ + dt, dt);
   updateActivity(); // bodies the providers woke take part
+  for (std::size_t r = 0; r < rank_elements_.size(); ++r)
+    rank_element_steps_[r] += static_cast<double>(rank_elements_[r]);
   forces(dt, true); // stresses at n+1, f(n+1), the next stable step, and unit by unit
                     // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
   applyConstraints(0.5 * dt, true); // the imposed velocities at n+1
@@ -304,9 +320,10 @@ std::string Solver::notFinite() const {
 // Work ranges over the bodies that move: element chunks of one material, node blocks.
 void Solver::updateActivity() {
   const std::size_t n_bodies = m_.bodies.size();
-  if (at_rest_seen_ == m_.at_rest)
+  if (at_rest_seen_ == m_.at_rest && !rebalance_due_)
     return;
   at_rest_seen_ = m_.at_rest;
+  balanceLoad(std::exchange(rebalance_due_, false));
   chunks_.clear();
   units_.clear();
   unit_nodes_.clear();
@@ -319,7 +336,7 @@ void Solver::updateActivity() {
     if (m_.at_rest[b])
       continue;
     active_bodies_.push_back(static_cast<std::uint32_t>(b));
-    // Every process moves every active node; it computes the elements of its own bodies.
+    // Every process moves every active node; it computes the elements of the bodies it owns.
     appendInPieces(node_ranges_, 0, Range{body.node_begin, body.node_end}, node_block,
                    [](const Range &) { return true; });
     active_elements_ += body.element_end - body.element_begin - body.eroded;
@@ -362,6 +379,141 @@ void Solver::updateActivity() {
   }
   sums_.resize(chunks_.size());
   shareAmongThreads();
+}
+
+namespace {
+
+// max / mean - 1 of the ranks' loads (0 without load).
+double imbalance(const std::vector<double> &loads) {
+  double total = 0.0, most = 0.0;
+  for (double l : loads)
+    total += l, most = std::max(most, l);
+  return total > 0.0 ? most * static_cast<double>(loads.size()) / total - 1.0 : 0.0;
+}
+
+std::vector<double> asDoubles(const std::vector<std::size_t> &counts) {
+  return std::vector<double>(counts.begin(), counts.end());
+}
+
+} // namespace
+
+// Each rank's active elements (the bodies it owns that move), and with several processes a new
+// partition when the load is out of balance. The loads change only when the bodies that move or
+// their elements change, which is when updateActivity calls this: the check is one pass over the
+// bodies and no message, and every process, holding the same model, takes the same decision.
+// Out of balance is measured against the best a partition of whole bodies can do: the most loaded
+// rank's active elements over the larger of their mean and the heaviest body's, less 1 (with no
+// body heavier than the mean, the imbalance max / mean - 1). The bodies are partitioned at the
+// first load, when `forced`, and when that measure passes rebalance_above_.
+void Solver::balanceLoad(bool forced) {
+  const std::size_t ranks = static_cast<std::size_t>(comm_.size());
+  std::vector<std::size_t> load(m_.bodies.size(), 0);
+  std::size_t total = 0, heaviest = 0;
+  for (std::size_t b = 0; b < load.size(); ++b) {
+    const Body &body = m_.bodies[b];
+    if (!m_.at_rest[b])
+      load[b] = body.element_end - body.element_begin - body.eroded;
+    total += load[b];
+    heaviest = std::max(heaviest, load[b]);
+  }
+  auto rankLoads = [&] {
+    std::vector<std::size_t> loads(ranks, 0);
+    for (std::size_t b = 0; b < load.size(); ++b)
+      loads[static_cast<std::size_t>(owner_[b])] += load[b];
+    return loads;
+  };
+  rank_elements_ = rankLoads();
+  if (ranks == 1 || total == 0) // one process owns every body; nothing moves: nothing to share
+    return;
+  const double best = std::max(static_cast<double>(total) / static_cast<double>(ranks),
+                               static_cast<double>(heaviest));
+  auto excess = [&] {
+    return static_cast<double>(*std::max_element(rank_elements_.begin(), rank_elements_.end())) /
+               best -
+           1.0;
+  };
+  // A partition that could not reach rebalance_imbalance (a body heavier than a rank's share in
+  // the middle of the others: no straight cut balances it) is made again only once the load is
+  // that much worse than it achieved, or the total load has changed by that fraction since.
+  const double out_of_balance = excess(), tol = s_.rebalance_imbalance;
+  const bool worth_trying = out_of_balance > last_achieved_ + tol ||
+                            std::abs(static_cast<double>(total) - last_total_) > tol * last_total_;
+  if (partitioned_ && !forced && !(out_of_balance > tol && worth_trying))
+    return;
+  const double before = imbalance(asDoubles(rank_elements_));
+  repartition(load);
+  rank_elements_ = rankLoads();
+  last_achieved_ = excess();
+  last_total_ = static_cast<double>(total);
+  if (partitioned_) {
+    ++partition_.rebalances;
+    partition_.forced += forced;
+  }
+  partitioned_ = true;
+  partition_.last_before = before;
+  partition_.last_after = imbalance(asDoubles(rank_elements_));
+}
+
+// Every body to the rank the partitioner gives it: each process passes the bodies it owns, with
+// their nodes' centroid and their active elements `load`, and all learn every body's new owner.
+// Every process holds every body and moves every node alike, but only a body's owner keeps its
+// elements' state (stress, energy, plastic strain...) current: the bodies that change owner take
+// theirs with them, copied from the old owner to every process.
+void Solver::repartition(const std::vector<std::size_t> &load) {
+  const Nodes &nd = m_.nodes;
+  parallel::PartitionItems mine;
+  for (std::size_t b = 0; b < m_.bodies.size(); ++b) {
+    if (!owns(b))
+      continue;
+    const Body &body = m_.bodies[b];
+    double x = 0.0, y = 0.0;
+    for (std::size_t a = body.node_begin; a < body.node_end; ++a)
+      x += nd.x[a], y += nd.y[a];
+    const double nodes =
+        static_cast<double>(std::max<std::size_t>(body.node_end - body.node_begin, 1));
+    mine.id.push_back(static_cast<std::uint32_t>(b));
+    mine.x.push_back(x / nodes);
+    mine.y.push_back(y / nodes);
+    mine.weight.push_back(static_cast<double>(load[b]));
+  }
+  const std::vector<int> to = partitioner_.partition(mine);
+  std::vector<std::int64_t> moves;
+  moves.reserve(2 * to.size());
+  for (std::size_t k = 0; k < to.size(); ++k)
+    moves.insert(moves.end(), {mine.id[k], to[k]});
+  const std::vector<std::int64_t> all = comm_.allGather(std::move(moves));
+  if (all.size() != 2 * owner_.size())
+    throw std::logic_error("the partition gave " + std::to_string(all.size() / 2) + " owners for " +
+                           std::to_string(owner_.size()) + " bodies");
+  std::vector<int> owner = owner_;
+  for (std::size_t k = 0; k < all.size(); k += 2) {
+    const auto b = static_cast<std::size_t>(all[k]);
+    const auto rank = static_cast<int>(all[k + 1]);
+    if (b >= owner.size() || rank < 0 || rank >= comm_.size())
+      throw std::logic_error("the partition gave body " + std::to_string(b) + " of " +
+                             std::to_string(owner.size()) + " to rank " + std::to_string(rank) +
+                             " of " + std::to_string(comm_.size()));
+    owner[b] = rank;
+  }
+  std::vector<std::uint32_t> moving;
+  for (std::size_t b = 0; b < owner.size(); ++b)
+    if (owner[b] != owner_[b])
+      moving.push_back(static_cast<std::uint32_t>(b));
+  shareOwned(moving, &Body::element_begin, &Body::element_end, elementState());
+  partition_.migrated_bodies += moving.size();
+  owner_ = std::move(owner);
+}
+
+PartitionReport Solver::partition() const {
+  PartitionReport report = partition_;
+  report.bodies.assign(rank_elements_.size(), 0);
+  for (int rank : owner_)
+    ++report.bodies[static_cast<std::size_t>(rank)];
+  report.active_elements = rank_elements_;
+  report.element_steps = rank_element_steps_;
+  report.imbalance = imbalance(asDoubles(rank_elements_));
+  report.run_imbalance = imbalance(rank_element_steps_);
+  return report;
 }
 
 // Each thread takes a contiguous run of units with about its share of the elements, and the node
@@ -552,13 +704,15 @@ void Solver::forces(double dt, bool kick) {
     inverted = sums_[i].inverted;
     dt_min = std::min(dt_min, sums_[i].dt_min);
   }
-  // The shortest step of all processes, and the first inverted element of any (its area from the
-  // process that computed it, gathered only then).
+  // The shortest step of all processes, and the first inverted element of any, the lowest number
+  // whoever computed it (its area from the process that did, gathered only then).
   dt_min = comm_.min(dt_min);
   const std::vector<std::int64_t> inverted_by =
       comm_.allGather(std::vector<std::int64_t>{inverted});
-  const auto first =
-      std::find_if(inverted_by.begin(), inverted_by.end(), [](std::int64_t e) { return e >= 0; });
+  auto first = inverted_by.end();
+  for (auto it = inverted_by.begin(); it != inverted_by.end(); ++it)
+    if (*it >= 0 && (first == inverted_by.end() || *it < *first))
+      first = it;
   if (first != inverted_by.end()) {
     const double area = inverted >= 0 ? m_.elements.area[static_cast<std::size_t>(inverted)] : 0.0;
     const double inverted_area =
@@ -583,7 +737,7 @@ void Solver::forces(double dt, bool kick) {
 // their owners), with the factors of the solver's step: safety and the providers' scaling.
 void Solver::bodyStepsFromElements() {
   measure_body_steps_ = false;
-  shareOwned<1>(&Body::element_begin, &Body::element_end, {&element_step_});
+  shareOwned<1>(active_bodies_, &Body::element_begin, &Body::element_end, {&element_step_});
   body_step_.assign(m_.bodies.size(), HUGE_VAL);
   for (std::uint32_t b : active_bodies_) {
     const Body &body = m_.bodies[b];
@@ -603,18 +757,19 @@ std::array<std::vector<double> *, 8> Solver::elementState() const {
           &el.plastic_strain, &el.viscosity};
 }
 
-// `fields` over each active body's range [begin, end) (its nodes or its elements), copied from
-// the body's owner to every process: each sends its own bodies' values in body order, and knows
-// where the others' lie (every process knows which bodies are active and whose they are).
+// `fields` over the range [begin, end) (nodes or elements) of each of `bodies` (in body order),
+// copied from the body's owner to every process: each sends its own bodies' values in body
+// order, and knows where the others' lie (every process knows every body's owner).
 template <std::size_t N>
-void Solver::shareOwned(std::size_t Body::*begin, std::size_t Body::*end,
+void Solver::shareOwned(const std::vector<std::uint32_t> &bodies, std::size_t Body::*begin,
+                        std::size_t Body::*end,
                         const std::array<std::vector<double> *, N> &fields) const {
   std::size_t count = 0;
-  for (std::uint32_t b : active_bodies_)
+  for (std::uint32_t b : bodies)
     if (owns(b))
       count += N * (m_.bodies[b].*end - m_.bodies[b].*begin);
   auto pack = [&](double *mine) {
-    for (std::uint32_t b : active_bodies_)
+    for (std::uint32_t b : bodies)
       if (owns(b))
         for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
           for (auto *f : fields)
@@ -622,7 +777,7 @@ void Solver::shareOwned(std::size_t Body::*begin, std::size_t Body::*end,
   };
   auto unpack = [&](const double *all) {
     for (int r = 0; r < comm_.size(); ++r)
-      for (std::uint32_t b : active_bodies_)
+      for (std::uint32_t b : bodies)
         if (owner(b) == r)
           for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
             for (auto *f : fields)
@@ -634,12 +789,13 @@ void Solver::shareOwned(std::size_t Body::*begin, std::size_t Body::*end,
 // The velocities and forces of the nodes of every process's active bodies, from their owners.
 void Solver::shareNodes() {
   Nodes &nd = m_.nodes;
-  shareOwned<4>(&Body::node_begin, &Body::node_end, {&nd.vx, &nd.vy, &nd.fx, &nd.fy});
+  shareOwned<4>(active_bodies_, &Body::node_begin, &Body::node_end,
+                {&nd.vx, &nd.vy, &nd.fx, &nd.fy});
 }
 
 // The element fields output reads, of every process's active bodies, from their owners.
 void Solver::shareElementState() const {
-  shareOwned(&Body::element_begin, &Body::element_end, elementState());
+  shareOwned(active_bodies_, &Body::element_begin, &Body::element_end, elementState());
 }
 
 // The active element with the shortest altitude, and what it has become: for the message of a

@@ -7,6 +7,7 @@
 
 #include "communicator.hpp"
 #include "model.hpp"
+#include "partitioner.hpp"
 
 #include <array>
 #include <cstddef>
@@ -47,7 +48,13 @@ struct SolverSettings {
   // (the kinetic energy this takes is booked, Energy::mass_scaling). 0: never.
   double mass_scaling_step_ratio = 0.0;
   double gravity_x = 0.0, gravity_y = 0.0; // body force per unit mass [m/s^2]
-  std::size_t chunk = 256;                 // elements per material batch
+  // With the element work shared by several processes: the bodies are partitioned anew when the
+  // load imbalance (the most loaded process's active elements over the least the partition could
+  // give, see Solver::balanceLoad) passes this fraction, and also before every rebalance_every-th
+  // step when that is not 0 (to exercise a change of owners in tests).
+  double rebalance_imbalance = 0.1;
+  std::size_t rebalance_every = 0;
+  std::size_t chunk = 256; // elements per material batch
 };
 
 // Energies per metre of depth [J/m]. Internal includes the plastic and viscous work done.
@@ -88,15 +95,32 @@ public:
   using std::runtime_error::runtime_error;
 };
 
+// How the element work is shared by the processes (Solver::partition): per rank, the bodies it
+// owns, their active elements now, and the element-steps it computed over the run; the imbalance
+// max / mean - 1 of the active elements now and of the element-steps over the run; the partitions
+// made after the first (`rebalances`, of which `forced` by rebalance_every), the bodies that
+// changed owner at them, and the imbalance just before and just after the last.
+struct PartitionReport {
+  std::vector<std::size_t> bodies, active_elements;
+  std::vector<double> element_steps;
+  double imbalance = 0.0, run_imbalance = 0.0;
+  std::size_t rebalances = 0, forced = 0, migrated_bodies = 0;
+  double last_before = 0.0, last_after = 0.0;
+};
+
 class Solver {
 public:
-  // `processes` share the element work: each computes the elements of the bodies it owns (body b
-  // is rank b mod size's); the model, the nodes' motion and the force providers (contact) are the
-  // same on every process. After each element pass the nodes of every process's active bodies
-  // (velocity and force) are gathered by all, and so are the failed elements' states; energies
-  // and the stable step are combined in rank order. It outlives the solver.
+  // `processes` share the element work: each computes the elements of the bodies it owns; the
+  // model, the nodes' motion and the force providers (contact) are the same on every process.
+  // With more than one process `partitioner` says who owns which body, from the bodies' centroids
+  // weighted by their active elements, at the start and whenever the load is out of balance
+  // (balanceLoad); every process holds every body, so a body that changes owner takes nothing with
+  // it. After each element pass the nodes of every process's active bodies (velocity and force)
+  // are gathered by all, and so are the failed elements' states; energies and the stable step are
+  // combined in rank order. Both outlive the solver.
   Solver(Model &model, SolverSettings settings,
-         const parallel::Communicator &processes = parallel::serial());
+         const parallel::Communicator &processes = parallel::serial(),
+         const parallel::Partitioner &partitioner = parallel::serialPartitioner());
 
   // One time step: half-kick, drift, internal and external forces, half-kick.
   void step();
@@ -122,6 +146,8 @@ public:
   static constexpr std::size_t all_bodies = static_cast<std::size_t>(-1);
   std::size_t massScaledElements() const { return added_mass_.size(); }
   double addedMass(std::size_t body = all_bodies) const;
+  // How the element work is shared now and was over the run (every process knows every owner).
+  PartitionReport partition() const;
 
   // Each active body's own stable step (safety and the providers' scaling applied, as dt()): the
   // smallest over its elements of the exact lumped-triangle bound (criticalStepGain), measured by
@@ -192,6 +218,8 @@ private:
   };
 
   void updateActivity();
+  void balanceLoad(bool forced);
+  void repartition(const std::vector<std::size_t> &load);
   void shareAmongThreads();
   struct KickSums {
     double gravity = 0.0, kinetic = 0.0, provider = 0.0, friction = 0.0;
@@ -209,12 +237,12 @@ private:
   void scaleMasses(double half_dt);
   std::string thinnestElement() const;
   std::string notFinite() const; // where a state that is not finite is (RunFailure's message)
-  bool owns(std::size_t body) const { return owner(body) == comm_.rank(); }
-  int owner(std::size_t body) const { return static_cast<int>(body % comm_.size()); }
+  bool owns(std::size_t body) const { return owner_[body] == comm_.rank(); }
+  int owner(std::size_t body) const { return owner_[body]; }
   std::array<std::vector<double> *, 8> elementState() const;
   template <std::size_t N>
-  void shareOwned(std::size_t Body::*begin, std::size_t Body::*end,
-                  const std::array<std::vector<double> *, N> &fields) const;
+  void shareOwned(const std::vector<std::uint32_t> &bodies, std::size_t Body::*begin,
+                  std::size_t Body::*end, const std::array<std::vector<double> *, N> &fields) const;
   void shareNodes();
   void accountEnergy();
   void bodyStepsFromElements();
@@ -222,6 +250,16 @@ private:
   Model &m_;
   SolverSettings s_;
   const parallel::Communicator &comm_;
+  const parallel::Partitioner &partitioner_;
+  // Who computes each body's elements: the partitioner's answer (all rank 0 with one process).
+  std::vector<int> owner_;
+  bool partitioned_ = false;   // owner_ is a partition (it starts as body b on rank b mod size)
+  bool rebalance_due_ = false; // rebalance_every: at the next updateActivity
+  // The last partition's imbalance (as balanceLoad measures it) and total active elements.
+  double last_achieved_ = 0.0, last_total_ = 0.0;
+  std::vector<std::size_t> rank_elements_; // each rank's active elements, as laid out
+  std::vector<double> rank_element_steps_; // over the run
+  PartitionReport partition_;              // the counts and the last rebalance's imbalances
   std::vector<ForceProvider *> providers_;
   std::vector<Chunk> chunks_;
   std::vector<Unit> units_;

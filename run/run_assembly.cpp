@@ -6,6 +6,7 @@
 #include "run_settings.hpp"
 #include "stop_signals.hpp"
 #include "writers.hpp"
+#include "zoltan_partitioner.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -193,11 +194,15 @@ RunAssembly::RunAssembly(const Scene &scene, const std::string &dir,
   }
   target.reset();
   const double dem_step = dem ? dem->stableStep() : HUGE_VAL; // every rank calls it
-  if (world.size > 1)
+  if (world.size > 1) {
     processes = std::make_unique<parallel::MpiCommunicator>(MPI_COMM_WORLD);
-  else
+    partitioner = std::make_unique<parallel::ZoltanRcb>(MPI_COMM_WORLD);
+  } else {
     processes = std::make_unique<parallel::SerialCommunicator>();
-  solver = std::make_unique<fem::Solver>(model, solverSettings(scene, dem_step), *processes);
+    partitioner = std::make_unique<parallel::SerialPartitioner>();
+  }
+  solver = std::make_unique<fem::Solver>(model, solverSettings(scene, dem_step), *processes,
+                                         *partitioner);
   solver->endAt(run.end_time);
   if (scene.contact.enabled) {
     contact = std::make_unique<fem::Contact>(model, contactSettings(scene, walls));

@@ -8,6 +8,7 @@
 #include "liggghts_dem.hpp"
 #include "model.hpp"
 #include "mpi_communicator.hpp"
+#include "partitioner.hpp"
 #include "projectile.hpp"
 #include "scene.hpp"
 #include "solver.hpp"
@@ -56,6 +57,8 @@ public:
   fem::Model model;
   // The ranks the solver shares its element work with (serial for one process).
   std::unique_ptr<parallel::Communicator> processes;
+  // Which rank owns which body (Zoltan's RCB with several processes, none needed with one).
+  std::unique_ptr<parallel::Partitioner> partitioner;
   std::unique_ptr<coupling::LiggghtsDem> dem;       // null: no disks
   std::unique_ptr<coupling::FeDemCoupling> coupled; // null: no disks
   std::unique_ptr<fem::Solver> solver;

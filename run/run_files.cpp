@@ -149,6 +149,20 @@ nlohmann::json levelFigures(const fem::LevelCensus &census, const LoopResult &lo
   return j;
 }
 
+nlohmann::json partitionSummary(const fem::PartitionReport &p) {
+  return {{"method", p.bodies.size() > 1 ? "zoltan rcb" : "one rank"},
+          {"bodies", p.bodies},
+          {"active_elements", p.active_elements},
+          {"element_steps", p.element_steps},
+          {"imbalance", p.imbalance},
+          {"run_imbalance", p.run_imbalance},
+          {"rebalances", p.rebalances},
+          {"forced_rebalances", p.forced},
+          {"migrated_bodies", p.migrated_bodies},
+          {"last_partition_imbalance_before", p.last_before},
+          {"last_partition_imbalance_after", p.last_after}};
+}
+
 nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Series &series,
                           const Frames &frames, const LoopResult &loop, double wall, int ranks,
                           const nlohmann::json &dem) {
@@ -245,6 +259,7 @@ nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Seri
     j["files"].push_back("vtk/run.pvd");
   j["representation"] = nameOf(scene.run.representation, representation_names);
   j["ranks"] = ranks;
+  j["partition"] = partitionSummary(solver.partition());
   if (!dem.is_null()) {
     j["dem"] = dem;
     j["files"].push_back("dem.data");

@@ -42,8 +42,11 @@ nlohmann::json levelFigures(const fem::LevelCensus &census, const LoopResult &lo
 // work on the disks, windows.
 nlohmann::json demFigures(const RunAssembly &run, const parallel::World &world);
 
-// summary.json: what ran, how it ended, its figures and files; `dem` the disks' figures (null:
-// no disks), `ranks` the MPI ranks.
+// How the element work was shared by the ranks (fem::PartitionReport), for summary.json.
+nlohmann::json partitionSummary(const fem::PartitionReport &partition);
+
+// summary.json: what ran, how it ended, its figures and files (the element work's partition
+// among them); `dem` the disks' figures (null: no disks), `ranks` the MPI ranks.
 nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Series &series,
                           const Frames &frames, const LoopResult &loop, double wall, int ranks,
                           const nlohmann::json &dem);

@@ -13,7 +13,9 @@ fem::SolverSettings solverSettings(const Scene &scene, double max_dt) {
           .anti_locking = run.anti_locking,
           .max_dt = max_dt,
           .erode_step_ratio = run.erode_step_ratio,
-          .mass_scaling_step_ratio = run.mass_scaling_step_ratio};
+          .mass_scaling_step_ratio = run.mass_scaling_step_ratio,
+          .rebalance_imbalance = run.rebalance_imbalance,
+          .rebalance_every = static_cast<std::size_t>(run.rebalance_every)};
 }
 
 fem::ContactSettings contactSettings(const Scene &scene, bool walls) {

@@ -336,6 +336,14 @@ const std::vector<Key> &keys() {
              "checkpoint_time) SIGINT and SIGTERM write one too"),
         real("run", "checkpoint_time", r, &R::checkpoint_time, "s", 0, false, 1,
              "simulated time between checkpoints; 0: none by simulated time"),
+        real("run", "rebalance_imbalance", r, &R::rebalance_imbalance, "", 0, true, 10,
+             "with several MPI ranks: the bodies are partitioned among the ranks anew (Zoltan "
+             "RCB, weighted by active elements) when the most loaded rank's active elements pass "
+             "the least a partition of whole bodies allows by this fraction (docs/solver.md)"),
+        integer("run", "rebalance_every", r, &R::rebalance_every, 0, 1e12,
+                "with several MPI ranks: a new partition also before every this many steps, "
+                "whatever the imbalance (to exercise a change of owners); 0: only by the "
+                "imbalance"),
         boolean("contact", "enabled", c, &C::enabled,
                 "contact between the bodies and with the box's walls; false: bodies pass through"),
         real("contact", "friction", c, &C::friction, "", 0, false, 10,

@@ -68,6 +68,10 @@ struct RunSpec {
   // them [s]; 0: none of that kind. Either on: also one on SIGINT or SIGTERM.
   double checkpoint_interval = 0.0;
   double checkpoint_time = 0.0;
+  // With several MPI ranks: the bodies are partitioned among them anew when the element work's
+  // imbalance passes this fraction, and before every rebalance_every-th step (0: not by steps).
+  double rebalance_imbalance = fem::SolverSettings{}.rebalance_imbalance;
+  std::int64_t rebalance_every = 0;
   bool checkpoints() const { return checkpoint_interval > 0.0 || checkpoint_time > 0.0; }
 };
 

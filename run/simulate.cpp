@@ -47,6 +47,26 @@ void checkRunnable(const Scene &scene, const std::string &where) {
   }
 }
 
+namespace {
+
+// The element work's partition among the ranks, for the log: per rank the bodies owned and their
+// active elements at the end, the element-steps over the run, the imbalances and rebalances.
+std::string partitionLine(const fem::PartitionReport &p) {
+  std::ostringstream line;
+  line << "element work over " << p.bodies.size() << " ranks (bodies / active elements / "
+       << "element-steps):";
+  for (std::size_t r = 0; r < p.bodies.size(); ++r)
+    line << (r ? "," : "") << " rank " << r << " " << p.bodies[r] << " / " << p.active_elements[r]
+         << " / " << p.element_steps[r];
+  line << "; imbalance " << p.imbalance << " (over the run " << p.run_imbalance << "); "
+       << p.rebalances << " rebalances (" << p.forced << " forced), " << p.migrated_bodies
+       << " bodies moved; the last partition took the imbalance from " << p.last_before << " to "
+       << p.last_after;
+  return line.str();
+}
+
+} // namespace
+
 RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::World &world,
                    bool resume) {
   const RunSpec &run = scene.run;
@@ -94,6 +114,8 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
   report.elements = model.elements.size();
   report.bodies = model.bodies.size();
   report.balance_error = solver.energy().balance_error;
+  if (writer && place.log && world.size > 1)
+    place.log->line(partitionLine(solver.partition()));
 
   // Whatever happened, the files hold everything computed so far and are whole.
   if (writer) {

@@ -19,11 +19,16 @@ MESOPEN_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 #   renders a frame off screen in the test liggghts_vtk_files; xvfb (xvfb-run) and xauth give that
 #   rendering an X display where there is none (CI). ParaView itself is not needed.
 # - yade runs the test yade_spheres_at_rest (label yade): 63 packages, 118 MB download, 0.8 GB disk.
+# - libtrilinos-zoltan-dev is Zoltan (RCB), which partitions the FE bodies among the MPI ranks
+#   (parallel/zoltan_partitioner.cpp; it brings trilinos-dev's CMake files and Scotch's runtime
+#   libraries). Its CMake target links libptscotch.so, libscotch.so and libz.so by path:
+#   libptscotch-dev (with libscotch-dev) and zlib1g-dev provide them.
 MESOPEN_PACKAGES=(
   build-essential cmake ninja-build pkg-config
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libeigen3-dev
   libhdf5-dev libvtk9-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libgtest-dev
   libliggghts-dev libopenmpi-dev openmpi-bin
+  libtrilinos-zoltan-dev libptscotch-dev zlib1g-dev
   libspectra-dev libsuitesparse-dev
   python3 python3-matplotlib python3-numpy python3-h5py python3-vtk9 xvfb xauth
   clang-format

@@ -1,11 +1,14 @@
-// Runs under mpirun: LIGGGHTS decomposed over the ranks, the FE elements shared by body.
+// Runs under mpirun: LIGGGHTS decomposed over the ranks, the FE elements shared by body (Zoltan's
+// RCB partition of the bodies).
 #include "h5file.hpp"
 #include "run.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <vector>
@@ -59,8 +62,6 @@ double difference(const std::string &a, const std::string &b, const std::string 
   return diff / scale;
 }
 
-} // namespace
-
 // One rank and 2 and 4 (oversubscribed) ranks give the same run but for round-off: the disks'
 // forces may be summed in another order when LIGGGHTS's particles are split over ranks, and the
 // granular dynamics amplifies that. Every rank chooses the disks near the FE bodies by the same
@@ -85,73 +86,151 @@ TEST(Mpi, OneTwoAndFourRanksAgree) {
   }
 }
 
-// The reduced default scene fully meshed (1,115 bodies), to 0.3 us (about 2,500 steps) with a frame
-// every 0.1 us, on one rank and on two sharing the element work (each computes the bodies it owns,
-// the nodes of the other's come by all-gather every step); and the same with time-step erosion at
-// 0.4 of the first step (28 elements eroded: the failed elements' states are gathered too, and both
-// ranks erode alike). Each body's elements are computed by one rank in the same order, the nodes'
-// states are copied exactly and the step is the least of the same values: the projectile's series
-// and the frames' fields agree bit for bit (tolerance 1e-14 of the largest value); the energies are
-// summed over the ranks in another order (internal energy and balance error to 1e-9 of their
-// largest value). And the same with mass scaling at 0.5 of the first step (the mass the elements
-// ask for is gathered, and both ranks add the same).
+// The reduced default scene fully meshed (1,115 bodies), to `end_time` with a frame every 0.1 us
+// and no VTK files, `extra` added to [run].
+std::string feScene(const ScratchDir &dir, const std::string &name, const std::string &end_time,
+                    const std::string &extra) {
+  std::ifstream in(std::string(MESOPEN_SOURCE_DIR) + "/examples/quickstart.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), {}), line, scene;
+  std::istringstream lines(text);
+  while (std::getline(lines, line)) {
+    if (line.starts_with("frame_interval") || line.starts_with("end_time") ||
+        line.starts_with("vtk"))
+      continue;
+    scene += line + "\n";
+    if (line == "[run]")
+      scene += "frame_interval = 1e-7\nend_time = " + end_time + "\nvtk = false\n" + extra;
+  }
+  const std::string path = dir / name;
+  std::ofstream(path) << scene;
+  return path;
+}
+
+// The same FE run but for the order of the energy sums: the projectile's series and every frame's
+// element and node fields equal to the last bit; the energies, summed over the ranks in another
+// order, within 1e-9 of their largest value.
+void expectSameFeRun(const std::string &a, const std::string &b, const std::string &label) {
+  for (const char *series : {"projectile/vy", "projectile/vx", "projectile/lateral_force",
+                             "projectile/rotational_momentum", "projectile/depth"}) {
+    const double d = difference(a + "/run.h5", b + "/run.h5", series);
+    std::printf("%s: %s differs by %.2e of its largest value\n", label.c_str(), series, d);
+    EXPECT_EQ(d, 0.0) << label << ": " << series;
+  }
+  for (const char *series : {"energy/internal", "energy/kinetic", "energy/balance_error"}) {
+    const double d = difference(a + "/run.h5", b + "/run.h5", series);
+    std::printf("%s: %s differs by %.2e of its largest value\n", label.c_str(), series, d);
+    EXPECT_LT(d, 1e-9) << label << ": " << series;
+  }
+  const H5File one = H5File::open(a + "/run.h5"), two = H5File::open(b + "/run.h5");
+  for (int frame = 0;; ++frame) {
+    char group[32];
+    std::snprintf(group, sizeof group, "/frames/%06d/", frame);
+    if (!one.exists(group + std::string("x")))
+      break;
+    for (const char *field : {"x", "y", "vx", "vy", "pressure", "sxx", "plastic_strain"}) {
+      const auto x = one.read<double>(group + std::string(field));
+      const auto y = two.read<double>(group + std::string(field));
+      EXPECT_TRUE(x == y) << label << ": frame " << frame << "'s " << field << " differs";
+    }
+  }
+}
+
+nlohmann::json summaryOf(const std::string &out) {
+  return nlohmann::json::parse(test::readFile(out + "/summary.json"));
+}
+
+} // namespace
+
+// One rank and two sharing the element work (each computes the bodies it owns, the nodes of the
+// other's come by all-gather every step), on the reduced default scene fully meshed to 0.3 us
+// (about 2,700 steps); and the same with time-step erosion at 0.4 of the first step (28 elements
+// eroded: the failed elements' states are gathered too, and both ranks erode alike) and a new
+// partition forced every 400 steps; and with mass scaling at 0.5 of the first step (the mass the
+// elements ask for is gathered, and both ranks add the same). Each body's elements are computed by
+// one rank in the same order, a body that changes owner brings its elements' state, the nodes'
+// states are copied exactly and the step is the least of the same values: the projectile's
+// series and the frames' fields agree bit for bit. The bodies are Zoltan's RCB partition weighted
+// by active elements: over the plain run the ranks' element-steps differ from their mean by less
+// than 5 % (round-robin ownership, body b on rank b mod 2: 21 %).
 TEST(Mpi, TwoRanksShareTheElementWork) {
   for (const std::string extra :
-       {"", "erode_step_ratio = 0.4\n", "mass_scaling_step_ratio = 0.5\n"}) {
+       {"", "erode_step_ratio = 0.4\nrebalance_every = 400\n", "mass_scaling_step_ratio = 0.5\n"}) {
     const bool eroding = extra.starts_with("erode"), scaling = extra.starts_with("mass");
     ScratchDir dir(eroding ? "mpi-fe-eroding" : scaling ? "mpi-fe-mass-scaling" : "mpi-fe");
-    const char *label = eroding ? ", eroding" : scaling ? ", mass scaling" : "";
-    std::ifstream in(std::string(MESOPEN_SOURCE_DIR) + "/examples/quickstart.toml");
-    std::string text((std::istreambuf_iterator<char>(in)), {}), line, scene;
-    std::istringstream lines(text);
-    while (std::getline(lines, line)) {
-      if (line.starts_with("frame_interval") || line.starts_with("end_time") ||
-          line.starts_with("vtk"))
-        continue;
-      scene += line + "\n";
-      if (line == "[run]")
-        scene += "frame_interval = 1e-7\nend_time = 0.3e-6\nvtk = false\n" + extra;
-    }
-    std::ofstream(dir / "fe.toml") << scene;
-    ASSERT_EQ(run(0, dir / "fe.toml", dir / "one").code, 0);
-    const test::Result r = run(2, dir / "fe.toml", dir / "two");
+    const std::string label = std::string("2 ranks sharing the elements") +
+                              (eroding   ? ", eroding, rebalanced every 400 steps"
+                               : scaling ? ", mass scaling"
+                                         : "");
+    const std::string scene = feScene(dir, "fe.toml", "0.3e-6", extra);
+    ASSERT_EQ(run(0, scene, dir / "one").code, 0);
+    const test::Result r = run(2, scene, dir / "two");
     ASSERT_EQ(r.code, 0) << r.output;
-    const std::string one_summary = test::readFile(dir / "one/summary.json"),
-                      two_summary = test::readFile(dir / "two/summary.json");
-    EXPECT_NE(two_summary.find("\"ranks\": 2"), std::string::npos);
-    if (!extra.empty()) { // the same elements eroded, the same mass added
-      const std::size_t at = one_summary.find(eroding ? "\"eroded_elements\"" : "\"added_mass\"");
-      ASSERT_NE(at, std::string::npos);
-      const std::string count = one_summary.substr(at, one_summary.find(',', at) - at);
-      EXPECT_EQ(count.find(": 0"), std::string::npos) << count;
-      EXPECT_NE(two_summary.find(count), std::string::npos) << count;
+    const nlohmann::json one = summaryOf(dir / "one"), two = summaryOf(dir / "two");
+    EXPECT_EQ(two["ranks"], 2);
+    if (eroding) {
+      EXPECT_GT(one["eroded_elements"].get<int>(), 0);
+      EXPECT_EQ(two["eroded_elements"], one["eroded_elements"]);
     }
-    for (const char *series : {"projectile/vy", "projectile/vx", "projectile/lateral_force",
-                               "projectile/rotational_momentum", "projectile/depth"}) {
-      const double d = difference(dir / "one/run.h5", dir / "two/run.h5", series);
-      std::printf("2 ranks sharing the elements%s: %s differs by %.2e of its largest value\n",
-                  label, series, d);
-      EXPECT_LE(d, 1e-14) << series;
+    if (scaling) {
+      EXPECT_GT(one["mass_scaling"]["added_mass"].get<double>(), 0.0);
+      EXPECT_EQ(two["mass_scaling"]["added_mass"], one["mass_scaling"]["added_mass"]);
     }
-    for (const char *series : {"energy/internal", "energy/kinetic", "energy/balance_error"}) {
-      const double d = difference(dir / "one/run.h5", dir / "two/run.h5", series);
-      std::printf("2 ranks sharing the elements%s: %s differs by %.2e of its largest value\n",
-                  label, series, d);
-      EXPECT_LT(d, 1e-9) << series;
+    expectSameFeRun(dir / "one", dir / "two", label);
+    const nlohmann::json &p = two["partition"];
+    std::printf("%s: partition %s\n", label.c_str(), p.dump().c_str());
+    EXPECT_EQ(p["method"], "zoltan rcb");
+    if (extra.empty()) { // rebalanced by the imbalance alone, as the grains woke
+      EXPECT_GT(p["rebalances"].get<int>(), 0);
+      EXPECT_EQ(p["forced_rebalances"], 0);
+      EXPECT_LT(p["run_imbalance"].get<double>(), 0.05);
     }
-    const H5File one = H5File::open(dir / "one/run.h5"), two = H5File::open(dir / "two/run.h5");
-    for (const char *field : {"x", "vy", "pressure", "sxx", "plastic_strain"}) {
-      const auto a = one.read<double>(std::string("/frames/000003/") + field);
-      const auto b = two.read<double>(std::string("/frames/000003/") + field);
-      ASSERT_EQ(a.size(), b.size()) << field;
-      double diff = 0.0, scale = 0.0;
-      for (std::size_t i = 0; i < a.size(); ++i)
-        diff = std::max(diff, std::abs(a[i] - b[i])), scale = std::max(scale, std::abs(a[i]));
-      std::printf("2 ranks sharing the elements%s: frame 3's %s differs by %.2e of its largest "
-                  "value\n",
-                  label, field, diff / scale);
-      EXPECT_LE(diff, 1e-14 * scale) << field;
+  }
+}
+
+// One, two and four ranks on the fully meshed scene to 0.1 us (548 steps) with time-step erosion
+// at 0.4 of the first step (5 elements eroded) and a new partition forced every 100 steps (5 in
+// the run, every body's owner as RCB gives it for the loads of that step): the same run but for
+// the energies' sum order, and each rank's figures add up to the run's (bodies, active elements,
+// element-steps). On one rank the keys change nothing: run.h5 is the same bytes as without them.
+TEST(Mpi, OneTwoAndFourRanksAgreeWhileRebalancing) {
+  ScratchDir dir("mpi-fe-rebalancing");
+  const std::string scene =
+      feScene(dir, "fe.toml", "0.1e-6", "erode_step_ratio = 0.4\nrebalance_every = 100\n");
+  const std::string plain = feScene(dir, "plain.toml", "0.1e-6", "erode_step_ratio = 0.4\n");
+  ASSERT_EQ(run(0, scene, dir / "one").code, 0);
+  ASSERT_EQ(run(0, plain, dir / "plain").code, 0);
+  const std::string same = "/usr/bin/python3 " + std::string(MESOPEN_SOURCE_DIR) +
+                           "/tests/support/same_run.py " + (dir / "one/run.h5") + " " +
+                           (dir / "plain/run.h5");
+  EXPECT_EQ(std::system(same.c_str()), 0) << same;
+  const nlohmann::json one = summaryOf(dir / "one");
+  EXPECT_GT(one["eroded_elements"].get<int>(), 0);
+  EXPECT_EQ(one["partition"]["method"], "one rank");
+  EXPECT_EQ(one["partition"]["rebalances"], 0);
+  for (int ranks : {2, 4}) {
+    const std::string out = dir / ("ranks-" + std::to_string(ranks));
+    const test::Result r = run(ranks, scene, out);
+    ASSERT_EQ(r.code, 0) << r.output;
+    const std::string label = std::to_string(ranks) + " ranks rebalanced every 100 steps";
+    const nlohmann::json summary = summaryOf(out);
+    EXPECT_EQ(summary["eroded_elements"], one["eroded_elements"]);
+    EXPECT_EQ(summary["steps"], one["steps"]);
+    expectSameFeRun(dir / "one", out, label);
+    const nlohmann::json &p = summary["partition"];
+    std::printf("%s: partition %s\n", label.c_str(), p.dump().c_str());
+    const auto steps = summary["steps"].get<std::size_t>();
+    EXPECT_EQ(p["forced_rebalances"].get<std::size_t>(), (steps - 1) / 100);
+    EXPECT_GE(p["rebalances"], p["forced_rebalances"]);
+    EXPECT_GT(p["migrated_bodies"].get<int>(), 0);
+    ASSERT_EQ(p["bodies"].size(), static_cast<std::size_t>(ranks));
+    std::size_t bodies = 0;
+    double element_steps = 0.0;
+    for (int rank = 0; rank < ranks; ++rank) {
+      bodies += p["bodies"][rank].get<std::size_t>();
+      element_steps += p["element_steps"][rank].get<double>();
     }
+    EXPECT_EQ(bodies, summary["model"]["bodies"].get<std::size_t>());
+    EXPECT_EQ(element_steps, summary["element_steps"].get<double>());
   }
 }
 

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Whether two run.h5 files hold the same run: every group, dataset (shape, type and every bit of
-its values) and attribute equal, but for the checkpoint keys of the root attribute `scene` (the
-composed scene), which say only when checkpoints are written.
+its values) and attribute equal, but for the checkpoint and rebalance keys of the root attribute
+`scene` (the composed scene), which say only when checkpoints are written and how the element work
+is shared by MPI ranks.
 
     /usr/bin/python3 same_run.py A B     exit 0: the same run; 1: not (what differs on stdout)
 """
@@ -10,11 +11,12 @@ import sys
 import h5py
 import numpy as np
 
-CHECKPOINT_KEYS = ("checkpoint_interval = ", "checkpoint_time = ")
+IGNORED_KEYS = ("checkpoint_interval = ", "checkpoint_time = ", "rebalance_imbalance = ",
+                "rebalance_every = ")
 
 
-def scene_without_checkpoints(text):
-    return "\n".join(line for line in text.split("\n") if not line.startswith(CHECKPOINT_KEYS))
+def scene_without_ignored_keys(text):
+    return "\n".join(line for line in text.split("\n") if not line.startswith(IGNORED_KEYS))
 
 
 def items(path):
@@ -24,7 +26,7 @@ def items(path):
         def add(name, obj):
             for key, value in obj.attrs.items():
                 if name == "/" and key == "scene":
-                    value = scene_without_checkpoints(value)
+                    value = scene_without_ignored_keys(value)
                 out["%s@%s" % (name, key)] = repr(value)
             if isinstance(obj, h5py.Dataset):
                 data = obj[()]
