@@ -2,6 +2,7 @@
 
 #include <zoltan.h>
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -48,7 +49,7 @@ void points(void *data, int /*gid_entries*/, int /*lid_entries*/, int count,
 
 } // namespace
 
-ZoltanRcb::ZoltanRcb(MPI_Comm comm) {
+ZoltanRcb::ZoltanRcb(MPI_Comm comm) : comm_(comm) {
   float version = 0.0f;
   if (Zoltan_Initialize(0, nullptr, &version) != ZOLTAN_OK)
     throw std::runtime_error("Zoltan_Initialize failed");
@@ -76,6 +77,12 @@ ZoltanRcb::ZoltanRcb(MPI_Comm comm) {
 ZoltanRcb::~ZoltanRcb() { Zoltan_Destroy(&zoltan_); }
 
 std::vector<int> ZoltanRcb::partition(const PartitionItems &mine) const {
+  int rank = 0;
+  MPI_Comm_rank(comm_, &rank);
+  unsigned long count = mine.size(), total = 0;
+  MPI_Allreduce(&count, &total, 1, MPI_UNSIGNED_LONG, MPI_SUM, comm_);
+  if (total < 2)
+    return std::vector<int>(mine.size(), rank);
   void *data = const_cast<PartitionItems *>(&mine); // Zoltan's callbacks take void *; read only
   Zoltan_Set_Num_Obj_Fn(zoltan_, itemCount, data);
   Zoltan_Set_Obj_List_Fn(zoltan_, itemList, data);
@@ -90,10 +97,14 @@ std::vector<int> ZoltanRcb::partition(const PartitionItems &mine) const {
       Zoltan_LB_Partition(zoltan_, &changes, &gid_entries, &lid_entries, &imports, &import_gids,
                           &import_lids, &import_procs, &import_parts, &exports, &export_gids,
                           &export_lids, &export_procs, &export_parts);
-  if (status != ZOLTAN_OK) {
+  // An error (ZOLTAN_FATAL, ZOLTAN_MEMERR: negative; a warning is positive, its parts valid) on
+  // any process, known to every one.
+  int error = std::min(status, 0), worst = 0;
+  MPI_Allreduce(&error, &worst, 1, MPI_INT, MPI_MIN, comm_);
+  if (worst < 0) {
     Zoltan_LB_Free_Part(&import_gids, &import_lids, &import_procs, &import_parts);
     Zoltan_LB_Free_Part(&export_gids, &export_lids, &export_procs, &export_parts);
-    throw std::runtime_error("Zoltan's RCB partition failed (status " + std::to_string(status) +
+    throw std::runtime_error("Zoltan's RCB partition failed (status " + std::to_string(worst) +
                              ")");
   }
   // With RETURN_LISTS = PARTS the export lists hold every item of this process and its part;
@@ -103,9 +114,10 @@ std::vector<int> ZoltanRcb::partition(const PartitionItems &mine) const {
     to[export_lids[k]] = export_parts[k];
   Zoltan_LB_Free_Part(&import_gids, &import_lids, &import_procs, &import_parts);
   Zoltan_LB_Free_Part(&export_gids, &export_lids, &export_procs, &export_parts);
-  for (int rank : to)
-    if (rank < 0)
-      throw std::runtime_error("Zoltan's RCB partition left an item without a part");
+  int missing = std::count(to.begin(), to.end(), -1), any_missing = 0;
+  MPI_Allreduce(&missing, &any_missing, 1, MPI_INT, MPI_MAX, comm_);
+  if (any_missing > 0)
+    throw std::runtime_error("Zoltan's RCB partition left an item without a part");
   return to;
 }
 

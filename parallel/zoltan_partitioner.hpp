@@ -18,11 +18,13 @@ public:
   ~ZoltanRcb() override;
   ZoltanRcb(const ZoltanRcb &) = delete;
   ZoltanRcb &operator=(const ZoltanRcb &) = delete;
-  // Throws std::runtime_error if Zoltan reports an error (on every process: Zoltan's error is
-  // collective).
+  // Fewer than two items in all (which Zoltan's RCB refuses on the processes left without one):
+  // each stays where it is. Throws std::runtime_error on every process if Zoltan reports an error
+  // on any (its errors are not always on every process).
   std::vector<int> partition(const PartitionItems &mine) const override;
 
 private:
+  MPI_Comm comm_;
   Zoltan_Struct *zoltan_ = nullptr;
 };
 
