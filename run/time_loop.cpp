@@ -82,28 +82,36 @@ double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double 
   const double g = d > 0.0 ? (count * stn - st * sn) / d : 0.0, n0 = (sn - g * st) / count;
   const double dt = span / static_cast<double>(now.steps - marks[first].steps);
   const double element_steps_left = time_left / dt * std::max(0.0, n0 + 0.5 * g * time_left);
-  // Wall seconds per element-step: the lower quartile over the intervals between marks. Other
-  // processes on the machine only ever lengthen an interval, so a burst of them (the mean's
-  // undoing) is left out, while a pace that changes for good moves the quartile.
-  std::vector<double> pace;
+  // Wall seconds per element-step: the median over the element-steps of the half (the pace that
+  // half of them ran faster than). An interval slowed by other work on the machine holds few
+  // element-steps, so a burst of it weighs little, where the intervals' plain mean follows it.
+  std::vector<std::pair<double, double>> pace; // (wall seconds per element-step, element-steps)
+  double work_done = 0.0;
   for (std::size_t i = first + 1; i < marks.size(); ++i) {
     const ProgressMark &m = marks[i], &p = marks[i - 1];
     const double work = 0.5 * (std::max(m.elements, 1.0) + std::max(p.elements, 1.0)) *
                         static_cast<double>(m.steps - p.steps);
-    if (work > 0.0)
-      pace.push_back(((m.wall - m.output) - (p.wall - p.output)) / work);
+    if (work > 0.0) {
+      pace.emplace_back(((m.wall - m.output) - (p.wall - p.output)) / work, work);
+      work_done += work;
+    }
   }
   if (pace.empty())
     return 0.0;
-  const auto quartile = pace.begin() + static_cast<std::ptrdiff_t>(pace.size() / 4);
-  std::nth_element(pace.begin(), quartile, pace.end());
+  std::sort(pace.begin(), pace.end());
+  double median = pace.back().first, below = 0.0;
+  for (const auto &[wall_per_step, work] : pace)
+    if ((below += work) >= 0.5 * work_done) {
+      median = wall_per_step;
+      break;
+    }
   // the frames to come: one per frame_interval to the end, and the last
   double frames_left = 0.0;
   if (frame_interval > 0.0 && now.frames > 0)
     frames_left = std::floor((now.time + time_left) / frame_interval) -
                   std::floor(now.time / frame_interval) + 1.0;
   const double frame_cost = now.frames > 0 ? now.output / static_cast<double>(now.frames) : 0.0;
-  return *quartile * element_steps_left + frames_left * frame_cost;
+  return median * element_steps_left + frames_left * frame_cost;
 }
 
 void Progress::clear() const {

@@ -32,8 +32,8 @@ struct ProgressMark {
 // first, from the marks so far (the last is now). The work left is counted in element-steps: the
 // depth is reached at the projectile's speed now and its mean deceleration over the last half of
 // the run so far, in steps of the mean step over that half, with the active elements growing as
-// a line fitted over it. An element-step costs the lower quartile of its wall time over the
-// intervals of that half (the frames' time taken out); the frames to come, one per
+// a line fitted over it. An element-step costs the median of its wall time over the element-steps
+// of that half (the frames' time taken out); the frames to come, one per
 // frame_interval [s] (0: none) and the last, cost their mean so far. With fewer than five marks
 // in that half: the share left at the pace so far.
 double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double end_depth,
