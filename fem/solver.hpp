@@ -127,6 +127,8 @@ public:
 
   double time() const { return time_; }
   std::size_t steps() const { return steps_; }
+  // The processes that share the run (one: the serial communicator).
+  const parallel::Communicator &processes() const { return comm_; }
   double dt() const { return dt_; } // the stable step, which step() takes short of the end
   // The steps end exactly at `time`: within 20 stable steps of it the rest is taken in equal steps,
   // so that the step changes once and by a twentieth at most, unless the whole run is shorter than

@@ -143,12 +143,31 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
       result.end = "max_steps";
     return !result.end.empty();
   };
+  // The output of a step (series, frames, checkpoints: the first process writes the files), its
+  // failure known to every process, which all end at that step: the others would otherwise wait
+  // for the failed one in the next step's exchanges.
+  auto together = [&](const auto &output) {
+    std::string failure;
+    try {
+      output();
+    } catch (const std::exception &e) {
+      failure = e.what();
+    }
+    const parallel::Communicator &processes = solver.processes();
+    if (processes.size() > 1 && processes.min(failure.empty() ? 1.0 : 0.0) == 0.0 &&
+        failure.empty())
+      failure = "another process failed at step " + std::to_string(solver.steps()) +
+                " (its message is in mpirun's output)";
+    if (!failure.empty())
+      throw std::runtime_error(failure);
+  };
   try {
     // (a run continued from a checkpoint has its first sample and frame, and had not ended)
-    if (!checkpoints.resumed()) {
-      series.sample(model, solver);
-      frames.offer(model, solver, true);
-    }
+    if (!checkpoints.resumed())
+      together([&] {
+        series.sample(model, solver);
+        frames.offer(model, solver, true);
+      });
     // the frames of the loop and the wall time they take, for the time left (Progress)
     const std::size_t frames_before = frames.size();
     const double output_before = frames.seconds();
@@ -181,15 +200,17 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
                                : std::vector<std::pair<std::uint32_t, std::uint32_t>>{},
                        contact ? contact->lastContacts()
                                : std::vector<fem::Contact::BodyContact>{});
-      const bool due = solver.steps() % every == 0;
-      if (due)
-        series.sample(model, solver);
-      last = ended(due);
-      if (last && !due)
-        series.sample(model, solver);
-      frames.offer(model, solver, last);
-      if (!last)
-        checkpoints.afterStep(result);
+      together([&] {
+        const bool due = solver.steps() % every == 0;
+        if (due)
+          series.sample(model, solver);
+        last = ended(due);
+        if (last && !due)
+          series.sample(model, solver);
+        frames.offer(model, solver, last);
+        if (!last)
+          checkpoints.afterStep(result);
+      });
       if (progress.due())
         progress.update(solver, series.depth(model), -series.last("projectile/vy"),
                         frames.size() - frames_before, frames.seconds() - output_before);
