@@ -38,6 +38,17 @@ std::string errorOf(const ScratchDir &dir, const std::string &campaign) {
   return "";
 }
 
+// `mesopen campaign CAMPAIGN -o OUT --threads 1` started in a child process: its pid (-1: none).
+pid_t startCampaign(const std::string &campaign, const std::string &out) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::execl(MESOPEN_BINARY, MESOPEN_BINARY, "campaign", campaign.c_str(), "-o", out.c_str(),
+            "--threads", "1", static_cast<char *>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
 } // namespace
 
 // Student's t, two-sided 95 %: the values of standard tables (e.g. NIST/SEMATECH e-Handbook,
@@ -232,13 +243,8 @@ TEST(Campaign, RunEndsWithItsKilledCampaign) {
   mesopen::test::writeFile(dir / "c.toml",
                            "[campaign]\nbase = \"base.toml\"\n[[run]]\nname = \"a\"\n");
   const std::string campaign = dir / "c.toml", out = dir / "out";
-  const pid_t pid = ::fork();
+  const pid_t pid = startCampaign(campaign, out);
   ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    ::execl(MESOPEN_BINARY, MESOPEN_BINARY, "campaign", campaign.c_str(), "-o", out.c_str(),
-            "--threads", "1", static_cast<char *>(nullptr));
-    ::_exit(127);
-  }
   auto find = [&](const std::string &name) {
     std::error_code ec;
     for (const auto &f : std::filesystem::recursive_directory_iterator(out, ec))
@@ -288,13 +294,8 @@ TEST(Campaign, InterruptedRunContinuesFromItsCheckpoint) {
     SCOPED_TRACE(damaged ? "damaged checkpoint" : "checkpoint");
     const std::string out = dir / (damaged ? "damaged" : "stopped");
     const std::string replicate = out + "/runs/a/r1";
-    const pid_t pid = ::fork();
+    const pid_t pid = startCampaign(campaign, out);
     ASSERT_GE(pid, 0);
-    if (pid == 0) {
-      ::execl(MESOPEN_BINARY, MESOPEN_BINARY, "campaign", campaign.c_str(), "-o", out.c_str(),
-              "--threads", "1", static_cast<char *>(nullptr));
-      ::_exit(127);
-    }
     for (int i = 0; i < 1200 && !std::filesystem::exists(replicate + "/checkpoint/state.h5"); ++i)
       ::usleep(25000);
     ::kill(pid, SIGTERM);
