@@ -12,7 +12,7 @@ projectile length deep for run 6): the time to that depth, the projectile's spee
 |H| (rotational momentum, Eq. 3.13 of the thesis), the lateral displacement of its centre of mass
 and its tilt. For each safety and each measure, from the three finest meshes h1 < h2 < h3:
 
-  - the observed order p of the seeds' mean, from e21 = f2 - f1 and e32 = f3 - f2 (Celik et al.,
+  - the observed order p of the mean over the seeds run at every mesh, from e21 = f2 - f1 and e32 = f3 - f2 (Celik et al.,
     J. Fluids Eng. 130, 078001, 2008, Eqs. 3-4):
         p = |ln|e32 / e21| + q(p)| / ln r21,  q(p) = ln((r21^p - s) / (r32^p - s)),  s = sign(e32 / e21)
     with r21 = h2 / h1, r32 = h3 / h2; the differences changing sign is oscillatory convergence
@@ -120,9 +120,11 @@ def analyse(rows):
                                  "values": {str(r["seed"]): r[key] for r in mine
                                             if r["mesh"] == m}})
             m = {"per_mesh": per_mesh}
-            if len(meshes) >= 3:
+            if len(meshes) >= 3 and full:
                 h = meshes[:3]
-                f = [per_mesh[i]["mean"] for i in range(3)]
+                # the order from the seeds run at every mesh (the same layouts at each mesh)
+                f = [float(np.mean([per_mesh[i]["values"][str(s)] for s in full]))
+                     for i in range(3)]
                 kind, p = observed_order(h, f)
                 m["kind"], m["order"] = kind, p
                 seed_kinds = {}
@@ -189,7 +191,7 @@ def markdown(result):
             label, unit, scale = MEASURES[key]
             cells = ["%.4g ± %.2g" % (scale * c["mean"], scale * c["sd"]) for c in m["per_mesh"]]
             if "kind" not in m:
-                tail = ["(fewer than 3 meshes)", "", ""]
+                tail = ["(fewer than 3 meshes, or no seed at every mesh)", "", ""]
             else:
                 order = "%.2f" % m["order"] if m["order"] is not None else m["kind"]
                 at0 = ("%.4g ± %.2g" % (scale * m["extrapolated"], scale * m["uncertainty"])
