@@ -100,9 +100,9 @@ double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double 
     return 0.0;
   std::sort(pace.begin(), pace.end());
   double median = pace.back().first, below = 0.0;
-  for (const auto &[wall_per_step, work] : pace)
+  for (const auto &[wall_per_element_step, work] : pace)
     if ((below += work) >= 0.5 * work_done) {
-      median = wall_per_step;
+      median = wall_per_element_step;
       break;
     }
   // the frames to come: one per frame_interval to the end, and the last
