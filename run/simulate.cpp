@@ -100,7 +100,10 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
   // continued).
   Checkpoints checkpoints(scene, dir, assembly, series, frames, h5 ? &*h5 : nullptr, world, resume);
   Progress progress(writer && place.progress, writer ? place.log : nullptr, run.end_time,
-                    run.end_depth * scene.projectile.length, run.frame_interval);
+                    run.end_depth * scene.projectile.length, run.frame_interval,
+                    model.elements.size());
+  if (assembly.coupled)
+    progress.countByTheStep([&coupled = *assembly.coupled] { return coupled.seconds(); });
   // The census of levels covers the steps this process takes (not those before a checkpoint).
   std::optional<fem::LevelCensus> census;
   if (run.level_census_interval > 0)

@@ -20,7 +20,7 @@ void Progress::update(const fem::Solver &solver, double depth, double speed, std
   last_ = Clock::now();
   const double wall = secondsSince(start_), t = solver.time();
   marks_.push_back({wall, t, depth, speed, output, frames, solver.steps(),
-                    static_cast<double>(solver.activeElements())});
+                    static_cast<double>(solver.activeElements()), stepwise_ ? stepwise_() : 0.0});
   const double done =
       std::min(1.0, std::max(t / end_time_, end_depth_ > 0.0 ? depth / end_depth_ : 0.0));
   char line[240];
@@ -30,7 +30,7 @@ void Progress::update(const fem::Solver &solver, double depth, double speed, std
                 solver.steps(), 1e9 * t, 1e3 * depth, 1e12 * solver.dt(),
                 static_cast<double>(solver.steps() - marks_.front().steps) /
                     std::max(wall - marks_.front().wall, 1e-9),
-                100.0 * done, wallLeft(marks_, end_time_, end_depth_, frame_interval_));
+                100.0 * done, wallLeft(marks_, end_time_, end_depth_, frame_interval_, elements_));
   if (terminal_)
     std::fprintf(stderr, "\r\033[Kmesopen run: %s", line);
   if (log_ && static_cast<int>(20.0 * done) > logged_) {
@@ -39,8 +39,24 @@ void Progress::update(const fem::Solver &solver, double depth, double speed, std
   }
 }
 
+namespace {
+
+// The value that the values holding half the weight lie below: (value, weight) pairs, sorted here.
+double weightedMedian(std::vector<std::pair<double, double>> &values) {
+  std::sort(values.begin(), values.end());
+  double total = 0.0, below = 0.0;
+  for (const auto &[value, weight] : values)
+    total += weight;
+  for (const auto &[value, weight] : values)
+    if ((below += weight) >= 0.5 * total)
+      return value;
+  return values.back().first;
+}
+
+} // namespace
+
 double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double end_depth,
-                double frame_interval) {
+                double frame_interval, double max_elements) {
   if (marks.empty())
     return 0.0;
   const ProgressMark &now = marks.back();
@@ -71,7 +87,7 @@ double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double 
   }
   // Element-steps left: time_left / dt steps at the step's mean over the half, of the active
   // elements fitted as a line in the simulated time (they grow as grains start to move),
-  // n(t_now + tau) = n0 + g tau, so n0 + g time_left / 2 on average.
+  // n(t_now + tau) = n0 + g tau up to max_elements, averaged over the time left.
   double st = 0.0, sn = 0.0, stt = 0.0, stn = 0.0;
   const double count = static_cast<double>(marks.size() - first);
   for (std::size_t i = first; i < marks.size(); ++i) {
@@ -80,38 +96,41 @@ double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double 
   }
   const double d = count * stt - st * st;
   const double g = d > 0.0 ? (count * stn - st * sn) / d : 0.0, n0 = (sn - g * st) / count;
+  double elements = std::max(0.0, n0 + 0.5 * g * time_left);
+  if (max_elements > 0.0 && g > 0.0 && time_left > 0.0 && n0 + g * time_left > max_elements) {
+    const double reached = std::clamp((max_elements - n0) / g, 0.0, time_left); // n = max there
+    elements =
+        (std::max(0.0, n0 + 0.5 * g * reached) * reached + max_elements * (time_left - reached)) /
+        time_left;
+  }
   const double dt = span / static_cast<double>(now.steps - marks[first].steps);
-  const double element_steps_left = time_left / dt * std::max(0.0, n0 + 0.5 * g * time_left);
+  const double element_steps_left = time_left / dt * elements;
   // Wall seconds per element-step: the median over the element-steps of the half (the pace that
   // half of them ran faster than). An interval slowed by other work on the machine holds few
   // element-steps, so a burst of it weighs little, where the intervals' plain mean follows it.
-  std::vector<std::pair<double, double>> pace; // (wall seconds per element-step, element-steps)
-  double work_done = 0.0;
+  // The stepwise work's wall seconds per step likewise, over the steps of the half.
+  std::vector<std::pair<double, double>> per_element, per_step; // (wall seconds per unit, units)
   for (std::size_t i = first + 1; i < marks.size(); ++i) {
     const ProgressMark &m = marks[i], &p = marks[i - 1];
-    const double work = 0.5 * (std::max(m.elements, 1.0) + std::max(p.elements, 1.0)) *
-                        static_cast<double>(m.steps - p.steps);
+    const double steps = static_cast<double>(m.steps - p.steps);
+    const double work = 0.5 * (std::max(m.elements, 1.0) + std::max(p.elements, 1.0)) * steps;
     if (work > 0.0) {
-      pace.emplace_back(((m.wall - m.output) - (p.wall - p.output)) / work, work);
-      work_done += work;
+      const double stepwise = m.stepwise - p.stepwise;
+      per_element.emplace_back(((m.wall - m.output) - (p.wall - p.output) - stepwise) / work, work);
+      per_step.emplace_back(stepwise / steps, steps);
     }
   }
-  if (pace.empty())
+  if (per_element.empty())
     return 0.0;
-  std::sort(pace.begin(), pace.end());
-  double median = pace.back().first, below = 0.0;
-  for (const auto &[wall_per_element_step, work] : pace)
-    if ((below += work) >= 0.5 * work_done) {
-      median = wall_per_element_step;
-      break;
-    }
+  const double steps_left = time_left / dt;
   // the frames to come: one per frame_interval to the end, and the last
   double frames_left = 0.0;
   if (frame_interval > 0.0 && now.frames > 0)
     frames_left = std::floor((now.time + time_left) / frame_interval) -
                   std::floor(now.time / frame_interval) + 1.0;
   const double frame_cost = now.frames > 0 ? now.output / static_cast<double>(now.frames) : 0.0;
-  return median * element_steps_left + frames_left * frame_cost;
+  return weightedMedian(per_element) * element_steps_left + weightedMedian(per_step) * steps_left +
+         frames_left * frame_cost;
 }
 
 void Progress::clear() const {

@@ -11,6 +11,7 @@
 #include "scene.hpp"
 #include "solver.hpp"
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -20,33 +21,40 @@ class Checkpoints;
 
 // A moment of a run, for the estimate of the time left: wall seconds since the loop's start,
 // simulated time [s], the projectile's depth [m] and downward speed [m/s], the frames written so
-// far and the wall seconds they took (within `wall`), the steps taken and the active elements.
+// far and the wall seconds they took (within `wall`), the steps taken, the active elements, and
+// the wall seconds (within `wall`) of the work whose cost goes by the step, not by the element
+// (the FE-DEM coupling: the DEM steps and the disks' contact).
 struct ProgressMark {
   double wall = 0.0, time = 0.0, depth = 0.0, speed = 0.0;
   double output = 0.0;
   std::size_t frames = 0, steps = 0;
   double elements = 0.0;
+  double stepwise = 0.0;
 };
 
 // The wall seconds left until end_time, or end_depth [m] (0: none) if the projectile gets there
 // first, from the marks so far (the last is now). The work left is counted in element-steps: the
 // depth is reached at the projectile's speed now and its mean deceleration over the last half of
 // the run so far, in steps of the mean step over that half, with the active elements growing as
-// a line fitted over it. An element-step costs the median of its wall time over the element-steps
-// of that half (the frames' time taken out); the frames to come, one per
-// frame_interval [s] (0: none) and the last, cost their mean so far. With fewer than five marks
-// in that half: the share left at the pace so far.
+// a line fitted over it, up to max_elements (the model's: 0, none). An element-step costs the
+// median of its wall time over the element-steps of that half (the frames' and the stepwise work's
+// time taken out), a step of the stepwise work the median over the steps of that half; the frames
+// to come, one per frame_interval [s] (0: none) and the last, cost their mean so far. With fewer
+// than five marks in that half: the share left at the pace so far.
 double wallLeft(const std::vector<ProgressMark> &marks, double end_time, double end_depth,
-                double frame_interval = 0.0);
+                double frame_interval = 0.0, double max_elements = 0.0);
 
 // A run's progress: on a terminal one line, rewritten in place at most four times a second (step,
 // simulated time, depth, step size, speed, share done, wall time left: wallLeft); in the log one
 // line per 5 % done.
 class Progress {
 public:
-  Progress(bool terminal, CommandLog *log, double end_time, double end_depth, double frame_interval)
+  // elements: the model's, which the active ones never pass.
+  Progress(bool terminal, CommandLog *log, double end_time, double end_depth, double frame_interval,
+           std::size_t elements)
       : terminal_(terminal), log_(log && log->on() ? log : nullptr), end_time_(end_time),
-        end_depth_(end_depth), frame_interval_(frame_interval) {}
+        end_depth_(end_depth), frame_interval_(frame_interval),
+        elements_(static_cast<double>(elements)) {}
   // Time for an update: a quarter of a second since the last (never when it shows nothing).
   bool due() const;
   // The state now: `depth` and `speed` the projectile's, downward [m, m/s]; the frames written
@@ -54,12 +62,15 @@ public:
   void update(const fem::Solver &solver, double depth, double speed, std::size_t frames,
               double output);
   void clear() const;
+  // The wall seconds so far of the work whose cost goes by the step (ProgressMark::stepwise).
+  void countByTheStep(std::function<double()> seconds) { stepwise_ = std::move(seconds); }
 
 private:
   bool terminal_;
   CommandLog *log_;
-  double end_time_, end_depth_, frame_interval_;
+  double end_time_, end_depth_, frame_interval_, elements_;
   Clock::time_point start_ = Clock::now(), last_ = Clock::now();
+  std::function<double()> stepwise_;
   std::vector<ProgressMark> marks_; // one per update
   int logged_ = 0;                  // 5 % steps logged
 };
