@@ -189,7 +189,8 @@ def main():
                 worst = max(worst, in_spreads)
         row["error"] = worst
     for row in table:
-        row["pareto"] = not any(o["wall"] < row["wall"] and o["error"] < row["error"]
+        row["pareto"] = not any(o["wall"] <= row["wall"] and o["error"] <= row["error"] and
+                                (o["wall"] < row["wall"] or o["error"] < row["error"])
                                 for o in table if o is not row)
 
     md = ["# Run 6: run time against error", "",
@@ -228,10 +229,10 @@ def plot(table, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for row in table:
+    for k, row in enumerate(sorted(table, key=lambda r: r["wall"])):
         ax.plot(row["wall"], row["error"], "o", color="C0" if row["pareto"] else "0.6")
         ax.annotate(row["label"], (row["wall"], row["error"]), fontsize=7,
-                    xytext=(4, 3), textcoords="offset points")
+                    xytext=(4, 3 if k % 2 == 0 else -9), textcoords="offset points")
     front = sorted((r for r in table if r["pareto"]), key=lambda r: r["wall"])
     ax.plot([r["wall"] for r in front], [r["error"] for r in front], "-", color="C0",
             label="Pareto front")
