@@ -25,7 +25,9 @@ seeds and its ratio to fe-10-plain's, and for each measure the mean over the see
 against the same seed's reference with its standard deviation; the error in seed spreads is that
 mean error over the reference's seed-to-seed standard deviation (below 1: smaller than what the
 layout alone changes), the largest over the measures giving the plot's error axis: wall time
-against it, with the Pareto front (no other shortcut both faster and closer).
+against it, with the Pareto front (no other shortcut both faster and closer). A mean error whose
+95 % interval over the seeds (Student's t) excludes 0 is named: with few seeds, the others are
+not told apart from no error.
 
     /usr/bin/python3 tools/bench/bench_shortcuts.py --mesopen build/bin/mesopen --out DIR
         --reference CONVERGENCE_DIR [--seeds 3] [--threads 2] [--only NAME,...]
@@ -43,7 +45,7 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.join(ROOT, "tools", "studies"))
-from convergence import MEASURES, measures  # noqa: E402
+from convergence import MEASURES, T95, measures  # noqa: E402
 
 PLAIN = {"run.mass_scaling_step_ratio": 0.0, "run.safety": 0.9, "target.mesh_size": 10e-6}
 SHORTCUTS = [  # name, label, keys on top of run 6 (no frames)
@@ -184,7 +186,10 @@ def main():
             mean = statistics.fmean(e)
             sd = statistics.stdev(e) if len(e) > 1 else float("nan")
             in_spreads = abs(mean) / spreads[m] if spreads[m] > 0 else float("nan")
-            row["errors"][m] = {"mean": mean, "sd": sd, "seeds": len(e), "in_spreads": in_spreads}
+            # the mean error's 95 % interval excludes 0 (Student's t over the seeds)
+            significant = len(e) > 1 and abs(mean) > T95[len(e) - 1] * sd / math.sqrt(len(e))
+            row["errors"][m] = {"mean": mean, "sd": sd, "seeds": len(e), "in_spreads": in_spreads,
+                                "significant": significant}
             if not math.isnan(in_spreads):
                 worst = max(worst, in_spreads)
         row["error"] = worst
@@ -199,17 +204,19 @@ def main():
           "| shortcut | wall [s] | x no shortcut | " +
           " | ".join("%s error [%s]" % (MEASURES[m][0].replace("|", "\\|"), MEASURES[m][1])
                      for m in MEASURES) +
-          " | error in seed spreads | Pareto |",
-          "|---|---|---|" + "---|" * len(MEASURES) + "---|---|"]
+          " | error in seed spreads | errors outside their 95 % interval of 0 | Pareto |",
+          "|---|---|---|" + "---|" * len(MEASURES) + "---|---|---|"]
     for row in table:
         cells = []
         for m in MEASURES:
             e = row["errors"].get(m)
             scale = MEASURES[m][2]
             cells.append("%+.3g ± %.2g" % (scale * e["mean"], scale * e["sd"]) if e else "-")
-        md.append("| %s | %.1f | %.2f | %s | %.2f | %s |" % (
+        significant = [MEASURES[m][0].replace("|", "\\|") for m, e in row["errors"].items()
+                       if e["significant"]]
+        md.append("| %s | %.1f | %.2f | %s | %.2f | %s | %s |" % (
             row["label"], row["wall"], row["ratio"], " | ".join(cells), row["error"],
-            "yes" if row["pareto"] else ""))
+            ", ".join(significant) or "none", "yes" if row["pareto"] else ""))
     md.append("")
     md.append("Seed-to-seed standard deviation of the reference: " + ", ".join(
         "%s %.3g %s" % (MEASURES[m][0], MEASURES[m][2] * spreads[m], MEASURES[m][1])
