@@ -107,8 +107,7 @@ LiggghtsDem::LiggghtsDem(const std::string &script,
       if (opened)
         std::fprintf(lmp->logfile, "\n# continued from a checkpoint\n");
     }
-    MPI_Allreduce(MPI_IN_PLACE, &opened, 1, MPI_INT, MPI_MIN, comm); // every process stops
-    if (!opened) {
+    if (!parallel::allReduce(opened, MPI_MIN, comm)) { // every process stops
       lammps_close(lmp_);
       throw std::runtime_error("cannot append to the LIGGGHTS log " + log);
     }
@@ -140,7 +139,7 @@ double LiggghtsDem::stableStep() const {
   double lightest = INFINITY;
   for (double m : p_.mass)
     lightest = std::min(lightest, m);
-  MPI_Allreduce(MPI_IN_PLACE, &lightest, 1, MPI_DOUBLE, MPI_MIN, comm_);
+  lightest = parallel::allReduce(lightest, MPI_MIN, comm_);
   return contactStep(std::isfinite(lightest) ? lightest : 0.0, kn_);
 }
 
@@ -148,8 +147,7 @@ double LiggghtsDem::largestRadius() const {
   double largest = 0.0;
   for (double r : p_.radius)
     largest = std::max(largest, r);
-  MPI_Allreduce(MPI_IN_PLACE, &largest, 1, MPI_DOUBLE, MPI_MAX, comm_);
-  return largest;
+  return parallel::allReduce(largest, MPI_MAX, comm_);
 }
 
 // The atoms' order and number change only where LIGGGHTS rebuilds its neighbour lists (it
@@ -269,40 +267,36 @@ void LiggghtsDem::gatherDiskForces(std::vector<DiskForce> &forces) const {
 
 // The disks of every rank on rank 0, ordered by id (the same order on any number of ranks).
 void LiggghtsDem::gatherParticles(const Particles &local, Particles &all) const {
-  const int n = static_cast<int>(local.size());
-  int ranks = 1, rank = 0;
-  MPI_Comm_size(comm_, &ranks);
-  MPI_Comm_rank(comm_, &rank);
-  std::vector<int> counts(ranks), starts(ranks + 1, 0);
-  MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm_);
-  for (int r = 0; r < ranks; ++r)
-    starts[r + 1] = starts[r] + counts[r];
-  const int total = rank == 0 ? starts[ranks] : 0;
-  std::vector<double> ids(n), all_ids(total);
-  for (int i = 0; i < n; ++i)
-    ids[i] = static_cast<double>(local.id[i]);
-  auto gather = [&](const std::vector<double> &mine, std::vector<double> &out) {
-    out.resize(total);
-    MPI_Gatherv(mine.data(), n, MPI_DOUBLE, out.data(), counts.data(), starts.data(), MPI_DOUBLE, 0,
-                comm_);
+  struct Disk { // one disk's id (as LIGGGHTS's tags, exact in a double) and fields, side by side
+    double id, x, y, vx, vy, omega, radius, mass;
   };
-  gather(ids, all_ids);
-  Particles gathered;
-  std::vector<double> Particles::*const fields[] = {
-      &Particles::x,     &Particles::y,      &Particles::vx,  &Particles::vy,
-      &Particles::omega, &Particles::radius, &Particles::mass};
-  for (auto field : fields)
-    gather(local.*field, gathered.*field);
-  std::vector<int> order(total);
-  for (int i = 0; i < total; ++i)
+  std::vector<Disk> mine(local.size());
+  for (std::size_t i = 0; i < mine.size(); ++i)
+    mine[i] = {static_cast<double>(local.id[i]),
+               local.x[i],
+               local.y[i],
+               local.vx[i],
+               local.vy[i],
+               local.omega[i],
+               local.radius[i],
+               local.mass[i]};
+  const std::vector<Disk> gathered = parallel::gatherItems(std::move(mine), 0, comm_);
+  std::vector<std::size_t> order(gathered.size());
+  for (std::size_t i = 0; i < order.size(); ++i)
     order[i] = i;
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return all_ids[a] < all_ids[b]; });
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return gathered[a].id < gathered[b].id; });
   all = Particles{};
-  for (auto field : fields) {
+  std::pair<std::vector<double> Particles::*, double Disk::*> const fields[] = {
+      {&Particles::x, &Disk::x},         {&Particles::y, &Disk::y},
+      {&Particles::vx, &Disk::vx},       {&Particles::vy, &Disk::vy},
+      {&Particles::omega, &Disk::omega}, {&Particles::radius, &Disk::radius},
+      {&Particles::mass, &Disk::mass}};
+  for (const auto &[field, member] : fields) {
     std::vector<double> &out = all.*field;
-    out.resize(total);
-    for (int i = 0; i < total; ++i)
-      out[i] = (gathered.*field)[order[i]];
+    out.resize(gathered.size());
+    for (std::size_t i = 0; i < order.size(); ++i)
+      out[i] = gathered[order[i]].*member;
   }
 }
 

@@ -175,6 +175,7 @@ void Contact::narrowPhase(const Model &model, double dt) {
   stats_.refreshed += refreshed;
   stats_.sides += 2 * overlapping, stats_.skipped += skipped, stats_.partial += partial;
   stats_.pairs = overlapping;
+  stats_.pair_steps += overlapping;
 }
 
 std::vector<Contact::BodyContact> Contact::lastContacts() const {

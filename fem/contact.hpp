@@ -86,6 +86,7 @@ struct ContactStatistics {
   std::size_t deep = 0;                // over the run: node-steps deeper than half an element
   std::size_t refreshed = 0;           // over the run: pair lists (re)built
   std::size_t searches = 0;            // over the run: searches for pairs of bodies
+  std::size_t pair_steps = 0;          // over the run: body pairs searched, summed over the steps
   std::size_t sides = 0, skipped = 0;  // over the run: sides of overlapping pairs, skipped as clear
   std::size_t partial = 0;             // over the run: sides whose hot nodes alone were looked at
   std::size_t sudden = 0;              // over the run: contacts found deeper than a step's approach

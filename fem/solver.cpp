@@ -178,7 +178,9 @@ Solver::Solver(Model &model, SolverSettings settings, const parallel::Communicat
   for (std::size_t b = 0; b < owner_.size(); ++b)
     owner_[b] = static_cast<int>(b % comm_.size());
   rank_elements_.assign(comm_.size(), 0);
+  rank_nodes_.assign(comm_.size(), 0);
   rank_element_steps_.assign(comm_.size(), 0.0);
+  rank_node_steps_.assign(comm_.size(), 0.0);
   const Nodes &nd = m_.nodes;
   inv_mass_.resize(nd.size());
   for (std::size_t a = 0; a < nd.size(); ++a)
@@ -264,8 +266,11 @@ void Solver::step() {
   for (auto *provider : providers_) // external forces at x(n+1): contact, coupling
     provider->addForces(m_, time_ + dt, dt);
   updateActivity(); // bodies the providers woke take part
-  for (std::size_t r = 0; r < rank_elements_.size(); ++r)
+  for (std::size_t r = 0; r < rank_elements_.size(); ++r) {
     rank_element_steps_[r] += static_cast<double>(rank_elements_[r]);
+    rank_node_steps_[r] += static_cast<double>(rank_nodes_[r]);
+  }
+  ++counted_steps_;
   forces(dt, true); // stresses at n+1, f(n+1), the next stable step, and unit by unit
                     // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
   applyConstraints(0.5 * dt, true); // the imposed velocities at n+1
@@ -331,11 +336,13 @@ void Solver::updateActivity() {
   std::size_t unit_elements = 0;
   active_elements_ = 0;
   active_bodies_.clear();
+  std::fill(rank_nodes_.begin(), rank_nodes_.end(), 0);
   for (std::size_t b = 0; b < n_bodies; ++b) {
     const Body &body = m_.bodies[b];
     if (m_.at_rest[b])
       continue;
     active_bodies_.push_back(static_cast<std::uint32_t>(b));
+    rank_nodes_[static_cast<std::size_t>(owner(b))] += body.node_end - body.node_begin;
     // Every process moves every active node; it computes the elements of the bodies it owns.
     appendInPieces(node_ranges_, 0, Range{body.node_begin, body.node_end}, node_block,
                    [](const Range &) { return true; });
@@ -510,7 +517,10 @@ PartitionReport Solver::partition() const {
   for (int rank : owner_)
     ++report.bodies[static_cast<std::size_t>(rank)];
   report.active_elements = rank_elements_;
+  report.active_nodes = rank_nodes_;
   report.element_steps = rank_element_steps_;
+  report.node_steps = rank_node_steps_;
+  report.steps = counted_steps_;
   report.imbalance = imbalance(asDoubles(rank_elements_));
   report.run_imbalance = imbalance(rank_element_steps_);
   return report;

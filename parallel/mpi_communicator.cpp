@@ -1,12 +1,29 @@
 #include "mpi_communicator.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <climits>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
 
 namespace mesopen::parallel {
+
+namespace {
+std::atomic<std::int64_t> received_bytes{0}, received_operations{0};
+} // namespace
+
+Traffic traffic() {
+  return {received_bytes.load(std::memory_order_relaxed),
+          received_operations.load(std::memory_order_relaxed)};
+}
+
+namespace detail {
+void countReceived(std::int64_t bytes) {
+  received_bytes.fetch_add(bytes, std::memory_order_relaxed);
+  received_operations.fetch_add(1, std::memory_order_relaxed);
+}
+} // namespace detail
 
 void ensureMpi() {
   int initialised = 0, finalised = 0;
@@ -41,20 +58,18 @@ World world(bool needed) {
 }
 
 void World::barrier() const {
-  if (size > 1)
+  if (size > 1) {
     MPI_Barrier(MPI_COMM_WORLD);
+    detail::countReceived(0);
+  }
 }
 
 double World::sum(double value) const {
-  if (size > 1)
-    MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
-  return value;
+  return size > 1 ? allReduce(value, MPI_SUM, MPI_COMM_WORLD) : value;
 }
 
 double World::max(double value) const {
-  if (size > 1)
-    MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-  return value;
+  return size > 1 ? allReduce(value, MPI_MAX, MPI_COMM_WORLD) : value;
 }
 
 namespace detail {
@@ -64,6 +79,8 @@ GatherLayout gatherLayout(std::int64_t mine, MPI_Comm comm) {
   MPI_Comm_size(comm, &ranks);
   std::vector<std::int64_t> sizes(static_cast<std::size_t>(ranks));
   MPI_Allgather(&mine, 1, MPI_INT64_T, sizes.data(), 1, MPI_INT64_T, comm);
+  if (ranks > 1)
+    countReceived(static_cast<std::int64_t>(sizeof(std::int64_t)) * (ranks - 1));
   GatherLayout layout;
   for (std::int64_t size : sizes) {
     if (layout.total + size > INT_MAX) // every rank sees the same sizes: all throw

@@ -25,10 +25,41 @@ struct World {
 };
 World world(bool needed);
 
+// What this process has received from the others through the operations of this file (the
+// solver's communicator, the coupling's gathers and reductions, the partitioner's reductions),
+// since it started, in 64-bit counts. `bytes` is the payload an operation delivers to this
+// process from the others, counted as a gather counts it whatever algorithm MPI uses: an
+// all-gather counts the other processes' parts, a reduction of n bytes (P - 1) n, a gather to a
+// root the others' parts at the root and nothing elsewhere, and the byte counts a gather of
+// unequal parts exchanges first (8 bytes from each other process) as well; a barrier counts
+// nothing. `operations` is the collective calls made with more than one process. Not counted:
+// MPI's own traffic (parts forwarded along a ring or tree, headers), and what Zoltan and LIGGGHTS
+// send on their own (a partition's cuts, the disks' decomposition).
+struct Traffic {
+  std::int64_t bytes = 0, operations = 0;
+};
+Traffic traffic();
+
 namespace detail {
-// Every rank's byte count (exchanged as 64-bit integers) and where each lands in the gathered
-// whole. MPI_Allgatherv takes int counts and offsets: a whole of more than INT_MAX bytes is refused
-// (std::length_error), not cut or wrapped.
+// One collective operation that delivered `bytes` from other processes (added to traffic()).
+void countReceived(std::int64_t bytes);
+// The MPI type of T, for the reductions.
+template <class T> MPI_Datatype mpiType() {
+  if constexpr (std::is_same_v<T, double>)
+    return MPI_DOUBLE;
+  else if constexpr (std::is_same_v<T, int>)
+    return MPI_INT;
+  else if constexpr (std::is_same_v<T, unsigned long>)
+    return MPI_UNSIGNED_LONG;
+  else if constexpr (std::is_same_v<T, std::int64_t>)
+    return MPI_INT64_T;
+  else
+    static_assert(sizeof(T) == 0, "no MPI type for this reduction");
+}
+
+// Every rank's byte count (exchanged as 64-bit integers, an all-gather counted by traffic()) and
+// where each lands in the gathered whole. MPI_Allgatherv takes int counts and offsets: a whole of
+// more than INT_MAX bytes is refused (std::length_error), not cut or wrapped.
 struct GatherLayout {
   std::vector<int> counts, offsets;
   std::int64_t total = 0;
@@ -49,7 +80,39 @@ template <class T> std::vector<T> allGatherItems(std::vector<T> mine, MPI_Comm c
   std::vector<T> all(static_cast<std::size_t>(layout.total) / sizeof(T));
   MPI_Allgatherv(mine.data(), layout.counts[rank], MPI_BYTE, all.data(), layout.counts.data(),
                  layout.offsets.data(), MPI_BYTE, comm);
+  detail::countReceived(layout.total - layout.counts[rank]);
   return all;
+}
+
+// Every rank's items (plain data, sent as bytes) concatenated in rank order on rank `root`; the
+// others get none. The byte counts are gathered as 64-bit integers first; a whole of more than
+// INT_MAX bytes, which MPI_Gatherv cannot address, throws std::length_error on every rank.
+template <class T> std::vector<T> gatherItems(std::vector<T> mine, int root, MPI_Comm comm) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  int ranks = 1, rank = 0;
+  MPI_Comm_size(comm, &ranks);
+  if (ranks == 1)
+    return mine;
+  MPI_Comm_rank(comm, &rank);
+  const detail::GatherLayout layout =
+      detail::gatherLayout(static_cast<std::int64_t>(mine.size() * sizeof(T)), comm);
+  std::vector<T> all(rank == root ? static_cast<std::size_t>(layout.total) / sizeof(T) : 0);
+  MPI_Gatherv(mine.data(), layout.counts[rank], MPI_BYTE, all.data(), layout.counts.data(),
+              layout.offsets.data(), MPI_BYTE, root, comm);
+  detail::countReceived(rank == root ? layout.total - layout.counts[rank] : 0);
+  return all;
+}
+
+// Every rank's `value` combined by `op` (MPI_MIN, MPI_MAX, MPI_SUM), on every rank.
+template <class T> T allReduce(T value, MPI_Op op, MPI_Comm comm) {
+  int ranks = 1;
+  MPI_Comm_size(comm, &ranks);
+  if (ranks == 1)
+    return value;
+  T result{};
+  MPI_Allreduce(&value, &result, 1, detail::mpiType<T>(), op, comm);
+  detail::countReceived(static_cast<std::int64_t>(sizeof(T)) * (ranks - 1));
+  return result;
 }
 
 // The processes of an MPI communicator (MPI initialised).

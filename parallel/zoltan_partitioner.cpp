@@ -1,5 +1,7 @@
 #include "zoltan_partitioner.hpp"
 
+#include "mpi_communicator.hpp"
+
 #include <zoltan.h>
 
 #include <algorithm>
@@ -79,8 +81,7 @@ ZoltanRcb::~ZoltanRcb() { Zoltan_Destroy(&zoltan_); }
 std::vector<int> ZoltanRcb::partition(const PartitionItems &mine) const {
   int rank = 0;
   MPI_Comm_rank(comm_, &rank);
-  unsigned long count = mine.size(), total = 0;
-  MPI_Allreduce(&count, &total, 1, MPI_UNSIGNED_LONG, MPI_SUM, comm_);
+  const unsigned long total = allReduce<unsigned long>(mine.size(), MPI_SUM, comm_);
   if (total < 2)
     return std::vector<int>(mine.size(), rank);
   void *data = const_cast<PartitionItems *>(&mine); // Zoltan's callbacks take void *; read only
@@ -99,8 +100,7 @@ std::vector<int> ZoltanRcb::partition(const PartitionItems &mine) const {
                           &export_lids, &export_procs, &export_parts);
   // An error (ZOLTAN_FATAL, ZOLTAN_MEMERR: negative; a warning is positive, its parts valid) on
   // any process, known to every one.
-  int error = std::min(status, 0), worst = 0;
-  MPI_Allreduce(&error, &worst, 1, MPI_INT, MPI_MIN, comm_);
+  const int worst = allReduce(std::min(status, 0), MPI_MIN, comm_);
   if (worst < 0) {
     Zoltan_LB_Free_Part(&import_gids, &import_lids, &import_procs, &import_parts);
     Zoltan_LB_Free_Part(&export_gids, &export_lids, &export_procs, &export_parts);
@@ -114,9 +114,8 @@ std::vector<int> ZoltanRcb::partition(const PartitionItems &mine) const {
     to[export_lids[k]] = export_parts[k];
   Zoltan_LB_Free_Part(&import_gids, &import_lids, &import_procs, &import_parts);
   Zoltan_LB_Free_Part(&export_gids, &export_lids, &export_procs, &export_parts);
-  int missing = std::count(to.begin(), to.end(), -1), any_missing = 0;
-  MPI_Allreduce(&missing, &any_missing, 1, MPI_INT, MPI_MAX, comm_);
-  if (any_missing > 0)
+  const int missing = static_cast<int>(std::count(to.begin(), to.end(), -1));
+  if (allReduce(missing, MPI_MAX, comm_) > 0)
     throw std::runtime_error("Zoltan's RCB partition left an item without a part");
   return to;
 }

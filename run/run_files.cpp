@@ -7,7 +7,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 namespace mesopen {
 
@@ -26,6 +29,33 @@ std::size_t fixedNodes(const fem::Model &model) {
 
 std::string absoluteScenePath(const std::string &path) {
   return fs::absolute(path).lexically_normal().string();
+}
+
+// This process's peak resident memory, VmHWM in /proc/self/status (-1: not there).
+std::int64_t peakMemoryBytes() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.starts_with("VmHWM:")) {
+      std::istringstream fields(line.substr(6));
+      std::int64_t kilobytes = -1;
+      std::string unit;
+      if (fields >> kilobytes >> unit && unit == "kB" && kilobytes >= 0)
+        return kilobytes * 1024;
+    }
+  return -1;
+}
+
+// Each rank's count over `steps`, per step.
+nlohmann::json perStep(const std::vector<double> &counts, std::size_t steps) {
+  nlohmann::json j = nlohmann::json::array();
+  for (double c : counts)
+    j.push_back(c / static_cast<double>(std::max<std::size_t>(steps, 1)));
+  return j;
+}
+
+std::vector<double> asDoubles(const std::vector<std::int64_t> &counts) {
+  return std::vector<double>(counts.begin(), counts.end());
 }
 
 } // namespace
@@ -149,7 +179,32 @@ nlohmann::json levelFigures(const fem::LevelCensus &census, const LoopResult &lo
   return j;
 }
 
-nlohmann::json partitionSummary(const fem::PartitionReport &p) {
+RankFigures rankFigures(const RunAssembly &run, const LoopResult &loop) {
+  const std::int64_t pair_steps =
+      run.contact ? static_cast<std::int64_t>(run.contact->statistics().pair_steps) : 0;
+  const std::vector<std::int64_t> mine{loop.step_bytes,  loop.max_step_bytes, loop.step_operations,
+                                       loop.other_bytes, pair_steps,          peakMemoryBytes()};
+  const std::vector<std::int64_t> all = run.solver->processes().allGather(mine);
+  RankFigures f;
+  f.steps = loop.counted_steps;
+  std::vector<std::int64_t> *const fields[] = {&f.step_bytes,         &f.max_step_bytes,
+                                               &f.step_operations,    &f.other_bytes,
+                                               &f.contact_pair_steps, &f.peak_memory_bytes};
+  for (std::size_t k = 0; k < all.size(); ++k)
+    fields[k % mine.size()]->push_back(all[k]);
+  return f;
+}
+
+nlohmann::json partitionSummary(const fem::PartitionReport &p, const RankFigures &f) {
+  double node_steps = 0.0;
+  for (double n : p.node_steps)
+    node_steps += n;
+  std::vector<double> halo;
+  for (double n : p.node_steps)
+    halo.push_back(node_steps - n);
+  nlohmann::json memory = nlohmann::json::array();
+  for (std::int64_t m : f.peak_memory_bytes)
+    memory.push_back(m >= 0 ? nlohmann::json(m) : nlohmann::json());
   return {{"method", p.bodies.size() > 1 ? "zoltan rcb" : "one rank"},
           {"bodies", p.bodies},
           {"active_elements", p.active_elements},
@@ -160,12 +215,22 @@ nlohmann::json partitionSummary(const fem::PartitionReport &p) {
           {"forced_rebalances", p.forced},
           {"migrated_bodies", p.migrated_bodies},
           {"last_partition_imbalance_before", p.last_before},
-          {"last_partition_imbalance_after", p.last_after}};
+          {"last_partition_imbalance_after", p.last_after},
+          {"steps_measured", p.steps},
+          {"active_elements_per_step", perStep(p.element_steps, p.steps)},
+          {"active_nodes_per_step", perStep(p.node_steps, p.steps)},
+          {"halo_nodes_per_step", perStep(halo, p.steps)},
+          {"contact_pairs_per_step", perStep(asDoubles(f.contact_pair_steps), f.steps)},
+          {"bytes_received_per_step", perStep(asDoubles(f.step_bytes), f.steps)},
+          {"max_bytes_received_in_a_step", f.max_step_bytes},
+          {"collectives_per_step", perStep(asDoubles(f.step_operations), f.steps)},
+          {"bytes_received_outside_steps_per_step", perStep(asDoubles(f.other_bytes), f.steps)},
+          {"peak_memory_bytes", memory}};
 }
 
 nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Series &series,
                           const Frames &frames, const LoopResult &loop, double wall, int ranks,
-                          const nlohmann::json &dem) {
+                          const RankFigures &rank_figures, const nlohmann::json &dem) {
   const fem::Model &model = run.model;
   const fem::Solver &solver = *run.solver;
   const fem::Energy &e = solver.energy();
@@ -259,7 +324,7 @@ nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Seri
     j["files"].push_back("vtk/run.pvd");
   j["representation"] = nameOf(scene.run.representation, representation_names);
   j["ranks"] = ranks;
-  j["partition"] = partitionSummary(solver.partition());
+  j["partition"] = partitionSummary(solver.partition(), rank_figures);
   if (!dem.is_null()) {
     j["dem"] = dem;
     j["files"].push_back("dem.data");

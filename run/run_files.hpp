@@ -42,14 +42,33 @@ nlohmann::json levelFigures(const fem::LevelCensus &census, const LoopResult &lo
 // work on the disks, windows.
 nlohmann::json demFigures(const RunAssembly &run, const parallel::World &world);
 
-// How the element work was shared by the ranks (fem::PartitionReport), for summary.json.
-nlohmann::json partitionSummary(const fem::PartitionReport &partition);
+// What each rank measured of its own part of the run, in rank order: over the steps it took
+// (`steps`, not those before a checkpoint) the bytes it received from the others within the
+// steps, the most within one step, the collective operations within them, the bytes it received
+// in the time loop outside the steps (LoopResult), the pairs of bodies its contact searched
+// (fem::ContactStatistics::pair_steps; 0 without contact), and its peak resident memory (VmHWM of
+// /proc/self/status; -1 where it cannot be read).
+struct RankFigures {
+  std::size_t steps = 0;
+  std::vector<std::int64_t> step_bytes, max_step_bytes, step_operations, other_bytes,
+      contact_pair_steps, peak_memory_bytes;
+};
+// This process's figures gathered from every process (every process calls it).
+RankFigures rankFigures(const RunAssembly &run, const LoopResult &loop);
+
+// How the element work was shared by the ranks (fem::PartitionReport) and what each rank's part
+// cost it (`ranks`), for summary.json: per rank, per step, the active elements and nodes it owned,
+// its halo nodes (the nodes of the moving bodies it does not own, whose velocities and forces it
+// receives from their owners every step: with every body held by every rank, all of them), the
+// pairs of bodies its contact searched, the bytes it received; its peak memory.
+nlohmann::json partitionSummary(const fem::PartitionReport &partition, const RankFigures &ranks);
 
 // summary.json: what ran, how it ended, its figures and files (the element work's partition
-// among them); `dem` the disks' figures (null: no disks), `ranks` the MPI ranks.
+// among them and each rank's figures, `rank_figures`); `dem` the disks' figures (null: no disks),
+// `ranks` the MPI ranks.
 nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Series &series,
                           const Frames &frames, const LoopResult &loop, double wall, int ranks,
-                          const nlohmann::json &dem);
+                          const RankFigures &rank_figures, const nlohmann::json &dem);
 
 // summary.json of a run that ended before its time loop (`status` "interrupted" or "failed"):
 // the scene, the status and why.

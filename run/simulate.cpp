@@ -112,6 +112,8 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
   report.loop = timeLoop(scene, model, *assembly.solver, series, frames, progress, checkpoints,
                          census ? &*census : nullptr, assembly.contact.get());
   catchStopSignals(false);
+  // Every rank takes part, before the files: rank 0 may fail to write them, and end here.
+  const RankFigures rank_figures = rankFigures(assembly, report.loop);
   report.steps = solver.steps();
   report.time = solver.time();
   report.elements = model.elements.size();
@@ -136,8 +138,8 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
   frames.writeCollection();
   report.wall = checkpoints.wallBefore() + secondsSince(place.start);
   report.vtk = frames.vtk();
-  nlohmann::json summary =
-      runSummary(scene, assembly, series, frames, report.loop, report.wall, world.size, dem);
+  nlohmann::json summary = runSummary(scene, assembly, series, frames, report.loop, report.wall,
+                                      world.size, rank_figures, dem);
   if (census)
     summary["levels"] = levelFigures(*census, report.loop, assembly.contact.get());
   if (checkpoints.on() || checkpoints.resumed())

@@ -1,6 +1,7 @@
 #include "time_loop.hpp"
 
 #include "checkpoint.hpp"
+#include "mpi_communicator.hpp"
 #include "stop_signals.hpp"
 
 #include <algorithm>
@@ -180,6 +181,7 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
     if (!failure.empty())
       throw std::runtime_error(failure);
   };
+  const parallel::Traffic loop_start = parallel::traffic();
   try {
     // (a run continued from a checkpoint has its first sample and frame, and had not ended)
     if (!checkpoints.resumed())
@@ -202,7 +204,14 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
         solver.measureBodySteps();
       const auto step_start = Clock::now();
       const double before = solver.time();
+      const parallel::Traffic traffic_before = parallel::traffic();
       solver.step();
+      const parallel::Traffic traffic_after = parallel::traffic();
+      const std::int64_t step_bytes = traffic_after.bytes - traffic_before.bytes;
+      result.step_bytes += step_bytes;
+      result.max_step_bytes = std::max(result.max_step_bytes, step_bytes);
+      result.step_operations += traffic_after.operations - traffic_before.operations;
+      ++result.counted_steps;
       if (!(solver.time() > before)) {
         char text[200];
         std::snprintf(text, sizeof text,
@@ -238,6 +247,7 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
     result.failure = e.what();
   }
   progress.clear();
+  result.other_bytes = parallel::traffic().bytes - loop_start.bytes - result.step_bytes;
   result.seconds = checkpoints.before().seconds + secondsSince(start);
   return result;
 }

@@ -11,6 +11,7 @@
 #include "scene.hpp"
 #include "solver.hpp"
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -81,6 +82,13 @@ struct LoopResult {
   std::string end;          // what ended it: end_time, end_depth or max_steps
   double element_steps = 0.0;
   double seconds = 0.0, solver_seconds = 0.0; // the whole loop; the steps alone
+  // This process's messages from the others (parallel::traffic: bytes as a gather counts them)
+  // over the steps it took (not those before a checkpoint): within the steps (the solver's
+  // exchanges, the coupling's, a new partition's), the most within one step and the collective
+  // operations within them; and in the loop outside the steps (the series, frames and checkpoints,
+  // the flags of a signal or of a failure). Not kept in checkpoints.
+  std::int64_t step_bytes = 0, max_step_bytes = 0, step_operations = 0, other_bytes = 0;
+  std::size_t counted_steps = 0;
 };
 
 // "completed", "failed" or "interrupted".

@@ -191,7 +191,10 @@ TEST(Mpi, TwoRanksShareTheElementWork) {
 // at 0.4 of the first step (5 elements eroded) and a new partition forced every 100 steps (5 in
 // the run, every body's owner as RCB gives it for the loads of that step): the same run but for
 // the energies' sum order, and each rank's figures add up to the run's (bodies, active elements,
-// element-steps). On one rank the keys change nothing: run.h5 is the same bytes as without them.
+// element-steps). Each rank's own and halo nodes add up to every moving node; every step it
+// receives at least the velocities and forces of its halo nodes (4 doubles each) from their
+// owners; every rank searches every contact pair, as one rank does; one rank receives nothing. On
+// one rank the keys change nothing: run.h5 is the same bytes as without them.
 TEST(Mpi, OneTwoAndFourRanksAgreeWhileRebalancing) {
   ScratchDir dir("mpi-fe-rebalancing");
   const std::string scene =
@@ -207,6 +210,12 @@ TEST(Mpi, OneTwoAndFourRanksAgreeWhileRebalancing) {
   EXPECT_GT(one["eroded_elements"].get<int>(), 0);
   EXPECT_EQ(one["partition"]["method"], "one rank");
   EXPECT_EQ(one["partition"]["rebalances"], 0);
+  const nlohmann::json &alone = one["partition"];
+  EXPECT_EQ(alone["bytes_received_per_step"][0], 0.0);
+  EXPECT_EQ(alone["halo_nodes_per_step"][0], 0.0);
+  EXPECT_GT(alone["contact_pairs_per_step"][0].get<double>(), 0.0);
+  EXPECT_GT(alone["peak_memory_bytes"][0].get<double>(), 0.0);
+  const double moving_nodes = alone["active_nodes_per_step"][0].get<double>();
   for (int ranks : {2, 4}) {
     const std::string out = dir / ("ranks-" + std::to_string(ranks));
     const test::Result r = run(ranks, scene, out);
@@ -231,6 +240,17 @@ TEST(Mpi, OneTwoAndFourRanksAgreeWhileRebalancing) {
     }
     EXPECT_EQ(bodies, summary["model"]["bodies"].get<std::size_t>());
     EXPECT_EQ(element_steps, summary["element_steps"].get<double>());
+    for (int rank = 0; rank < ranks; ++rank) {
+      const double halo = p["halo_nodes_per_step"][rank].get<double>();
+      EXPECT_NEAR(p["active_nodes_per_step"][rank].get<double>() + halo, moving_nodes,
+                  1e-9 * moving_nodes);
+      EXPECT_GT(halo, 0.0);
+      EXPECT_GE(p["bytes_received_per_step"][rank].get<double>(), 32.0 * halo) << rank;
+      EXPECT_GE(p["max_bytes_received_in_a_step"][rank].get<double>(),
+                p["bytes_received_per_step"][rank].get<double>());
+      EXPECT_EQ(p["contact_pairs_per_step"][rank], alone["contact_pairs_per_step"][0]);
+      EXPECT_GT(p["peak_memory_bytes"][rank].get<double>(), 0.0);
+    }
   }
 }
 

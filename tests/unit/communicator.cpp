@@ -1,6 +1,6 @@
 // The communicators on one process: every operation gives back this process's values unchanged
-// (the solver's one-process results depend on it), and a gather MPI_Allgatherv cannot address is
-// refused.
+// (the solver's one-process results depend on it) and counts no traffic, a gather MPI_Allgatherv
+// cannot address is refused, and the traffic counter counts past 32 bits.
 #include "communicator.hpp"
 #include "mpi_communicator.hpp"
 
@@ -35,7 +35,22 @@ TEST(Communicator, SerialGivesBackItsInput) { expectUnchanged(parallel::serial()
 
 TEST(Communicator, MpiOnOneProcessGivesBackItsInput) {
   parallel::ensureMpi();
+  const parallel::Traffic before = parallel::traffic();
   expectUnchanged(parallel::MpiCommunicator(MPI_COMM_SELF));
+  EXPECT_EQ(parallel::allReduce(2.5, MPI_MAX, MPI_COMM_SELF), 2.5);
+  EXPECT_EQ(parallel::gatherItems(std::vector<int>{1, 2}, 0, MPI_COMM_SELF),
+            (std::vector<int>{1, 2}));
+  EXPECT_EQ(parallel::traffic().bytes, before.bytes);
+  EXPECT_EQ(parallel::traffic().operations, before.operations);
+}
+
+// The counts are 64-bit: 9 GiB, past what 32 bits hold, counted exactly.
+TEST(Communicator, TrafficCountsPast32Bits) {
+  const parallel::Traffic before = parallel::traffic();
+  for (int k = 0; k < 3; ++k)
+    parallel::detail::countReceived(std::int64_t{3} << 30);
+  EXPECT_EQ(parallel::traffic().bytes - before.bytes, std::int64_t{9} << 30);
+  EXPECT_EQ(parallel::traffic().operations - before.operations, 3);
 }
 
 TEST(Communicator, GatherPastIntMaxBytesIsRefused) {

@@ -1,0 +1,133 @@
+// The byte counter of the communication layer (parallel::traffic) on every process of mpirun:
+// each operation, on parts of known sizes (equal or not, empty on some ranks), must add exactly the
+// bytes the other processes' parts hold (and the 8-byte size each sends first where the parts may
+// differ), and one operation per MPI call; the data must arrive too, so that the counts are those
+// of real parts. A gather to rank 0 counts its parts there alone. Prints what failed and exits 1.
+#include "mpi_communicator.hpp"
+
+#include <mpi.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+using namespace mesopen::parallel;
+
+namespace {
+
+int failures = 0, rank = 0, size = 1;
+
+// The counter's change across `operation` against the bytes and MPI calls expected.
+template <class F>
+void expectTraffic(const std::string &what, std::int64_t bytes, std::int64_t operations,
+                   F &&operation) {
+  const Traffic before = traffic();
+  const bool data_ok = operation();
+  const Traffic after = traffic();
+  const std::int64_t got = after.bytes - before.bytes, calls = after.operations - before.operations;
+  if (got != bytes || calls != operations || !data_ok) {
+    std::printf("rank %d of %d: %s: %lld bytes in %lld operations, expected %lld in %lld%s\n", rank,
+                size, what.c_str(), static_cast<long long>(got), static_cast<long long>(calls),
+                static_cast<long long>(bytes), static_cast<long long>(operations),
+                data_ok ? "" : "; the data gathered are wrong");
+    ++failures;
+  }
+}
+
+struct Item { // 24 bytes of plain data
+  std::int64_t id;
+  double x, y;
+};
+
+} // namespace
+
+int main(int argc, char **argv) {
+  MPI_Init(&argc, &argv);
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  const std::int64_t others = size - 1, sizes = 8 * others; // the parts' byte counts, 8 bytes each
+  {
+    const MpiCommunicator comm(MPI_COMM_WORLD);
+    // k doubles from every rank: 8 k from each other rank.
+    for (const std::int64_t k : {0, 1, 1000, 12345}) {
+      expectTraffic(
+          "all-gather of " + std::to_string(k) + " doubles", 8 * k * others + sizes, 2, [&] {
+            const std::vector<double> all = comm.allGather(std::vector<double>(k, rank + 0.5));
+            bool ok = static_cast<std::int64_t>(all.size()) == k * size;
+            for (std::size_t i = 0; ok && i < all.size(); ++i)
+              ok = all[i] == static_cast<double>(i / k) + 0.5;
+            return ok;
+          });
+    }
+    // rank r sends 3 r + 1 64-bit integers: all but its own.
+    std::int64_t total = 0;
+    for (int r = 0; r < size; ++r)
+      total += 3 * r + 1;
+    expectTraffic("all-gather of unequal 64-bit parts", 8 * (total - (3 * rank + 1)) + sizes, 2,
+                  [&] {
+                    const std::vector<std::int64_t> all =
+                        comm.allGather(std::vector<std::int64_t>(3 * rank + 1, rank));
+                    return static_cast<std::int64_t>(all.size()) == total && all.back() == size - 1;
+                  });
+    // sums in order and the least value: all-gathers of their values.
+    expectTraffic("sums of 7 doubles in rank order", 8 * 7 * others + sizes, 2, [&] {
+      const std::vector<double> sums = comm.sumInOrder(std::vector<double>(7, 1.0));
+      return sums.size() == 7 && sums[6] == size;
+    });
+    expectTraffic("least of one double", 8 * others + sizes, 2,
+                  [&] { return comm.min(10.0 - rank) == 10.0 - (size - 1); });
+    // share: rank r holds 2 r values (rank 0 none).
+    std::int64_t shared = 0;
+    for (int r = 0; r < size; ++r)
+      shared += 2 * r;
+    expectTraffic("share of 2 r values from rank r", 8 * (shared - 2 * rank) + sizes, 2, [&] {
+      bool ok = true;
+      comm.share(
+          static_cast<std::size_t>(2 * rank),
+          [&](double *mine) {
+            for (int i = 0; i < 2 * rank; ++i)
+              mine[i] = rank;
+          },
+          [&](const double *all) { ok = shared == 0 || all[shared - 1] == size - 1; });
+      return ok;
+    });
+  }
+  // The coupling's and the partitioner's operations.
+  expectTraffic("all-gather of 5 items of 24 bytes", 24 * 5 * others + sizes, 2, [&] {
+    const std::vector<Item> all =
+        allGatherItems(std::vector<Item>(5, Item{rank, 1.0, 2.0}), MPI_COMM_WORLD);
+    return static_cast<int>(all.size()) == 5 * size && all.back().id == size - 1;
+  });
+  expectTraffic("gather of rank + 2 items of 24 bytes to rank 0",
+                (rank == 0 ? 24 * (others * (others + 1) / 2 + 2 * others) : 0) + sizes, 2, [&] {
+                  const std::vector<Item> all = gatherItems(
+                      std::vector<Item>(rank + 2, Item{rank, 0.0, 0.0}), 0, MPI_COMM_WORLD);
+                  return rank == 0 ? static_cast<std::int64_t>(all.size()) ==
+                                         (size * (size - 1)) / 2 + 2 * size
+                                   : all.empty();
+                });
+  expectTraffic("reduction of a double", 8 * others, 1,
+                [&] { return allReduce(double(rank), MPI_MAX, MPI_COMM_WORLD) == size - 1; });
+  expectTraffic("reduction of an int", 4 * others, 1,
+                [&] { return allReduce(rank, MPI_MIN, MPI_COMM_WORLD) == 0; });
+  expectTraffic("reduction of an unsigned long", 8 * others, 1, [&] {
+    return allReduce<unsigned long>(1, MPI_SUM, MPI_COMM_WORLD) == static_cast<unsigned long>(size);
+  });
+  const World w = world(true);
+  expectTraffic("the world's sum", 8 * others, 1, [&] { return w.sum(1.0) == size; });
+  expectTraffic("the world's barrier", 0, 1, [&] {
+    w.barrier();
+    return true;
+  });
+  // Within one process nothing is received and no operation counted.
+  expectTraffic("all-gather within one process", 0, 0, [&] {
+    return MpiCommunicator(MPI_COMM_SELF).allGather(std::vector<double>(100, 1.0)).size() == 100;
+  });
+  int any = 0;
+  MPI_Allreduce(&failures, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  if (rank == 0)
+    std::printf("traffic_count on %d processes: %s\n", size, any ? "FAILED" : "every count exact");
+  MPI_Finalize();
+  return any ? 1 : 0;
+}
