@@ -114,6 +114,7 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
   catchStopSignals(false);
   // Every rank takes part, before the files: rank 0 may fail to write them, and end here.
   const RankFigures rank_figures = rankFigures(assembly, report.loop);
+  const nlohmann::json dem = assembly.coupled ? demFigures(assembly, world) : nlohmann::json();
   report.steps = solver.steps();
   report.time = solver.time();
   report.elements = model.elements.size();
@@ -131,7 +132,6 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
     writeRunAttributes(*h5, scene, runStatus(report.loop));
     h5->close();
   }
-  const nlohmann::json dem = assembly.coupled ? demFigures(assembly, world) : nlohmann::json();
   if (!writer)
     return report;
   std::filesystem::rename(h5_path + ".tmp", h5_path);

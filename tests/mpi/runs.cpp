@@ -291,3 +291,24 @@ TEST(Mpi, OutputFailureEndsEveryRank) {
   const auto summary = nlohmann::json::parse(test::readFile(dir / "out/summary.json"));
   EXPECT_EQ(summary["status"], "failed");
 }
+
+// The same after the loop, with disks: run.h5 fails on the first process as it is closed (no
+// frames, the series written at the end); the others, gathering the disks' figures for the
+// summary, must not wait for it there.
+TEST(Mpi, OutputFailureAfterTheLoopEndsEveryRankWithDisks) {
+  ScratchDir dir("mpi-output-failure-dem");
+  std::ofstream(dir / "scene.toml")
+      << "[target]\nwidth = 1.0e-3\nheight = 0.5e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
+         "[projectile]\nlength = 0.3e-3\n[run]\nrepresentation = \"dem\"\nend_time = 2e-7\n"
+         "frame_interval = 0\nvtk = false\n";
+  std::ofstream(dir / "limited.sh")
+      << "#!/bin/sh\ntrap '' XFSZ\nulimit -f 50\nexec " << MESOPEN_BINARY << " \"$@\"\n";
+  std::filesystem::permissions(dir / "limited.sh", std::filesystem::perms::owner_all);
+  const std::string cmd = "timeout 120 mpirun --allow-run-as-root --oversubscribe -np 2 " +
+                          (dir / "limited.sh") + " run " + (dir / "scene.toml") + " -o " +
+                          (dir / "out") + " --threads 1 --quiet >/dev/null 2>&1";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 1) << "124: a process waited for the failed one";
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/run.h5")) << "a run.h5 that could not be whole";
+}
