@@ -270,6 +270,24 @@ TEST(Mpi, CoupledBaselineRunsOnTwoRanks) {
   EXPECT_NE(summary.find("\"disks\": 6198"), std::string::npos) << summary;
 }
 
+namespace {
+
+// `mesopen run DIR/scene.toml -o DIR/out` on two processes, every process's files limited to
+// 50 KiB (SIGXFSZ ignored: a write past it fails with EFBIG), at most 120 s: mpirun's exit code
+// (124 when it was stopped for taking longer), -1 if it did not exit.
+int runWithFilesLimited(const ScratchDir &dir) {
+  std::ofstream(dir / "limited.sh")
+      << "#!/bin/sh\ntrap '' XFSZ\nulimit -f 50\nexec " << MESOPEN_BINARY << " \"$@\"\n";
+  std::filesystem::permissions(dir / "limited.sh", std::filesystem::perms::owner_all);
+  const std::string cmd = "timeout 120 mpirun --allow-run-as-root --oversubscribe -np 2 " +
+                          (dir / "limited.sh") + " run " + (dir / "scene.toml") + " -o " +
+                          (dir / "out") + " --threads 1 --quiet >/dev/null 2>&1";
+  const int status = std::system(cmd.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+} // namespace
+
 // A file the first process cannot write (a frame past the file-size limit, as on a full disk) ends
 // the run on every process, with exit code 1 and a failed summary: the other process does not wait
 // for it in the next step's exchanges (it did, until mpirun was killed).
@@ -278,16 +296,7 @@ TEST(Mpi, OutputFailureEndsEveryRank) {
   std::ofstream(dir / "scene.toml")
       << "[target]\nwidth = 1.0e-3\nheight = 0.5e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
          "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 2e-7\nframe_interval = 1e-8\n";
-  // every process's files limited to 50 KiB (SIGXFSZ ignored: the write fails with EFBIG)
-  std::ofstream(dir / "limited.sh")
-      << "#!/bin/sh\ntrap '' XFSZ\nulimit -f 50\nexec " << MESOPEN_BINARY << " \"$@\"\n";
-  std::filesystem::permissions(dir / "limited.sh", std::filesystem::perms::owner_all);
-  const std::string cmd = "timeout 120 mpirun --allow-run-as-root --oversubscribe -np 2 " +
-                          (dir / "limited.sh") + " run " + (dir / "scene.toml") + " -o " +
-                          (dir / "out") + " --threads 1 --quiet >/dev/null 2>&1";
-  const int status = std::system(cmd.c_str());
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 1) << "124: a process waited for the failed one";
+  EXPECT_EQ(runWithFilesLimited(dir), 1) << "124: a process waited for the failed one";
   const auto summary = nlohmann::json::parse(test::readFile(dir / "out/summary.json"));
   EXPECT_EQ(summary["status"], "failed");
 }
@@ -301,14 +310,6 @@ TEST(Mpi, OutputFailureAfterTheLoopEndsEveryRankWithDisks) {
       << "[target]\nwidth = 1.0e-3\nheight = 0.5e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
          "[projectile]\nlength = 0.3e-3\n[run]\nrepresentation = \"dem\"\nend_time = 2e-7\n"
          "frame_interval = 0\nvtk = false\n";
-  std::ofstream(dir / "limited.sh")
-      << "#!/bin/sh\ntrap '' XFSZ\nulimit -f 50\nexec " << MESOPEN_BINARY << " \"$@\"\n";
-  std::filesystem::permissions(dir / "limited.sh", std::filesystem::perms::owner_all);
-  const std::string cmd = "timeout 120 mpirun --allow-run-as-root --oversubscribe -np 2 " +
-                          (dir / "limited.sh") + " run " + (dir / "scene.toml") + " -o " +
-                          (dir / "out") + " --threads 1 --quiet >/dev/null 2>&1";
-  const int status = std::system(cmd.c_str());
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 1) << "124: a process waited for the failed one";
+  EXPECT_EQ(runWithFilesLimited(dir), 1) << "124: a process waited for the failed one";
   EXPECT_FALSE(std::filesystem::exists(dir / "out/run.h5")) << "a run.h5 that could not be whole";
 }
