@@ -73,6 +73,24 @@ void LevelCensus::sample(const Model &model, double time, std::size_t step,
       .values.push_back(static_cast<double>(pairs.size()));
   column("contacts", "", "node-to-segment contacts between bodies")
       .values.push_back(static_cast<double>(contacts.size()));
+  { // the elements on a node in contact (the pushed node, the segment's two), whatever the levels
+    const Elements &el = model.elements;
+    auto mark = [&](std::uint32_t a) {
+      for (std::uint32_t i = node_element_begin_[a]; i < node_element_begin_[a + 1]; ++i) {
+        const std::uint32_t e = node_elements_[i];
+        if (!el.eroded[e] && element_level_[e] < 0)
+          marked_elements_.push_back(e), element_level_[e] = 0;
+      }
+    };
+    for (const Contact::BodyContact &c : contacts)
+      mark(c.node), mark(c.segment_node[0]), mark(c.segment_node[1]);
+    column("contact_node_elements", "",
+           "elements on a node in contact between bodies (a ring at every contact)")
+        .values.push_back(static_cast<double>(marked_elements_.size()));
+    for (std::uint32_t e : marked_elements_)
+      element_level_[e] = -1;
+    marked_elements_.clear();
+  }
 
   std::vector<int> level(n_bodies);
   for (int L = 1; L <= max_level_; ++L) {

@@ -146,6 +146,7 @@ nlohmann::json levelFigures(const fem::LevelCensus &census, const LoopResult &lo
   j["mean_active_elements"] = elements / std::max<double>(census.samples(), 1.0);
   j["mean_pairs"] = pairs / std::max<double>(census.samples(), 1.0);
   j["contact_share_of_steps"] = contact_share;
+  j["contact_node_element_share"] = census.total("contact_node_elements") / std::max(elements, 1.0);
   for (int L = 1; L <= census.maxLevel(); ++L) {
     std::string p("L"); // the census's columns of largest level L: "L<L>/..."
     p += std::to_string(L);

@@ -105,4 +105,15 @@ TEST(Levels, CensusCountsLevelsRingsAndWork) {
   EXPECT_EQ(census.total("L3/pairs_3_3"), 1.0);
   EXPECT_EQ(census.total("L3/element_work"),
             4.0 + 8.0 / 8.0 + 6.0 * (1.0 - 1.0 / 8.0) + 12.0 / 8.0);
+  // The elements on a node in contact whatever the levels: the ring and body 0's on its pushed
+  // node 3 and its segment's nodes 4 and 5, in each of the two samples.
+  std::set<std::size_t> on_contact_nodes;
+  for (std::size_t e = 0; e < model.elements.size(); ++e)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = model.elements.node[3 * e + k];
+      if (a == 3 || a == 4 || a == 5 || a == b1 || a == b1 + 1 || a == corner)
+        on_contact_nodes.insert(e);
+    }
+  ASSERT_GT(on_contact_nodes.size(), ring.size());
+  EXPECT_EQ(census.total("contact_node_elements"), 2.0 * on_contact_nodes.size());
 }
