@@ -270,7 +270,6 @@ void Solver::step() {
     rank_element_steps_[r] += static_cast<double>(rank_elements_[r]);
     rank_node_steps_[r] += static_cast<double>(rank_nodes_[r]);
   }
-  ++counted_steps_;
   forces(dt, true); // stresses at n+1, f(n+1), the next stable step, and unit by unit
                     // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
   applyConstraints(0.5 * dt, true); // the imposed velocities at n+1
@@ -520,7 +519,6 @@ PartitionReport Solver::partition() const {
   report.active_nodes = rank_nodes_;
   report.element_steps = rank_element_steps_;
   report.node_steps = rank_node_steps_;
-  report.steps = counted_steps_;
   report.imbalance = imbalance(asDoubles(rank_elements_));
   report.run_imbalance = imbalance(rank_element_steps_);
   return report;

@@ -96,16 +96,15 @@ public:
 };
 
 // How the element work is shared by the processes (Solver::partition): per rank, the bodies it
-// owns, their active elements and their nodes (the active nodes it owns) now, and over the run
-// the element-steps it computed and the node-steps of the nodes it owned; the steps those are
-// summed over (this process's: those before a checkpoint are not counted); the imbalance
+// owns, their active elements and their nodes (the active nodes it owns) now, and over this
+// process's steps (not those before a checkpoint) the element-steps it computed and the
+// node-steps of the nodes it owned; the imbalance
 // max / mean - 1 of the active elements now and of the element-steps over the run; the partitions
 // made after the first (`rebalances`, of which `forced` by rebalance_every), the bodies that
 // changed owner at them, and the imbalance just before and just after the last.
 struct PartitionReport {
   std::vector<std::size_t> bodies, active_elements, active_nodes;
   std::vector<double> element_steps, node_steps;
-  std::size_t steps = 0;
   double imbalance = 0.0, run_imbalance = 0.0;
   std::size_t rebalances = 0, forced = 0, migrated_bodies = 0;
   double last_before = 0.0, last_after = 0.0;
@@ -265,7 +264,6 @@ private:
   std::vector<std::size_t> rank_elements_; // each rank's active elements, as laid out
   std::vector<std::size_t> rank_nodes_;    // the nodes of each rank's active bodies, as laid out
   std::vector<double> rank_element_steps_, rank_node_steps_; // over the run
-  std::size_t counted_steps_ = 0;                            // the steps they are summed over
   PartitionReport partition_; // the counts and the last rebalance's imbalances
   std::vector<ForceProvider *> providers_;
   std::vector<Chunk> chunks_;
