@@ -14,6 +14,9 @@ compare:
                    default) and 0.4
   hybrid-b0.25/0.44/0.66 the hybrid target with band half-widths 0.25, 0.44 and 0.66 mm
   dem              every grain a disk
+  hybrid-b0.66-d0.6, dem-d0.6   the disks' step (dem.step) at 0.6 ns, a quarter of their stable
+                   step (2.37 ns in run 6), which the others take: the DEM step's error is the
+                   difference
 (the hybrid and dem runs on fe-10-plain's mesh, step and no mass scaling).
 
 The reference is a convergence campaign (examples/convergence-run-6.toml, read through
@@ -63,6 +66,11 @@ SHORTCUTS = [  # name, label, keys on top of run 6 (no frames)
     ("hybrid-b0.66", "hybrid, band 0.66 mm",
      {**PLAIN, "run.representation": "hybrid", "run.band_half_width": 0.66e-3}),
     ("dem", "dem", {**PLAIN, "run.representation": "dem"}),
+    ("hybrid-b0.66-d0.6", "hybrid, band 0.66 mm, DEM step 0.6 ns",
+     {**PLAIN, "run.representation": "hybrid", "run.band_half_width": 0.66e-3,
+      "dem.step": 0.6e-9}),
+    ("dem-d0.6", "dem, DEM step 0.6 ns",
+     {**PLAIN, "run.representation": "dem", "dem.step": 0.6e-9}),
 ]
 PLAIN_NAME = SHORTCUTS[0][0]
 

@@ -1,0 +1,55 @@
+#!/usr/bin/python3
+"""tools/studies/scaling_model.py against figures worked by hand: one rank's step is the unit costs
+times run 6's counts; today's design receives 32 bytes per moving node it does not own and never
+goes below the nodes' and the contact's time; the spatial design's halo falls as 1/sqrt(P); bad
+arguments exit with 2.
+
+    /usr/bin/python3 tests/studies/scaling_model.py WORKDIR
+"""
+import json
+import math
+import os
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+TOOL = os.path.join(ROOT, "tools", "studies", "scaling_model.py")
+
+
+def close(a, b, what):
+    if not math.isclose(a, b, rel_tol=1e-9):
+        sys.exit("scaling_model: %s is %r, expected %r" % (what, a, b))
+
+
+def main():
+    work = sys.argv[1]
+    os.makedirs(work, exist_ok=True)
+    out = os.path.join(work, "model.json")
+    subprocess.run([sys.executable, TOOL, "--elements", "446558", "--ranks", "1,4,16",
+                    "--c-e", "30e-9", "--c-n", "20e-9", "--c-p", "500e-9", "--latency", "1e-6",
+                    "--json", out], check=True, stdout=subprocess.DEVNULL)
+    m = json.load(open(out))
+    # run 6 itself: 124,306 moving elements, 82,395 nodes, 3,089 pairs a step
+    one = 124306 * 30e-9 + 82395 * 20e-9 + 3089 * 500e-9
+    close(m["serial_step_s"], one, "one rank's step")
+    rows = {r["today"]["ranks"]: r for r in m["rows"]}
+    close(rows[1]["spatial"]["step_s"], one, "the spatial design on one rank")
+    today4 = rows[4]["today"]
+    close(today4["bytes_received"], 32 * 82395 * 3 / 4, "today's bytes at 4 ranks")
+    close(today4["compute_s"], 124306 / 4 * 30e-9 + 82395 * 20e-9 + 3089 * 500e-9,
+          "today's compute at 4 ranks")
+    close(today4["comm_s"], 3e-6 + 32 * 82395 * 0.75 / 10e9 + 2 * 2 * 1e-6,
+          "today's communication at 4 ranks")
+    close(rows[4]["spatial"]["halo_nodes"] / rows[16]["spatial"]["halo_nodes"], 2.0,
+          "the halo from 4 to 16 ranks")
+    if not rows[16]["spatial"]["efficiency"] > rows[16]["today"]["efficiency"]:
+        sys.exit("scaling_model: the spatial design is not the better at 16 ranks")
+    bad = subprocess.run([sys.executable, TOOL, "--ranks", "0"], stdout=subprocess.DEVNULL,
+                         stderr=subprocess.PIPE, text=True)
+    if bad.returncode != 2 or "--ranks" not in bad.stderr:
+        sys.exit("scaling_model: --ranks 0 gave %d: %s" % (bad.returncode, bad.stderr))
+    print("scaling_model: one rank %.4g ms a step; the halo halves from 4 to 16 ranks" % (1e3 * one))
+
+
+if __name__ == "__main__":
+    main()
