@@ -692,19 +692,10 @@ void Solver::forces(double dt, bool kick) {
         kick_sums_[u] = sums;
     }
   }
-  if (kick) {
-    energy_.kinetic = 0.0;
-    // Every process's units' sums, in rank order and unit order (one process: its own).
-    std::vector<double> mine;
-    mine.reserve(4 * kick_sums_.size());
-    for (const KickSums &k : kick_sums_)
-      mine.insert(mine.end(), {k.gravity, k.kinetic, k.provider, k.friction});
-    const std::vector<double> all = comm_.allGather(std::move(mine));
-    kick_sums_.clear();
-    for (std::size_t k = 0; k < all.size(); k += 4)
-      kick_sums_.push_back({all[k], all[k + 1], all[k + 2], all[k + 3]});
-    addKickSums(kick_sums_, 0.5 * dt);
-  }
+  // The step's figures of every process in one exchange: its shortest element step, its first
+  // inverted element, whether elements failed or asked for mass (erode and scaleMasses gather
+  // theirs only then), its elements' energies (summed in rank order, as sumInOrder) and its
+  // units' kick sums (in rank order and unit order).
   const long n = static_cast<long>(chunks_.size());
   double dt_min = std::numeric_limits<double>::infinity();
   std::int64_t inverted = -1;
@@ -712,11 +703,54 @@ void Solver::forces(double dt, bool kick) {
     inverted = sums_[i].inverted;
     dt_min = std::min(dt_min, sums_[i].dt_min);
   }
-  // The shortest step of all processes, and the first inverted element of any, the lowest number
-  // whoever computed it (its area from the process that did, gathered only then).
-  dt_min = comm_.min(dt_min);
-  const std::vector<std::int64_t> inverted_by =
-      comm_.allGather(std::vector<std::int64_t>{inverted});
+  double internal = 0.0, plastic = 0.0, viscous = 0.0;
+  bool failing = false, scaling = false;
+  for (std::size_t i = 0; i < chunks_.size(); ++i) {
+    internal += sums_[i].internal;
+    plastic += sums_[i].plastic;
+    viscous += sums_[i].viscous;
+    failing = failing || sums_[i].eroding;
+    scaling = scaling || !sums_[i].scaled.empty();
+  }
+  constexpr std::size_t header = 8; // the figures before the kick sums
+  std::vector<double> mine{dt_min,
+                           static_cast<double>(inverted),
+                           failing ? 1.0 : 0.0,
+                           scaling ? 1.0 : 0.0,
+                           internal,
+                           plastic,
+                           viscous,
+                           static_cast<double>(kick ? kick_sums_.size() : 0)};
+  if (kick)
+    for (const KickSums &k : kick_sums_)
+      mine.insert(mine.end(), {k.gravity, k.kinetic, k.provider, k.friction});
+  const std::vector<double> all = comm_.allGather(std::move(mine));
+  kick_sums_.clear();
+  std::vector<std::int64_t> inverted_by;
+  step_sums_ = {0.0, 0.0, 0.0};
+  failing_ = scaling_ = false;
+  for (std::size_t at = 0; at < all.size();) {
+    const double *f = &all[at];
+    dt_min = std::min(dt_min, f[0]);
+    inverted_by.push_back(static_cast<std::int64_t>(f[1]));
+    failing_ = failing_ || f[2] != 0.0;
+    scaling_ = scaling_ || f[3] != 0.0;
+    for (int k = 0; k < 3; ++k)
+      step_sums_[k] += f[4 + k];
+    const auto units = static_cast<std::size_t>(f[7]);
+    for (std::size_t u = 0; u < units; ++u)
+      kick_sums_.push_back({f[header + 4 * u], f[header + 4 * u + 1], f[header + 4 * u + 2],
+                            f[header + 4 * u + 3]});
+    at += header + 4 * units;
+  }
+  if (comm_.size() == 1) // one process: its own sums, as they were
+    step_sums_ = {internal, plastic, viscous};
+  if (kick) {
+    energy_.kinetic = 0.0;
+    addKickSums(kick_sums_, 0.5 * dt);
+  }
+  // The first inverted element of any process, the lowest number whoever computed it (its area
+  // from the process that did, gathered only then).
   auto first = inverted_by.end();
   for (auto it = inverted_by.begin(); it != inverted_by.end(); ++it)
     if (*it >= 0 && (first == inverted_by.end() || *it < *first))
@@ -1090,6 +1124,8 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
 // anew and the providers take the new boundaries. Their forces leave f(n+1), which the next
 // half-kick uses; the step to come was taken without them (elementPass).
 void Solver::erode() {
+  if (!failing_) // no element of any process failed in this step's pass
+    return;
   std::vector<std::uint32_t> failed;
   std::vector<std::uint8_t> kind;
   for (std::size_t i = 0; i < chunks_.size(); ++i)
@@ -1159,7 +1195,7 @@ void Solver::erode() {
 // constraint is kept); the change of the leapfrog kinetic energy 1/2 m (|v|^2 - |dv|^2), dv the
 // half-kick dt/2 f / m, is booked as mass_scaling.
 void Solver::scaleMasses(double half_dt) {
-  if (!(scale_below_ > 0.0)) // off (the same on every process: no gathering)
+  if (!(scale_below_ > 0.0) || !scaling_) // off, or no element asked (every process knows)
     return;
   std::vector<std::pair<std::uint32_t, double>> scaled;
   for (std::size_t i = 0; i < chunks_.size(); ++i)
@@ -1221,15 +1257,9 @@ double Solver::addedMass(std::size_t body) const {
 }
 
 void Solver::accountEnergy() {
-  // Element sums of this step's pass (chunk order: the same for any thread count).
-  double internal = 0.0, plastic = 0.0, viscous = 0.0;
-  for (std::size_t i = 0; i < chunks_.size(); ++i) {
-    internal += sums_[i].internal;
-    plastic += sums_[i].plastic;
-    viscous += sums_[i].viscous;
-  }
-  const std::vector<double> all = comm_.sumInOrder({internal, plastic, viscous});
-  internal = all[0], plastic = all[1], viscous = all[2];
+  // Element sums of this step's pass (chunk order: the same for any thread count), every
+  // process's (forces).
+  const double internal = step_sums_[0], plastic = step_sums_[1], viscous = step_sums_[2];
   energy_.internal = internal;
   energy_.plastic += plastic;
   energy_.viscous += viscous;

@@ -305,6 +305,10 @@ private:
   Energy energy_;
   // Work of this step: constraints and gravity; providers' forces; their frictional part.
   double kick_work_ = 0.0, provider_work_ = 0.0, friction_work_ = 0.0;
+  // The last element pass of every process (forces): its internal energy, plastic and viscous
+  // work, and whether any element failed or asked for mass.
+  std::array<double, 3> step_sums_{};
+  bool failing_ = false, scaling_ = false;
 };
 
 } // namespace mesopen::fem
