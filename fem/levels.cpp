@@ -73,6 +73,12 @@ void LevelCensus::sample(const Model &model, double time, std::size_t step,
       .values.push_back(static_cast<double>(pairs.size()));
   column("contacts", "", "node-to-segment contacts between bodies")
       .values.push_back(static_cast<double>(contacts.size()));
+  std::size_t active_nodes = 0;
+  for (std::size_t b = 0; b < n_bodies; ++b)
+    if (body_steps[b] < HUGE_VAL)
+      active_nodes += model.bodies[b].node_end - model.bodies[b].node_begin;
+  column("active_nodes", "", "nodes of the bodies that move (the single-rate node work)")
+      .values.push_back(static_cast<double>(active_nodes));
   { // the elements on a node in contact (the pushed node, the segment's two), whatever the levels
     const Elements &el = model.elements;
     auto mark = [&](std::uint32_t a) {
@@ -138,6 +144,20 @@ void LevelCensus::sample(const Model &model, double time, std::size_t step,
           marked_elements_.push_back(e), element_level_[e] = node_level_[a];
         element_level_[e] = std::min(element_level_[e], node_level_[a]);
       }
+    // Levels by whole body instead of rings: a body in contact with a finer one takes its level
+    // (one hop: by the partners' own levels), its elements and nodes alike.
+    std::vector<int> whole(level);
+    for (const Contact::BodyContact &c : contacts) {
+      whole[c.node_body] = std::min(whole[c.node_body], level[c.segment_body]);
+      whole[c.segment_body] = std::min(whole[c.segment_body], level[c.node_body]);
+    }
+    double whole_elements = 0.0, whole_nodes = 0.0;
+    for (std::size_t b = 0; b < n_bodies; ++b) {
+      whole_elements += static_cast<double>(active(b)) * std::ldexp(1.0, -whole[b]);
+      if (body_steps[b] < HUGE_VAL)
+        whole_nodes += static_cast<double>(model.bodies[b].node_end - model.bodies[b].node_begin) *
+                       std::ldexp(1.0, -whole[b]);
+    }
     std::vector<double> promoted(L + 1, 0.0);
     for (std::uint32_t e : marked_elements_) {
       const int from = level[el.body[e]], to = element_level_[e];
@@ -172,6 +192,13 @@ void LevelCensus::sample(const Model &model, double time, std::size_t step,
         .values.push_back(element_work);
     column(p + "pair_work", "", "pair updates per base step: sum over pairs of 2^-(finer level)")
         .values.push_back(pair_work);
+    column(p + "whole_body_element_work", "",
+           "element updates per base step with levels by whole body (a body in contact with a "
+           "finer one at its level): sum over active elements of 2^-level")
+        .values.push_back(whole_elements);
+    column(p + "whole_body_node_work", "",
+           "node moves per base step with levels by whole body, each node at its body's level")
+        .values.push_back(whole_nodes);
     column(p + "projectile_level", "", "the level of body 0, the projectile")
         .values.push_back(n_bodies > 0 ? level[0] : 0.0);
   }

@@ -175,6 +175,10 @@ nlohmann::json levelFigures(const fem::LevelCensus &census, const LoopResult &lo
     l["element_work_ratio"] = element_ratio;
     l["pair_work_ratio"] = pair_ratio;
     l["projected_cost_ratio"] = (1.0 - contact_share) * element_ratio + contact_share * pair_ratio;
+    l["whole_body_element_work_ratio"] =
+        census.total(p + "whole_body_element_work") / std::max(elements, 1.0);
+    l["whole_body_node_work_ratio"] =
+        census.total(p + "whole_body_node_work") / std::max(census.total("active_nodes"), 1.0);
     j[p.substr(0, p.size() - 1)] = l;
   }
   return j;

@@ -96,6 +96,11 @@ TEST(Levels, CensusCountsLevelsRingsAndWork) {
   EXPECT_EQ(census.total("L3/pairs_0_3"), 1.0);
   EXPECT_EQ(census.total("L3/pair_work"), 1.0);
   EXPECT_EQ(census.total("L3/projectile_level"), 0.0);
+  // Levels by whole body: body 1 touches body 0, so all of it at level 0 (4 + 8 elements, 6 + 9
+  // nodes).
+  EXPECT_EQ(census.total("active_nodes"), 15.0);
+  EXPECT_EQ(census.total("L3/whole_body_element_work"), 12.0);
+  EXPECT_EQ(census.total("L3/whole_body_node_work"), 15.0);
   // L = 1: body 1 at level 1.
   EXPECT_EQ(census.total("L1/elements_level_1"), 8.0);
   EXPECT_EQ(census.total("L1/element_work"), 4.0 + 8.0 / 2.0 + 6.0 * (1.0 - 1.0 / 2.0));
@@ -105,6 +110,8 @@ TEST(Levels, CensusCountsLevelsRingsAndWork) {
   EXPECT_EQ(census.total("L3/pairs_3_3"), 1.0);
   EXPECT_EQ(census.total("L3/element_work"),
             4.0 + 8.0 / 8.0 + 6.0 * (1.0 - 1.0 / 8.0) + 12.0 / 8.0);
+  EXPECT_EQ(census.total("L3/whole_body_element_work"), 12.0 + 12.0 / 8.0);
+  EXPECT_EQ(census.total("L3/whole_body_node_work"), 15.0 + 15.0 / 8.0);
   // The elements on a node in contact whatever the levels: the ring and body 0's on its pushed
   // node 3 and its segment's nodes 4 and 5, in each of the two samples.
   std::set<std::size_t> on_contact_nodes;
