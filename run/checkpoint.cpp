@@ -455,13 +455,9 @@ void Checkpoints::afterStep(const LoopResult &loop) {
     write(loop);
 }
 
-bool Checkpoints::stopBySignal(const LoopResult &loop) {
-  int signal = stopSignal();
-  if (world_.size > 1)
-    signal = static_cast<int>(world_.max(signal));
+bool Checkpoints::stopBySignal(const LoopResult &loop, int signal) {
   if (signal == 0)
     return false;
-  setStopSignal(signal);
   if (!on_)
     return true;
   if (run_.coupled && run_.coupled->windowOpen())

@@ -86,10 +86,10 @@ public:
 
   // After a step that did not end the run: a checkpoint when one is due.
   void afterStep(const LoopResult &loop);
-  // Whether a stop signal came (to any rank) and the run may stop after this step: its
-  // checkpoint written, when checkpoints are on (with disks false within a window: the loop steps
-  // on to its end).
-  bool stopBySignal(const LoopResult &loop);
+  // Whether the stop signal every rank agreed on (0: none; the time loop's agreement after each
+  // step) lets the run stop after this step: its checkpoint written, when checkpoints are on (with
+  // disks false within a window: the loop steps on to its end).
+  bool stopBySignal(const LoopResult &loop, int signal);
   // The run ended: completed, its checkpoints are removed; else they stay for --resume.
   void end(bool completed);
 

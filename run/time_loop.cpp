@@ -165,7 +165,9 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
   };
   // The output of a step (series, frames, checkpoints: the first process writes the files), its
   // failure known to every process, which all end at that step: the others would otherwise wait
-  // for the failed one in the next step's exchanges.
+  // for the failed one in the next step's exchanges. In the same reduction the processes agree on
+  // a stop signal (the largest any caught; the next turn of the loop stops on it).
+  int agreed_signal = 0;
   auto together = [&](const auto &output) {
     std::string failure;
     try {
@@ -174,26 +176,35 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
       failure = e.what();
     }
     const parallel::Communicator &processes = solver.processes();
-    if (processes.size() > 1 && processes.min(failure.empty() ? 1.0 : 0.0) == 0.0 &&
-        failure.empty())
-      failure = "another process failed at step " + std::to_string(solver.steps()) +
-                " (its message is in mpirun's output)";
+    agreed_signal = stopSignal();
+    if (processes.size() > 1) {
+      constexpr double failed = 65536.0; // above every signal number
+      const double worst =
+          -processes.min(-((failure.empty() ? 0.0 : failed) + static_cast<double>(agreed_signal)));
+      if (worst >= failed && failure.empty())
+        failure = "another process failed at step " + std::to_string(solver.steps()) +
+                  " (its message is in mpirun's output)";
+      agreed_signal = static_cast<int>(std::fmod(worst, failed));
+      if (agreed_signal != 0)
+        setStopSignal(agreed_signal);
+    }
     if (!failure.empty())
       throw std::runtime_error(failure);
   };
   const parallel::Traffic loop_start = parallel::traffic();
   try {
     // (a run continued from a checkpoint has its first sample and frame, and had not ended)
-    if (!checkpoints.resumed())
-      together([&] {
+    together([&] {
+      if (!checkpoints.resumed()) {
         series.sample(model, solver);
         frames.offer(model, solver, true);
-      });
+      }
+    });
     // the frames of the loop and the wall time they take, for the time left (Progress)
     const std::size_t frames_before = frames.size();
     const double output_before = frames.seconds();
     for (bool last = !checkpoints.resumed() && ended(true); !last;) {
-      if (checkpoints.stopBySignal(result)) {
+      if (checkpoints.stopBySignal(result, agreed_signal)) {
         result.interrupted = true;
         result.failure = std::string("stopped by ") + stopSignalName() + " at step " +
                          std::to_string(solver.steps());

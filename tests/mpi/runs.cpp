@@ -316,3 +316,39 @@ TEST(Mpi, OutputFailureAfterTheLoopEndsEveryRankWithDisks) {
   EXPECT_EQ(runWithFilesLimited(dir), 1) << "124: a process waited for the failed one";
   EXPECT_FALSE(std::filesystem::exists(dir / "out/run.h5")) << "a run.h5 that could not be whole";
 }
+
+// A stop signal caught by one process only (MESOPEN_STOP_AT_STEP=40 on rank 1, as a SIGTERM after
+// step 40) stops every process at that step: the ranks agree on it in the reduction that ends each
+// step (a process stopping alone would leave the others waiting: mpirun killed at 120 s, 124).
+// The checkpoint written there continues, on two ranks, to the same run as one never stopped.
+TEST(Mpi, StopOnOneRankStopsEveryRankAtOneStep) {
+  ScratchDir dir("mpi-stop-one-rank");
+  std::ofstream(dir / "scene.toml")
+      << "[target]\nwidth = 1.0e-3\nheight = 0.5e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
+         "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 1e-7\nframe_interval = 0\n"
+         "vtk = false\ncheckpoint_interval = 1e6\n";
+  std::ofstream(dir / "stop1.sh") << "#!/bin/sh\nif [ \"$OMPI_COMM_WORLD_RANK\" = 1 ]; then "
+                                     "export MESOPEN_STOP_AT_STEP=40; fi\nexec "
+                                  << MESOPEN_BINARY << " \"$@\"\n";
+  std::filesystem::permissions(dir / "stop1.sh", std::filesystem::perms::owner_all);
+  const std::string mpirun = "timeout 120 mpirun --allow-run-as-root --oversubscribe -np 2 ";
+  auto code = [](const std::string &cmd) {
+    const int status = std::system((cmd + " --threads 1 --quiet >/dev/null 2>&1").c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  EXPECT_EQ(code(mpirun + (dir / "stop1.sh") + " run " + (dir / "scene.toml") + " -o " +
+                 (dir / "stopped")),
+            143)
+      << "124: a process went on alone";
+  const auto stopped = nlohmann::json::parse(test::readFile(dir / "stopped/summary.json"));
+  EXPECT_EQ(stopped["status"], "interrupted");
+  EXPECT_EQ(stopped["steps"], 40);
+  EXPECT_EQ(code(mpirun + MESOPEN_BINARY + " run --resume " + (dir / "stopped")), 0);
+  EXPECT_EQ(code(mpirun + MESOPEN_BINARY + " run " + (dir / "scene.toml") + " -o " +
+                 (dir / "whole")),
+            0);
+  const std::string same = "/usr/bin/python3 " + std::string(MESOPEN_SOURCE_DIR) +
+                           "/tests/support/same_run.py " + (dir / "stopped/run.h5") + " " +
+                           (dir / "whole/run.h5");
+  EXPECT_EQ(std::system(same.c_str()), 0) << same;
+}
