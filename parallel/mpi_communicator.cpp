@@ -119,11 +119,8 @@ std::vector<double> MpiCommunicator::sumInOrder(std::vector<double> mine) const 
   return sum;
 }
 
-double MpiCommunicator::min(double value) const {
-  double smallest = value;
-  for (double v : allGather(std::vector<double>{value}))
-    smallest = std::min(smallest, v);
-  return smallest;
+double MpiCommunicator::min(double value) const { // exact in any order: one reduction
+  return allReduce(value, MPI_MIN, comm_);
 }
 
 void MpiCommunicator::share(std::size_t count, const std::function<void(double *)> &pack,

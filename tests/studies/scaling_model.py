@@ -2,7 +2,7 @@
 """tools/studies/scaling_model.py against figures worked by hand: one rank's step is the unit costs
 times run 6's counts; today's design receives 32 bytes per moving node it does not own and never
 goes below the nodes' and the contact's time; the spatial design's halo falls as 1/sqrt(P); bad
-arguments exit with 2.
+arguments (a rank count of 0, an infinite latency, a JSON file in no directory) exit with 2.
 
     /usr/bin/python3 tests/studies/scaling_model.py WORKDIR
 """
@@ -44,11 +44,15 @@ def main():
           "the halo from 4 to 16 ranks")
     if not rows[16]["spatial"]["efficiency"] > rows[16]["today"]["efficiency"]:
         sys.exit("scaling_model: the spatial design is not the better at 16 ranks")
-    bad = subprocess.run([sys.executable, TOOL, "--ranks", "0"], stdout=subprocess.DEVNULL,
-                         stderr=subprocess.PIPE, text=True)
-    if bad.returncode != 2 or "--ranks" not in bad.stderr:
-        sys.exit("scaling_model: --ranks 0 gave %d: %s" % (bad.returncode, bad.stderr))
-    print("scaling_model: one rank %.4g ms a step; the halo halves from 4 to 16 ranks" % (1e3 * one))
+    for args, key in ((["--ranks", "0"], "--ranks"), (["--latency", "inf"], "--latency"),
+                      (["--json", os.path.join(work, "no", "such.json")], "--json")):
+        bad = subprocess.run([sys.executable, TOOL] + args, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.PIPE, text=True)
+        if bad.returncode != 2 or key not in bad.stderr:
+            sys.exit("scaling_model: %s gave %d: %s" % (" ".join(args), bad.returncode,
+                                                        bad.stderr))
+    print("scaling_model: one rank %.4g ms a step; the halo halves from 4 to 16 ranks"
+          % (1e3 * one))
 
 
 if __name__ == "__main__":

@@ -109,8 +109,9 @@ def analyse(run_dir, windows):
             print("  element work %.3f, pair work %.3f of single rate: projected cost %.3f -> %s"
                   % (f["element_work_ratio"], f["pair_work_ratio"], f["projected_cost_ratio"],
                      "go" if f["projected_cost_ratio"] <= CRITERION else "no-go"))
-            print("  levels by whole body: element work %.3f, node work %.3f of single rate"
-                  % (f["whole_body_element_work_ratio"], f["whole_body_node_work_ratio"]))
+            if "whole_body_element_work_ratio" in f:  # (runs made before the census had them)
+                print("  levels by whole body: element work %.3f, node work %.3f of single rate"
+                      % (f["whole_body_element_work_ratio"], f["whole_body_node_work_ratio"]))
             out["windows"]["L%d" % L] = rec
     with open(os.path.join(run_dir, "mts-levels.json"), "w") as f:
         json.dump(out, f, indent=1)

@@ -123,13 +123,17 @@ def main():
               file=sys.stderr)
         sys.exit(2)
     for name in ("elements", "bandwidth", "latency", "active", "band", "c_e", "c_n", "c_p"):
-        if not getattr(a, name) > 0 or (name == "active" and a.active > 1):
-            print("scaling_model.py: --%s %g: allowed > 0%s" % (
-                name.replace("_", "-"), getattr(a, name), " and <= 1" if name == "active" else ""),
+        value = getattr(a, name)
+        if not (value > 0 and math.isfinite(value)) or (name == "active" and a.active > 1):
+            print("scaling_model.py: --%s %g: allowed finite and > 0%s" % (
+                name.replace("_", "-"), value, " and <= 1" if name == "active" else ""),
                 file=sys.stderr)
             sys.exit(2)
     if any(r < 1 for r in a.ranks):
         print("scaling_model.py: --ranks: each at least 1", file=sys.stderr)
+        sys.exit(2)
+    if a.json and not os.path.isdir(os.path.dirname(os.path.abspath(a.json))):
+        print("scaling_model.py: --json %s: no such directory" % a.json, file=sys.stderr)
         sys.exit(2)
     result = model(a)
     print("%.3g elements, %.3g moving a step, %.3g moving nodes, %.3g pairs; one rank: %.3g s a "
@@ -137,8 +141,9 @@ def main():
                     result["serial_step_s"]))
     for design in ("today", "spatial"):
         print("\n## %s\n\n%s" % (design, table(result, design)))
-    print("\nThe spatial design's efficiency falls below one half at %s ranks." %
-          result["spatial_half_efficiency_ranks"])
+    stop = result["spatial_half_efficiency_ranks"]
+    print("\nThe spatial design's efficiency falls below one half at %d ranks." % stop if stop else
+          "\nThe spatial design's efficiency stays above one half up to %d ranks." % (1 << 24))
     if a.json:
         tmp = a.json + ".tmp"
         with open(tmp, "w") as f:
