@@ -739,8 +739,8 @@ void Solver::forces(double dt, bool kick) {
       step_sums_[k] += f[4 + k];
     const auto units = static_cast<std::size_t>(f[7]);
     for (std::size_t u = 0; u < units; ++u)
-      kick_sums_.push_back({f[header + 4 * u], f[header + 4 * u + 1], f[header + 4 * u + 2],
-                            f[header + 4 * u + 3]});
+      kick_sums_.push_back(
+          {f[header + 4 * u], f[header + 4 * u + 1], f[header + 4 * u + 2], f[header + 4 * u + 3]});
     at += header + 4 * units;
   }
   if (comm_.size() == 1) // one process: its own sums, as they were

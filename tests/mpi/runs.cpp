@@ -344,9 +344,8 @@ TEST(Mpi, StopOnOneRankStopsEveryRankAtOneStep) {
   EXPECT_EQ(stopped["status"], "interrupted");
   EXPECT_EQ(stopped["steps"], 40);
   EXPECT_EQ(code(mpirun + MESOPEN_BINARY + " run --resume " + (dir / "stopped")), 0);
-  EXPECT_EQ(code(mpirun + MESOPEN_BINARY + " run " + (dir / "scene.toml") + " -o " +
-                 (dir / "whole")),
-            0);
+  EXPECT_EQ(
+      code(mpirun + MESOPEN_BINARY + " run " + (dir / "scene.toml") + " -o " + (dir / "whole")), 0);
   const std::string same = "/usr/bin/python3 " + std::string(MESOPEN_SOURCE_DIR) +
                            "/tests/support/same_run.py " + (dir / "stopped/run.h5") + " " +
                            (dir / "whole/run.h5");
