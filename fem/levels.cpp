@@ -145,18 +145,28 @@ void LevelCensus::sample(const Model &model, double time, std::size_t step,
         element_level_[e] = std::min(element_level_[e], node_level_[a]);
       }
     // Levels by whole body instead of rings: a body in contact with a finer one takes its level
-    // (one hop: by the partners' own levels), its elements and nodes alike.
-    std::vector<int> whole(level);
+    // (one hop: by the partners' own levels), its elements and nodes alike; and the same with the
+    // pairs of overlapping boxes as partners (promoted before they touch).
+    std::vector<int> whole(level), by_pairs(level);
     for (const Contact::BodyContact &c : contacts) {
       whole[c.node_body] = std::min(whole[c.node_body], level[c.segment_body]);
       whole[c.segment_body] = std::min(whole[c.segment_body], level[c.node_body]);
     }
-    double whole_elements = 0.0, whole_nodes = 0.0;
+    for (auto [a, b] : pairs) {
+      by_pairs[a] = std::min(by_pairs[a], level[b]);
+      by_pairs[b] = std::min(by_pairs[b], level[a]);
+    }
+    double whole_elements = 0.0, whole_nodes = 0.0, pair_elements = 0.0, pair_nodes = 0.0;
     for (std::size_t b = 0; b < n_bodies; ++b) {
-      whole_elements += static_cast<double>(active(b)) * std::ldexp(1.0, -whole[b]);
-      if (body_steps[b] < HUGE_VAL)
-        whole_nodes += static_cast<double>(model.bodies[b].node_end - model.bodies[b].node_begin) *
-                       std::ldexp(1.0, -whole[b]);
+      const auto elements = static_cast<double>(active(b));
+      const double nodes =
+          body_steps[b] < HUGE_VAL
+              ? static_cast<double>(model.bodies[b].node_end - model.bodies[b].node_begin)
+              : 0.0;
+      whole_elements += elements * std::ldexp(1.0, -whole[b]);
+      whole_nodes += nodes * std::ldexp(1.0, -whole[b]);
+      pair_elements += elements * std::ldexp(1.0, -by_pairs[b]);
+      pair_nodes += nodes * std::ldexp(1.0, -by_pairs[b]);
     }
     std::vector<double> promoted(L + 1, 0.0);
     for (std::uint32_t e : marked_elements_) {
@@ -199,6 +209,13 @@ void LevelCensus::sample(const Model &model, double time, std::size_t step,
     column(p + "whole_body_node_work", "",
            "node moves per base step with levels by whole body, each node at its body's level")
         .values.push_back(whole_nodes);
+    column(p + "pair_promoted_element_work", "",
+           "element updates per base step with levels by whole body, a body at the finest level "
+           "of the bodies whose boxes overlap its own")
+        .values.push_back(pair_elements);
+    column(p + "pair_promoted_node_work", "",
+           "node moves per base step with levels by whole body promoted by overlapping boxes")
+        .values.push_back(pair_nodes);
     column(p + "projectile_level", "", "the level of body 0, the projectile")
         .values.push_back(n_bodies > 0 ? level[0] : 0.0);
   }

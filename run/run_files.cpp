@@ -179,6 +179,10 @@ nlohmann::json levelFigures(const fem::LevelCensus &census, const LoopResult &lo
         census.total(p + "whole_body_element_work") / std::max(elements, 1.0);
     l["whole_body_node_work_ratio"] =
         census.total(p + "whole_body_node_work") / std::max(census.total("active_nodes"), 1.0);
+    l["pair_promoted_element_work_ratio"] =
+        census.total(p + "pair_promoted_element_work") / std::max(elements, 1.0);
+    l["pair_promoted_node_work_ratio"] =
+        census.total(p + "pair_promoted_node_work") / std::max(census.total("active_nodes"), 1.0);
     j[p.substr(0, p.size() - 1)] = l;
   }
   return j;

@@ -101,6 +101,8 @@ TEST(Levels, CensusCountsLevelsRingsAndWork) {
   EXPECT_EQ(census.total("active_nodes"), 15.0);
   EXPECT_EQ(census.total("L3/whole_body_element_work"), 12.0);
   EXPECT_EQ(census.total("L3/whole_body_node_work"), 15.0);
+  EXPECT_EQ(census.total("L3/pair_promoted_element_work"), 12.0); // the pair {0, 1} overlaps
+  EXPECT_EQ(census.total("L3/pair_promoted_node_work"), 15.0);
   // L = 1: body 1 at level 1.
   EXPECT_EQ(census.total("L1/elements_level_1"), 8.0);
   EXPECT_EQ(census.total("L1/element_work"), 4.0 + 8.0 / 2.0 + 6.0 * (1.0 - 1.0 / 2.0));

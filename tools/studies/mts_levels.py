@@ -112,6 +112,9 @@ def analyse(run_dir, windows):
             if "whole_body_element_work_ratio" in f:  # (runs made before the census had them)
                 print("  levels by whole body: element work %.3f, node work %.3f of single rate"
                       % (f["whole_body_element_work_ratio"], f["whole_body_node_work_ratio"]))
+            if "pair_promoted_element_work_ratio" in f:
+                print("  promoted by overlapping boxes: element work %.3f, node work %.3f"
+                      % (f["pair_promoted_element_work_ratio"], f["pair_promoted_node_work_ratio"]))
             out["windows"]["L%d" % L] = rec
     with open(os.path.join(run_dir, "mts-levels.json"), "w") as f:
         json.dump(out, f, indent=1)
