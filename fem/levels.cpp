@@ -60,6 +60,10 @@ void LevelCensus::sample(const Model &model, double time, std::size_t step,
     return body_steps[b] < HUGE_VAL ? body.element_end - body.element_begin - body.eroded
                                     : std::size_t{0};
   };
+  auto moving_nodes = [&](std::size_t b) {
+    const Body &body = model.bodies[b];
+    return body_steps[b] < HUGE_VAL ? body.node_end - body.node_begin : std::size_t{0};
+  };
   std::size_t active_elements = 0;
   for (std::size_t b = 0; b < n_bodies; ++b)
     active_elements += active(b);
@@ -75,8 +79,7 @@ void LevelCensus::sample(const Model &model, double time, std::size_t step,
       .values.push_back(static_cast<double>(contacts.size()));
   std::size_t active_nodes = 0;
   for (std::size_t b = 0; b < n_bodies; ++b)
-    if (body_steps[b] < HUGE_VAL)
-      active_nodes += model.bodies[b].node_end - model.bodies[b].node_begin;
+    active_nodes += moving_nodes(b);
   column("active_nodes", "", "nodes of the bodies that move (the single-rate node work)")
       .values.push_back(static_cast<double>(active_nodes));
   { // the elements on a node in contact (the pushed node, the segment's two), whatever the levels
@@ -144,30 +147,6 @@ void LevelCensus::sample(const Model &model, double time, std::size_t step,
           marked_elements_.push_back(e), element_level_[e] = node_level_[a];
         element_level_[e] = std::min(element_level_[e], node_level_[a]);
       }
-    // Levels by whole body instead of rings: a body in contact with a finer one takes its level
-    // (one hop: by the partners' own levels), its elements and nodes alike; and the same with the
-    // pairs of overlapping boxes as partners (promoted before they touch).
-    std::vector<int> whole(level), by_pairs(level);
-    for (const Contact::BodyContact &c : contacts) {
-      whole[c.node_body] = std::min(whole[c.node_body], level[c.segment_body]);
-      whole[c.segment_body] = std::min(whole[c.segment_body], level[c.node_body]);
-    }
-    for (auto [a, b] : pairs) {
-      by_pairs[a] = std::min(by_pairs[a], level[b]);
-      by_pairs[b] = std::min(by_pairs[b], level[a]);
-    }
-    double whole_elements = 0.0, whole_nodes = 0.0, pair_elements = 0.0, pair_nodes = 0.0;
-    for (std::size_t b = 0; b < n_bodies; ++b) {
-      const auto elements = static_cast<double>(active(b));
-      const double nodes =
-          body_steps[b] < HUGE_VAL
-              ? static_cast<double>(model.bodies[b].node_end - model.bodies[b].node_begin)
-              : 0.0;
-      whole_elements += elements * std::ldexp(1.0, -whole[b]);
-      whole_nodes += nodes * std::ldexp(1.0, -whole[b]);
-      pair_elements += elements * std::ldexp(1.0, -by_pairs[b]);
-      pair_nodes += nodes * std::ldexp(1.0, -by_pairs[b]);
-    }
     std::vector<double> promoted(L + 1, 0.0);
     for (std::uint32_t e : marked_elements_) {
       const int from = level[el.body[e]], to = element_level_[e];
@@ -202,20 +181,39 @@ void LevelCensus::sample(const Model &model, double time, std::size_t step,
         .values.push_back(element_work);
     column(p + "pair_work", "", "pair updates per base step: sum over pairs of 2^-(finer level)")
         .values.push_back(pair_work);
-    column(p + "whole_body_element_work", "",
-           "element updates per base step with levels by whole body (a body in contact with a "
-           "finer one at its level): sum over active elements of 2^-level")
-        .values.push_back(whole_elements);
-    column(p + "whole_body_node_work", "",
-           "node moves per base step with levels by whole body, each node at its body's level")
-        .values.push_back(whole_nodes);
-    column(p + "pair_promoted_element_work", "",
-           "element updates per base step with levels by whole body, a body at the finest level "
-           "of the bodies whose boxes overlap its own")
-        .values.push_back(pair_elements);
-    column(p + "pair_promoted_node_work", "",
-           "node moves per base step with levels by whole body promoted by overlapping boxes")
-        .values.push_back(pair_nodes);
+    // Levels by whole body instead of rings: a body takes the finest own level of its partners
+    // (one hop), its elements and nodes alike; the partners the bodies in contact with it, or those
+    // whose boxes overlap its own (promoted before they touch).
+    auto wholeBody = [&](const std::string &name, const std::string &partners,
+                         const auto &each_partnership) {
+      std::vector<int> whole(level);
+      each_partnership([&](std::uint32_t a, std::uint32_t b) {
+        whole[a] = std::min(whole[a], level[b]);
+        whole[b] = std::min(whole[b], level[a]);
+      });
+      double elements = 0.0, nodes = 0.0;
+      for (std::size_t b = 0; b < n_bodies; ++b) {
+        elements += static_cast<double>(active(b)) * std::ldexp(1.0, -whole[b]);
+        nodes += static_cast<double>(moving_nodes(b)) * std::ldexp(1.0, -whole[b]);
+      }
+      column(p + name + "_element_work", "",
+             "element updates per base step with levels by whole body, a body at the finest level "
+             "of " +
+                 partners + ": sum over active elements of 2^-level")
+          .values.push_back(elements);
+      column(p + name + "_node_work", "",
+             "node moves per base step with levels by whole body (" + partners +
+                 "), each node at its body's level")
+          .values.push_back(nodes);
+    };
+    wholeBody("whole_body", "the bodies in contact with it", [&](const auto &partners) {
+      for (const Contact::BodyContact &c : contacts)
+        partners(c.node_body, c.segment_body);
+    });
+    wholeBody("pair_promoted", "the bodies whose boxes overlap its own", [&](const auto &partners) {
+      for (auto [a, b] : pairs)
+        partners(a, b);
+    });
     column(p + "projectile_level", "", "the level of body 0, the projectile")
         .values.push_back(n_bodies > 0 ? level[0] : 0.0);
   }

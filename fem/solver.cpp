@@ -743,8 +743,6 @@ void Solver::forces(double dt, bool kick) {
           {f[header + 4 * u], f[header + 4 * u + 1], f[header + 4 * u + 2], f[header + 4 * u + 3]});
     at += header + 4 * units;
   }
-  if (comm_.size() == 1) // one process: its own sums, as they were
-    step_sums_ = {internal, plastic, viscous};
   if (kick) {
     energy_.kinetic = 0.0;
     addKickSums(kick_sums_, 0.5 * dt);
