@@ -104,8 +104,11 @@ double Contact::penetration(std::size_t B, double px, double py, Scratch &scratc
 
 // A step: the allowances let go by a step's share, the pairs of bodies (broad phase), the contacts
 // of each pair and their forces (narrow phase), the walls' contacts, the forces into the nodes.
-void Contact::addForces(Model &model, double, double dt) {
+void Contact::addForces(Model &model, double time, double dt) {
   const auto start = std::chrono::steady_clock::now();
+  time_ = time;
+  if (!model.due.empty() && pushed_time_.empty())
+    pushed_time_.assign(pushed_.size(), -HUGE_VAL);
   allowances_.release();
   if (pairs_.update(model, boundaries_))
     ++stats_.searches;
@@ -253,26 +256,22 @@ void Contact::addBlock(Model &model, std::size_t k) {
   Nodes &nd = model.nodes;
   std::uint32_t woken = no_node;
   // the depths the block's nodes are pushed at, for the next step's hits
-  // (with levels, of the due bodies' nodes: the others' pairs were not computed)
-  if (model.due.empty()) {
+  // (with levels, a depth carries the time it was pushed at instead: see hit)
+  const bool levels = !model.due.empty();
+  if (!levels) {
     for (std::uint32_t p : block_pushed_[k])
       pushed_[p] = 0.0;
     block_pushed_[k].clear();
-  } else {
-    std::size_t kept = 0;
-    for (std::uint32_t p : block_pushed_[k])
-      if (model.due[nd.body[p]])
-        pushed_[p] = 0.0;
-      else
-        block_pushed_[k][kept++] = p;
-    block_pushed_[k].resize(kept);
   }
   for (const Hits &hits : run_hits_)
     for (std::size_t i = 0, n = hits.loads[k].size(); i < n; ++i) {
       const Load &l = hits.loads[k][i];
       if (i + prefetch_ahead < n)
         prefetchLoad(nd, hits.loads[k][i + prefetch_ahead]);
-      if (l.depth > 0.0 && l.depth > pushed_[l.node]) { // (a reaction is pushed at 0)
+      if (levels) {
+        if (l.depth > 0.0 && (pushed_time_[l.node] != time_ || l.depth > pushed_[l.node]))
+          pushed_[l.node] = l.depth, pushed_time_[l.node] = time_;
+      } else if (l.depth > 0.0 && l.depth > pushed_[l.node]) { // (a reaction is pushed at 0)
         if (pushed_[l.node] == 0.0)
           block_pushed_[k].push_back(l.node);
         pushed_[l.node] = l.depth;
@@ -550,7 +549,10 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
   // (approachReach), the node was not reached by approach: B's boundary folded over it, or a new
   // closest segment took over in a dented body. Pushed out at once it would leave at depth / dt;
   // the excess is allowed for instead and let go over release_steps steps, as erosion's overlaps.
-  const double reach = approachReach(pushed_[p], h, vn, dt);
+  // (with levels, the depth pushed at the pair's last step, the pair's window ago, or since)
+  const double pushed =
+      levels && pushed_time_[p] < time_ - dt * (1.0 + 1e-9) ? 0.0 : pushed_[p];
+  const double reach = approachReach(pushed, h, vn, dt);
   if (depth > reach)
     hits.sudden.emplace_back(p, depth - reach), depth = reach;
   // Two nodes that meet are pushed apart by both passes, a wall contact by one: the walls take

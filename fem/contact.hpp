@@ -195,6 +195,9 @@ private:
   // The depth each model node was pushed at in the last step (the deepest of its contacts; 0 if
   // none; the nodes where it is not 0 are in block_pushed_).
   std::vector<double> pushed_;
+  // With levels: the time each node's depth in pushed_ was pushed at, and this step's time.
+  std::vector<double> pushed_time_;
+  double time_ = 0.0;
   ContactStatistics stats_;
 
 public:

@@ -381,14 +381,15 @@ void Solver::updateActivity() {
       const bool averaged = s_.anti_locking && material->plastic();
       // A work unit holds whole bodies (no node is shared between units, so each unit adds its
       // elements' forces into the nodes without races, in element order).
-      const bool new_unit = units_.size() == first_unit || unit_elements >= unit_target;
+      // (with levels, a unit holds consecutive bodies: its nodes stay together)
+      const bool new_unit = units_.size() == first_unit || unit_elements >= unit_target ||
+                            (by_body && units_.back().node_hi != body.node_begin);
       if (new_unit) {
         units_.push_back({chunks_.size(), chunks_.size(), unit_nodes_.size(), unit_nodes_.size(),
                           body.node_begin, body.node_end, false});
         unit_elements = 0;
       }
       Unit &unit = units_.back();
-      const std::size_t body_chunks = chunks_.size();
       // The body's elements in runs without eroded ones.
       for (std::size_t e = body.element_begin; e < body.element_end;) {
         std::size_t end = body.element_end;
@@ -399,14 +400,14 @@ void Solver::updateActivity() {
           while (end < body.element_end && !m_.elements.eroded[end])
             ++end;
         }
-        appendInPieces(chunks_, by_body ? body_chunks : unit.chunk_begin,
+        appendInPieces(chunks_, unit.chunk_begin,
                        Chunk{{e, end}, material, averaged}, s_.chunk, [&](const Chunk &c) {
                          return c.material == material && c.averaged_volume == averaged;
                        });
         unit_elements += end - e;
         e = end;
       }
-      appendInPieces(unit_nodes_, by_body ? unit_nodes_.size() : unit.nodes_begin,
+      appendInPieces(unit_nodes_, unit.nodes_begin,
                      Range{body.node_begin, body.node_end},
                      std::numeric_limits<std::size_t>::max(), [](const Range &) { return true; });
       unit.chunk_end = chunks_.size();
@@ -1120,27 +1121,13 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   // element bound for their material's state: L_s / c times criticalStepGain, the damping factor
   // unchanged.
   const double refine_below = refine_margin * shortest_step_;
-  // With levels, a body's level is the longest power of two of base steps within its own step:
-  // when the exact bounds (at most 1.5 times the cheap ones) could lift the batch to the next
-  // level, its elements below that level's step take them too, until one stays below it (the level
-  // is then the cheap bounds' one).
-  double lift_below = 0.0;
-  if (levels() && dt_ > 0.0 && dt_min < HUGE_VAL) {
-    const double base = dt_ / (s_.safety * step_scale_); // the base step before those factors
-    const int level = stepLevel(dt_min, base, s_.max_level);
-    const double next = base * std::ldexp(1.0, level + 1);
-    if (level < s_.max_level && 1.5 * dt_min >= next)
-      lift_below = next;
-  }
-  if (dt_min < std::max(refine_below, lift_below)) {
+  if (dt_min < refine_below) {
     dt_min = HUGE_VAL;
     for (std::size_t i = 0; i < n; ++i) {
-      if (step[i] < refine_below || step[i] < lift_below) {
+      if (step[i] < refine_below) {
         const double g_x[3] = {gx[0][i], gx[1][i], gx[2][i]},
                      g_y[3] = {gy[0][i], gy[1][i], gy[2][i]};
         step[i] *= criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i], shear_share[i]);
-        if (step[i] < lift_below)
-          lift_below = 0.0;
       }
       dt_min = std::min(dt_min, step[i]);
     }
@@ -1178,6 +1165,9 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
       }
     }
   }
+  // With levels, each element's step, for its body's (bodySums).
+  if (levels())
+    std::copy(step, step + n, level_step_.data() + e0);
   // Into the unit's nodes, in element order.
   for (std::size_t i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) {

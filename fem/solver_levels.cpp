@@ -34,11 +34,13 @@ void Solver::startLevels() {
   m_.due.assign(n, 1);
   m_.window.assign(n, 0.0);
   m_.own_step.assign(n, 0.0);
+  penalty_level_.assign(n, 0.0);
   own_level_.assign(n, static_cast<std::uint8_t>(s_.max_level));
   body_step_min_.assign(n, HUGE_VAL);
   body_kinetic_.assign(n, 0.0);
   body_internal_.assign(n, 0.0);
   level_start_.assign(static_cast<std::size_t>(s_.max_level) + 1, 0.0);
+  level_step_.assign(m_.elements.size(), HUGE_VAL);
 }
 
 void Solver::addKinetic(std::size_t node, double change) {
@@ -47,19 +49,25 @@ void Solver::addKinetic(std::size_t node, double change) {
     body_kinetic_[m_.nodes.body[node]] += change;
 }
 
-// The internal energy and shortest element step of the bodies of units [unit_begin, unit_end) from
-// their chunks' sums of the last pass (a chunk holds one body's elements).
+// The internal energy and shortest element step of the bodies of units [unit_begin, unit_end)
+// from their elements after the last pass (their energy, their steps in level_step_).
 void Solver::bodySums(std::size_t unit_begin, std::size_t unit_end) {
   const Elements &el = m_.elements;
-  std::size_t last = static_cast<std::size_t>(-1);
+  std::size_t b = static_cast<std::size_t>(-1);
+  double internal = 0.0, step = HUGE_VAL;
   for (std::size_t u = unit_begin; u < unit_end; ++u)
-    for (std::size_t c = units_[u].chunk_begin; c < units_[u].chunk_end; ++c) {
-      const std::size_t b = el.body[chunks_[c].begin];
-      if (b != last)
-        body_internal_[b] = 0.0, body_step_min_[b] = HUGE_VAL, last = b;
-      body_internal_[b] += sums_[c].internal;
-      body_step_min_[b] = std::min(body_step_min_[b], sums_[c].dt_min);
-    }
+    for (std::size_t c = units_[u].chunk_begin; c < units_[u].chunk_end; ++c)
+      for (std::size_t e = chunks_[c].begin; e < chunks_[c].end; ++e) {
+        if (el.body[e] != b) {
+          if (b != static_cast<std::size_t>(-1))
+            body_internal_[b] = internal, body_step_min_[b] = step;
+          b = el.body[e], internal = 0.0, step = HUGE_VAL;
+        }
+        internal += el.energy[e];
+        step = std::min(step, level_step_[e]);
+      }
+  if (b != static_cast<std::size_t>(-1))
+    body_internal_[b] = internal, body_step_min_[b] = step;
 }
 
 std::vector<std::size_t> Solver::elementsByLevel() const {
@@ -122,7 +130,12 @@ void Solver::stepLevels() {
     if (due)
       m_.window[b] = tau[level_[b]];
     static const bool constant = getenv("MESOPEN_DEBUG_SOFT") != nullptr;
-    m_.own_step[b] = std::ldexp(dt, constant ? s_.max_level : own_level_[b]);
+    static const double rate = getenv("MESOPEN_DEBUG_RATE") ? atof(getenv("MESOPEN_DEBUG_RATE")) : 1e9;
+    // the penalty's level: up at once, down by `rate` levels a step
+    double &lambda = penalty_level_[b];
+    const double target = constant ? s_.max_level : own_level_[b];
+    lambda = target >= lambda ? target : std::max(target, lambda - rate);
+    m_.own_step[b] = std::ldexp(dt, 0) * std::exp2(lambda);
   }
   { // the due bodies' external forces cleared; the others keep theirs for their next half-kick
     std::size_t kept = 0;
@@ -205,14 +218,17 @@ void Solver::forcesLevels(int top, const double *tau) {
   const bool gravity = gx != 0.0 || gy != 0.0;
   const std::size_t units_end = level_units_[static_cast<std::size_t>(top) + 1];
   std::vector<KickSums> unit_sums(units_end);
+  unit_scratch_.resize(static_cast<std::size_t>(omp_get_max_threads()));
   for (int l = 0; l <= top; ++l) {
     const auto level = static_cast<std::size_t>(l);
     const double dt = tau[l];
 #pragma omp parallel if (level_units_[level + 1] - level_units_[level] > 1)
     {
-      std::vector<NodeState> state;
-      std::vector<NodeForce> force;
-      std::vector<double> jacobian;
+      // (kept from step to step: a level's unit may span many nodes not its own)
+      Scratch &scratch = unit_scratch_[static_cast<std::size_t>(omp_get_thread_num())];
+      std::vector<NodeState> &state = scratch.state;
+      std::vector<NodeForce> &force = scratch.force;
+      std::vector<double> &jacobian = scratch.jacobian;
       for (auto [u, end] = threadShare(level_thread_units_[level]); u < end; ++u) {
         const Unit &unit = units_[u];
         const std::size_t base = unit.node_lo;
@@ -230,22 +246,21 @@ void Solver::forcesLevels(int top, const double *tau) {
           nodalVolumes(unit, nodes);
         for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
           elementPass(chunks_[i], dt, nodes, sums_[i]);
-        KickSums sums;
-        for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r) { // one body each
-          KickSums body;
+        KickSums sums; // the kinetic energy body by body into body_kinetic_
+        std::uint32_t body = nd.body[unit.node_lo];
+        for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
           for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
+            if (nd.body[a] != body)
+              body_kinetic_[body] = std::exchange(sums.kinetic, 0.0), body = nd.body[a];
             double fx = force[a - base].x, fy = force[a - base].y;
             if (nd.is_loaded[a])
               fx += nd.external[a].fx, fy += nd.external[a].fy;
             nd.fx[a] = fx, nd.fy[a] = fy;
             double vx = state[a - base].vx, vy = state[a - base].vy;
-            halfKickLevels(a, 0.5 * dt, 0.5 * dt, fx, fy, true, vx, vy, body);
+            halfKickLevels(a, 0.5 * dt, 0.5 * dt, fx, fy, true, vx, vy, sums);
             nd.vx[a] = vx, nd.vy[a] = vy;
           }
-          body_kinetic_[nd.body[unit_nodes_[r].begin]] = body.kinetic;
-          sums.gravity += body.gravity, sums.provider += body.provider;
-          sums.friction += body.friction;
-        }
+        body_kinetic_[body] = std::exchange(sums.kinetic, 0.0);
         unit_sums[u] = sums;
       }
     }
@@ -293,12 +308,20 @@ void Solver::forcesLevels(int top, const double *tau) {
 void Solver::chooseLevels(int top) {
   const std::size_t n = m_.bodies.size();
   const auto max_level = static_cast<std::uint8_t>(s_.max_level);
+  static const bool debug = getenv("MESOPEN_DEBUG_LEVELS") != nullptr;
+  static double own_up = 0, own_down = 0, up = 0, down = 0, by_level[8] = {};
+  std::vector<std::uint8_t> before_own = own_level_, before = level_;
   for (std::size_t b = 0; b < n; ++b)
     if (m_.at_rest[b])
       own_level_[b] = max_level;
-    else if (level_[b] <= top)
-      own_level_[b] = static_cast<std::uint8_t>(
-          stepLevel(s_.safety * step_scale_ * body_step_min_[b], dt_, s_.max_level));
+    else if (level_[b] <= top) {
+      // up only with a margin (a body near a threshold would flip between two levels)
+      static const double margin = getenv("MESOPEN_DEBUG_MARGIN") ? atof(getenv("MESOPEN_DEBUG_MARGIN")) : 1.0;
+      const double step = s_.safety * step_scale_ * body_step_min_[b];
+      const int now = stepLevel(step, dt_, s_.max_level);
+      const int up = stepLevel(step / margin, dt_, s_.max_level);
+      own_level_[b] = static_cast<std::uint8_t>(now > own_level_[b] ? std::max<int>(up, own_level_[b]) : now);
+    }
   std::vector<std::uint8_t> cap(n, max_level);
   for (auto *provider : providers_)
     provider->capLevels(own_level_, cap);
@@ -309,6 +332,17 @@ void Solver::chooseLevels(int top) {
   for (std::size_t b = 0; b < n; ++b)
     if (!m_.at_rest[b] && level_[b] <= top)
       level_[b] = std::min({own_level_[b], cap[b], static_cast<std::uint8_t>(top), static_cast<std::uint8_t>(debug_cap)});
+  if (debug) {
+    for (std::size_t b = 0; b < n; ++b) if (!m_.at_rest[b]) {
+      own_up += own_level_[b] > before_own[b]; own_down += own_level_[b] < before_own[b];
+      up += level_[b] > before[b]; down += level_[b] < before[b]; by_level[level_[b]] += 1;
+    }
+    if (steps_ % 1000 == 0) {
+      fprintf(stderr, "step %zu own up %g down %g level up %g down %g body-steps by level", steps_, own_up, own_down, up, down);
+      for (int l = 0; l <= s_.max_level; ++l) fprintf(stderr, " %g", by_level[l]);
+      fprintf(stderr, "\n");
+    }
+  }
 }
 
 } // namespace mesopen::fem
