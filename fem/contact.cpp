@@ -523,14 +523,14 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
   const ContactBoundaries &bd = boundaries_;
   const auto [A, k, B, k1, k2, w2, nx, ny, found_depth, h, mu] = f;
   // With levels, over the pair's window (the coarser body's), each side's impulse as a force over
-  // its own body's window.
+  // its own body's window; the penalty from the finer body's own step (Model::own_step), which
+  // changes far less often than the pair's window.
   const bool levels = !model.window.empty();
   double penalty_dt = dt;
   if (levels) {
     dt = k1 == no_node ? model.window[A] : std::max(model.window[A], model.window[B]);
-    static const bool by_window = getenv("MESOPEN_DEBUG_PENALTY_WINDOW") != nullptr;
-    penalty_dt = by_window ? dt : std::max(dt, k1 == no_node ? model.own_step[A]
-                                             : std::min(model.own_step[A], model.own_step[B]));
+    penalty_dt = std::max(dt, k1 == no_node ? model.own_step[A]
+                                            : std::min(model.own_step[A], model.own_step[B]));
   }
   double depth = found_depth;
   const Nodes &nd = model.nodes;
@@ -550,8 +550,7 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
   // closest segment took over in a dented body. Pushed out at once it would leave at depth / dt;
   // the excess is allowed for instead and let go over release_steps steps, as erosion's overlaps.
   // (with levels, the depth pushed at the pair's last step, the pair's window ago, or since)
-  const double pushed =
-      levels && pushed_time_[p] < time_ - dt * (1.0 + 1e-9) ? 0.0 : pushed_[p];
+  const double pushed = levels && pushed_time_[p] < time_ - dt * (1.0 + 1e-9) ? 0.0 : pushed_[p];
   const double reach = approachReach(pushed, h, vn, dt);
   if (depth > reach)
     hits.sudden.emplace_back(p, depth - reach), depth = reach;
@@ -560,8 +559,8 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
   const bool wall = k1 == no_node;
   const double kappa = wall ? 2.0 * s_.stiffness : s_.stiffness, c = damping_[wall];
   // (the first `touching` h of the depth is free)
-  const ContactForce f_c =
-      contactForce(m_eff, m_eff, depth - touching * h, vx, vy, vn, nx, ny, kappa, c, mu, penalty_dt);
+  const ContactForce f_c = contactForce(m_eff, m_eff, depth - touching * h, vx, vy, vn, nx, ny,
+                                        kappa, c, mu, penalty_dt);
   const double fx = f_c.fx, fy = f_c.fy, friction_x = -f_c.ft * f_c.tx,
                friction_y = -f_c.ft * f_c.ty;
   const double scale_a = levels ? dt / model.window[A] : 1.0;
@@ -572,7 +571,8 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
     const double scale_b = levels ? dt / model.window[B] : 1.0;
     for (auto [s, w] : {std::pair{k1, w1}, {k2, w2}}) {
       const double ws = w * scale_b;
-      loads.push_back({bd.nodes[s], B, -ws * fx, -ws * fy, -ws * friction_x, -ws * friction_y, 0.0});
+      loads.push_back(
+          {bd.nodes[s], B, -ws * fx, -ws * fy, -ws * friction_x, -ws * friction_y, 0.0});
     }
   }
   ++hits.count;
@@ -580,7 +580,8 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
   hits.deep += found_depth / h > deep;
 }
 
-void Contact::capLevels(const std::vector<std::uint8_t> &own, std::vector<std::uint8_t> &cap) const {
+void Contact::capLevels(const std::vector<std::uint8_t> &own,
+                        std::vector<std::uint8_t> &cap) const {
   for (const Pair &pair : pairs_.pairs()) {
     cap[pair.a] = std::min(cap[pair.a], own[pair.b]);
     cap[pair.b] = std::min(cap[pair.b], own[pair.a]);

@@ -104,7 +104,8 @@ public:
   // Levels: a pair is computed at steps where both bodies are due, over the coarser body's window;
   // a body may meet the bodies of its pairs (boxes within the search margin).
   bool takesLevels() const override { return true; }
-  void capLevels(const std::vector<std::uint8_t> &own, std::vector<std::uint8_t> &cap) const override;
+  void capLevels(const std::vector<std::uint8_t> &own,
+                 std::vector<std::uint8_t> &cap) const override;
   const ContactStatistics &statistics() const { return stats_; }
   // The last step's contacts between bodies (the walls' left out), in pair order: a boundary node
   // of `node_body` pushed out of `segment_body` through the segment between two of its nodes

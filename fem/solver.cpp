@@ -400,15 +400,14 @@ void Solver::updateActivity() {
           while (end < body.element_end && !m_.elements.eroded[end])
             ++end;
         }
-        appendInPieces(chunks_, unit.chunk_begin,
-                       Chunk{{e, end}, material, averaged}, s_.chunk, [&](const Chunk &c) {
+        appendInPieces(chunks_, unit.chunk_begin, Chunk{{e, end}, material, averaged}, s_.chunk,
+                       [&](const Chunk &c) {
                          return c.material == material && c.averaged_volume == averaged;
                        });
         unit_elements += end - e;
         e = end;
       }
-      appendInPieces(unit_nodes_, unit.nodes_begin,
-                     Range{body.node_begin, body.node_end},
+      appendInPieces(unit_nodes_, unit.nodes_begin, Range{body.node_begin, body.node_end},
                      std::numeric_limits<std::size_t>::max(), [](const Range &) { return true; });
       unit.chunk_end = chunks_.size();
       unit.nodes_end = unit_nodes_.size();
@@ -681,8 +680,8 @@ void Solver::applyConstraints(double half_dt, bool second_half) {
     friction_work_ += f_friction * shift;
     kick_work_ += nd.mass[a] * gravity * shift;
     if (second_half)
-      addKinetic(a,
-                 0.5 * nd.mass[a] * (target * target - sq(target - before) - v * v + sq(v - before)));
+      addKinetic(a, 0.5 * nd.mass[a] *
+                        (target * target - sq(target - before) - v * v + sq(v - before)));
     else
       position += 2.0 * half_dt * (target - v);
     v = target;

@@ -342,7 +342,7 @@ private:
   // work ranges by level (units [level_units_[l], level_units_[l + 1]), node blocks likewise) and
   // each level's share per thread; the levels the ranges were laid out for.
   std::vector<std::uint8_t> level_, own_level_, laid_levels_;
-  std::vector<double> body_step_min_, body_kinetic_, body_internal_, level_start_, penalty_level_;
+  std::vector<double> body_step_min_, body_kinetic_, body_internal_, level_start_;
   std::vector<double> level_step_; // per element: its step in its last pass
   std::vector<std::size_t> level_units_, level_blocks_;
   std::vector<std::vector<std::size_t>> level_thread_units_, level_thread_blocks_;

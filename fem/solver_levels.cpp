@@ -21,7 +21,6 @@
 
 namespace mesopen::fem {
 
-
 void Solver::startLevels() {
   if (comm_.size() > 1)
     throw std::invalid_argument("multiple time stepping (max_level " +
@@ -34,7 +33,6 @@ void Solver::startLevels() {
   m_.due.assign(n, 1);
   m_.window.assign(n, 0.0);
   m_.own_step.assign(n, 0.0);
-  penalty_level_.assign(n, 0.0);
   own_level_.assign(n, static_cast<std::uint8_t>(s_.max_level));
   body_step_min_.assign(n, HUGE_VAL);
   body_kinetic_.assign(n, 0.0);
@@ -129,13 +127,7 @@ void Solver::stepLevels() {
     m_.due[b] = due;
     if (due)
       m_.window[b] = tau[level_[b]];
-    static const bool constant = getenv("MESOPEN_DEBUG_SOFT") != nullptr;
-    static const double rate = getenv("MESOPEN_DEBUG_RATE") ? atof(getenv("MESOPEN_DEBUG_RATE")) : 1e9;
-    // the penalty's level: up at once, down by `rate` levels a step
-    double &lambda = penalty_level_[b];
-    const double target = constant ? s_.max_level : own_level_[b];
-    lambda = target >= lambda ? target : std::max(target, lambda - rate);
-    m_.own_step[b] = std::ldexp(dt, 0) * std::exp2(lambda);
+    m_.own_step[b] = std::ldexp(dt, own_level_[b]);
   }
   { // the due bodies' external forces cleared; the others keep theirs for their next half-kick
     std::size_t kept = 0;
@@ -308,41 +300,21 @@ void Solver::forcesLevels(int top, const double *tau) {
 void Solver::chooseLevels(int top) {
   const std::size_t n = m_.bodies.size();
   const auto max_level = static_cast<std::uint8_t>(s_.max_level);
-  static const bool debug = getenv("MESOPEN_DEBUG_LEVELS") != nullptr;
-  static double own_up = 0, own_down = 0, up = 0, down = 0, by_level[8] = {};
-  std::vector<std::uint8_t> before_own = own_level_, before = level_;
   for (std::size_t b = 0; b < n; ++b)
     if (m_.at_rest[b])
       own_level_[b] = max_level;
-    else if (level_[b] <= top) {
-      // up only with a margin (a body near a threshold would flip between two levels)
-      static const double margin = getenv("MESOPEN_DEBUG_MARGIN") ? atof(getenv("MESOPEN_DEBUG_MARGIN")) : 1.0;
-      const double step = s_.safety * step_scale_ * body_step_min_[b];
-      const int now = stepLevel(step, dt_, s_.max_level);
-      const int up = stepLevel(step / margin, dt_, s_.max_level);
-      own_level_[b] = static_cast<std::uint8_t>(now > own_level_[b] ? std::max<int>(up, own_level_[b]) : now);
-    }
+    else if (level_[b] <= top)
+      own_level_[b] = static_cast<std::uint8_t>(
+          ownLevel(s_.safety * step_scale_ * body_step_min_[b], dt_, own_level_[b], s_.max_level));
   std::vector<std::uint8_t> cap(n, max_level);
   for (auto *provider : providers_)
     provider->capLevels(own_level_, cap);
   for (const auto &c : m_.constraints)
     for (std::uint32_t a : c.nodes)
       cap[m_.nodes.body[a]] = 0;
-  static const int debug_cap = getenv("MESOPEN_DEBUG_CAP") ? atoi(getenv("MESOPEN_DEBUG_CAP")) : 99;
   for (std::size_t b = 0; b < n; ++b)
     if (!m_.at_rest[b] && level_[b] <= top)
-      level_[b] = std::min({own_level_[b], cap[b], static_cast<std::uint8_t>(top), static_cast<std::uint8_t>(debug_cap)});
-  if (debug) {
-    for (std::size_t b = 0; b < n; ++b) if (!m_.at_rest[b]) {
-      own_up += own_level_[b] > before_own[b]; own_down += own_level_[b] < before_own[b];
-      up += level_[b] > before[b]; down += level_[b] < before[b]; by_level[level_[b]] += 1;
-    }
-    if (steps_ % 1000 == 0) {
-      fprintf(stderr, "step %zu own up %g down %g level up %g down %g body-steps by level", steps_, own_up, own_down, up, down);
-      for (int l = 0; l <= s_.max_level; ++l) fprintf(stderr, " %g", by_level[l]);
-      fprintf(stderr, "\n");
-    }
-  }
+      level_[b] = std::min({own_level_[b], cap[b], static_cast<std::uint8_t>(top)});
 }
 
 } // namespace mesopen::fem
