@@ -323,10 +323,10 @@ const std::vector<Key> &keys() {
                 "levels and the work they would take (/levels in run.h5, `levels` in "
                 "summary.json; docs/solver.md); 0: none"),
         integer("run", "max_level", r, &R::max_level, 0, 3,
-                "multiple time stepping: the largest level, a batch of elements updating every "
-                "2^level base steps (the global stable step) within its own stable step, every "
-                "node moving every base step; the elements on a node in contact update every "
-                "step (docs/solver.md); 0: every element every step"),
+                "multiple time stepping by body: the largest level, a body stepping every "
+                "2^level base steps (the shortest body's step) within its own stable step and "
+                "no coarser than the bodies it may meet, a contact pair when both its bodies "
+                "step (docs/solver.md, one process); 0: every body every step"),
         real("run", "end_depth", r, &R::end_depth, "", 0, false, 100,
              "stop when the projectile's depth reaches this many projectile lengths (thesis: 1); "
              "0: run to end_time"),
