@@ -104,8 +104,11 @@ double Contact::penetration(std::size_t B, double px, double py, Scratch &scratc
 
 // A step: the allowances let go by a step's share, the pairs of bodies (broad phase), the contacts
 // of each pair and their forces (narrow phase), the walls' contacts, the forces into the nodes.
-void Contact::addForces(Model &model, double, double dt) {
+void Contact::addForces(Model &model, double time, double dt) {
   const auto start = std::chrono::steady_clock::now();
+  time_ = time;
+  if (!model.due.empty() && pushed_time_.empty())
+    pushed_time_.assign(pushed_.size(), -HUGE_VAL);
   allowances_.release();
   if (pairs_.update(model, boundaries_))
     ++stats_.searches;
@@ -121,6 +124,7 @@ void Contact::addForces(Model &model, double, double dt) {
 void Contact::narrowPhase(const Model &model, double dt) {
   const ContactBoundaries &bd = boundaries_;
   const long runs = static_cast<long>(pairs_.runs());
+  const bool levels = !model.due.empty();
   std::size_t refreshed = 0, overlapping = 0, skipped = 0, partial = 0;
 #pragma omp parallel if (pairs_.size() > 64) reduction(+ : refreshed, overlapping, skipped, partial)
   {
@@ -135,6 +139,8 @@ void Contact::narrowPhase(const Model &model, double dt) {
         if (i + prefetch_ahead < run.size())
           prefetchPair(run[i + prefetch_ahead], arena);
         Pair &pair = run[i];
+        if (levels && !(model.due[pair.a] && model.due[pair.b]))
+          continue;
         if (!bd.boxes[pair.a].overlaps(bd.boxes[pair.b]))
           continue;
         ++overlapping;
@@ -250,15 +256,22 @@ void Contact::addBlock(Model &model, std::size_t k) {
   Nodes &nd = model.nodes;
   std::uint32_t woken = no_node;
   // the depths the block's nodes are pushed at, for the next step's hits
-  for (std::uint32_t p : block_pushed_[k])
-    pushed_[p] = 0.0;
-  block_pushed_[k].clear();
+  // (with levels, a depth carries the time it was pushed at instead: see hit)
+  const bool levels = !model.due.empty();
+  if (!levels) {
+    for (std::uint32_t p : block_pushed_[k])
+      pushed_[p] = 0.0;
+    block_pushed_[k].clear();
+  }
   for (const Hits &hits : run_hits_)
     for (std::size_t i = 0, n = hits.loads[k].size(); i < n; ++i) {
       const Load &l = hits.loads[k][i];
       if (i + prefetch_ahead < n)
         prefetchLoad(nd, hits.loads[k][i + prefetch_ahead]);
-      if (l.depth > 0.0 && l.depth > pushed_[l.node]) { // (a reaction is pushed at 0)
+      if (levels) {
+        if (l.depth > 0.0 && (pushed_time_[l.node] != time_ || l.depth > pushed_[l.node]))
+          pushed_[l.node] = l.depth, pushed_time_[l.node] = time_;
+      } else if (l.depth > 0.0 && l.depth > pushed_[l.node]) { // (a reaction is pushed at 0)
         if (pushed_[l.node] == 0.0)
           block_pushed_[k].push_back(l.node);
         pushed_[l.node] = l.depth;
@@ -456,6 +469,8 @@ void Contact::walls(const Model &model, double dt, Hits &hits) const {
   if (!left && !right && !bottom)
     return;
   for (std::uint32_t b : pairs_.moving()) {
+    if (!model.due.empty() && !model.due[b])
+      continue;
     const Box &box = bd.boxes[b];
     if (!(left && box.x0 < s_.wall_left) && !(right && box.x1 > s_.wall_right) &&
         !(bottom && box.y0 < s_.wall_bottom))
@@ -507,6 +522,16 @@ void Contact::prefetchHit(const Model &model, const Found &f) const {
 MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, Hits &hits) const {
   const ContactBoundaries &bd = boundaries_;
   const auto [A, k, B, k1, k2, w2, nx, ny, found_depth, h, mu] = f;
+  // With levels, over the pair's window (the coarser body's), each side's impulse as a force over
+  // its own body's window; the penalty from the finer body's own step (Model::own_step), which
+  // changes far less often than the pair's window.
+  const bool levels = !model.window.empty();
+  double penalty_dt = dt;
+  if (levels) {
+    dt = k1 == no_node ? model.window[A] : std::max(model.window[A], model.window[B]);
+    penalty_dt = std::max(dt, k1 == no_node ? model.own_step[A]
+                                            : std::min(model.own_step[A], model.own_step[B]));
+  }
   double depth = found_depth;
   const Nodes &nd = model.nodes;
   const double w1 = 1.0 - w2;
@@ -524,7 +549,9 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
   // (approachReach), the node was not reached by approach: B's boundary folded over it, or a new
   // closest segment took over in a dented body. Pushed out at once it would leave at depth / dt;
   // the excess is allowed for instead and let go over release_steps steps, as erosion's overlaps.
-  const double reach = approachReach(pushed_[p], h, vn, dt);
+  // (with levels, the depth pushed at the pair's last step, the pair's window ago, or since)
+  const double pushed = levels && pushed_time_[p] < time_ - dt * (1.0 + 1e-9) ? 0.0 : pushed_[p];
+  const double reach = approachReach(pushed, h, vn, dt);
   if (depth > reach)
     hits.sudden.emplace_back(p, depth - reach), depth = reach;
   // Two nodes that meet are pushed apart by both passes, a wall contact by one: the walls take
@@ -532,19 +559,33 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
   const bool wall = k1 == no_node;
   const double kappa = wall ? 2.0 * s_.stiffness : s_.stiffness, c = damping_[wall];
   // (the first `touching` h of the depth is free)
-  const ContactForce f_c =
-      contactForce(m_eff, m_eff, depth - touching * h, vx, vy, vn, nx, ny, kappa, c, mu, dt);
+  const ContactForce f_c = contactForce(m_eff, m_eff, depth - touching * h, vx, vy, vn, nx, ny,
+                                        kappa, c, mu, penalty_dt);
   const double fx = f_c.fx, fy = f_c.fy, friction_x = -f_c.ft * f_c.tx,
                friction_y = -f_c.ft * f_c.ty;
-  hits.loads[block_[A]].push_back({p, A, fx, fy, friction_x, friction_y, depth});
+  const double scale_a = levels ? dt / model.window[A] : 1.0;
+  hits.loads[block_[A]].push_back(
+      {p, A, scale_a * fx, scale_a * fy, scale_a * friction_x, scale_a * friction_y, depth});
   if (k1 != no_node) {
     std::vector<Load> &loads = hits.loads[block_[B]];
-    for (auto [s, w] : {std::pair{k1, w1}, {k2, w2}})
-      loads.push_back({bd.nodes[s], B, -w * fx, -w * fy, -w * friction_x, -w * friction_y, 0.0});
+    const double scale_b = levels ? dt / model.window[B] : 1.0;
+    for (auto [s, w] : {std::pair{k1, w1}, {k2, w2}}) {
+      const double ws = w * scale_b;
+      loads.push_back(
+          {bd.nodes[s], B, -ws * fx, -ws * fy, -ws * friction_x, -ws * friction_y, 0.0});
+    }
   }
   ++hits.count;
   hits.depth = std::max(hits.depth, found_depth / h);
   hits.deep += found_depth / h > deep;
+}
+
+void Contact::capLevels(const std::vector<std::uint8_t> &own,
+                        std::vector<std::uint8_t> &cap) const {
+  for (const Pair &pair : pairs_.pairs()) {
+    cap[pair.a] = std::min(cap[pair.a], own[pair.b]);
+    cap[pair.b] = std::min(cap[pair.b], own[pair.a]);
+  }
 }
 
 Contact::State Contact::state() const {

@@ -101,6 +101,11 @@ public:
   // stiffness: kappa_n = 2 kappa either way.
   double stepStiffness() const override { return 2.0 * s_.stiffness; }
   void boundaryChanged(const Model &model, const std::vector<std::uint32_t> &bodies) override;
+  // Levels: a pair is computed at steps where both bodies are due, over the coarser body's window;
+  // a body may meet the bodies of its pairs (boxes within the search margin).
+  bool takesLevels() const override { return true; }
+  void capLevels(const std::vector<std::uint8_t> &own,
+                 std::vector<std::uint8_t> &cap) const override;
   const ContactStatistics &statistics() const { return stats_; }
   // The last step's contacts between bodies (the walls' left out), in pair order: a boundary node
   // of `node_body` pushed out of `segment_body` through the segment between two of its nodes
@@ -191,6 +196,9 @@ private:
   // The depth each model node was pushed at in the last step (the deepest of its contacts; 0 if
   // none; the nodes where it is not 0 are in block_pushed_).
   std::vector<double> pushed_;
+  // With levels: the time each node's depth in pushed_ was pushed at, and this step's time.
+  std::vector<double> pushed_time_;
+  double time_ = 0.0;
   ContactStatistics stats_;
 
 public:

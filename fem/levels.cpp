@@ -13,6 +13,23 @@ int stepLevel(double body_step, double base_step, int max_level) {
   return std::min(max_level, static_cast<int>(std::floor(std::log2(body_step / base_step))));
 }
 
+namespace {
+// A body's own level rises only when its step holds the higher level with this margin, and falls
+// as soon as its step no longer holds its level: its contacts' penalty follows its own level
+// (k ~ m / step^2), and a body whose step lies near a level's bound would otherwise switch to
+// and fro, each fall stiffening its contacts fourfold at their depth and pushing energy into
+// them (quickstart at L = 2: contact energy -41 J/m without the margin, -0.95 with 1.3, -0.38 at
+// a single rate, its contact damping off).
+constexpr double level_up_margin = 1.3;
+} // namespace
+
+int ownLevel(double body_step, double base_step, int now, int max_level) {
+  const int level = stepLevel(body_step, base_step, max_level);
+  if (level <= now)
+    return level;
+  return std::max(now, stepLevel(body_step / level_up_margin, base_step, max_level));
+}
+
 LevelCensus::LevelCensus(const Model &model, int max_level) : max_level_(max_level) {
   const Elements &el = model.elements;
   const std::size_t n_nodes = model.nodes.size();

@@ -23,6 +23,11 @@ namespace mesopen::fem {
 // 0 when the body's step is not twice the base step; max_level for a body at rest (infinite step).
 int stepLevel(double body_step, double base_step, int max_level);
 
+// A body's own level under multiple time stepping (Solver, max_level), from its level `now`: it
+// falls at once to stepLevel, it rises only when the step holds the higher level with a margin
+// of level_up_margin (see levels.cpp).
+int ownLevel(double body_step, double base_step, int now, int max_level);
+
 class LevelCensus {
 public:
   // Censuses for every largest level from 1 to max_level.

@@ -95,6 +95,18 @@ struct Model {
   // Per body: 1 while it is at rest and unloaded, not updated (side by side: the time loop and the
   // contact look at every body's every step). Every body starts at rest; none goes back to rest.
   std::vector<std::uint8_t> at_rest;
+  // Multiple time stepping (SolverSettings::max_level): per body, whether it steps in the step
+  // being taken (1 for a body at rest: its nodes stand still, so they are current), and the time
+  // its last or current step spans (its window). The force providers load due bodies alone, a
+  // pair of bodies only when both are due, and give a body's nodes the impulse of the pair's
+  // window as a force over the body's window. Empty: every body steps every step.
+  std::vector<std::uint8_t> due;
+  std::vector<double> window;
+  // Per body: the step of its own level (2^level base steps within its own stable step), which
+  // sets the stiffness of its contacts (a pair's penalty takes the finer body's, at least the
+  // pair's window): a penalty tied to the pair's window would stiffen fourfold or more each time
+  // a body moves down a level and push the overlap apart.
+  std::vector<double> own_step;
 
   // A body that was at rest takes part in the time loop again (contact calls this).
   void wake(std::size_t body) { at_rest[body] = 0; }

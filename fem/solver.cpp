@@ -1,4 +1,5 @@
 #include "solver.hpp"
+#include "levels.hpp"
 #include "materials/hyperelastic.hpp"
 #include "threads.hpp"
 
@@ -179,6 +180,9 @@ Solver::Solver(Model &model, SolverSettings settings, const parallel::Communicat
     owner_[b] = static_cast<int>(b % comm_.size());
   rank_elements_.assign(comm_.size(), 0);
   rank_nodes_.assign(comm_.size(), 0);
+  level_.assign(m_.bodies.size(), 0);
+  if (levels())
+    startLevels();
   rank_element_steps_.assign(comm_.size(), 0.0);
   rank_node_steps_.assign(comm_.size(), 0.0);
   const Nodes &nd = m_.nodes;
@@ -211,7 +215,11 @@ Solver::Solver(Model &model, SolverSettings settings, const parallel::Communicat
   dt_ = std::min(next_dt_, s_.max_dt);
   for (const Range &r : node_ranges_)
     for (std::size_t a = r.begin; a < r.end; ++a)
-      energy_.kinetic += 0.5 * nd.mass[a] * (nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a]);
+      addKinetic(a, 0.5 * nd.mass[a] * (nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a]));
+  if (levels()) {
+    bodySums(0, units_.size());
+    std::fill(m_.window.begin(), m_.window.end(), dt_);
+  }
   accountEnergy();
   energy_.initial = energy_.kinetic + energy_.internal;
   energy_.balance_error = 0.0;
@@ -236,6 +244,11 @@ void Solver::storeReferenceShapes() {
 }
 
 void Solver::addForceProvider(ForceProvider *provider) {
+  if (levels() && !provider->takesLevels())
+    throw std::invalid_argument("multiple time stepping (max_level " +
+                                std::to_string(s_.max_level) +
+                                ") with a force provider that steps every body every step (DEM "
+                                "coupling): allowed with FE-FE contact alone");
   providers_.push_back(provider);
   const double scale = std::sqrt(std::max(0.0, 1.0 - 0.25 * provider->stepStiffness()));
   if (scale < step_scale_) { // the step already taken from the elements, scaled
@@ -250,6 +263,8 @@ constexpr double end_steps = 20.0;
 
 // The time loop's step: each line one stage of the central-difference scheme.
 void Solver::step() {
+  if (levels())
+    return stepLevels();
   // Within end_steps stable steps of endAt's time, the rest in equal steps (past it: stable steps).
   const double stable = dt_, remaining = end_at_ - time_;
   const double steps_left = remaining > 0.0 && remaining < end_steps * stable
@@ -321,18 +336,20 @@ std::string Solver::notFinite() const {
   return msg.str();
 }
 
-// Work ranges over the bodies that move: element chunks of one material, node blocks.
+// Work ranges over the bodies that move: element chunks of one material, node blocks. With levels,
+// level by level (each level's units and blocks together), a chunk and a unit's node range of one
+// body each.
 void Solver::updateActivity() {
   const std::size_t n_bodies = m_.bodies.size();
-  if (at_rest_seen_ == m_.at_rest && !rebalance_due_)
+  if (at_rest_seen_ == m_.at_rest && !rebalance_due_ && laid_levels_ == level_)
     return;
   at_rest_seen_ = m_.at_rest;
+  laid_levels_ = level_;
   balanceLoad(std::exchange(rebalance_due_, false));
   chunks_.clear();
   units_.clear();
   unit_nodes_.clear();
   node_ranges_.clear();
-  std::size_t unit_elements = 0;
   active_elements_ = 0;
   active_bodies_.clear();
   std::fill(rank_nodes_.begin(), rank_nodes_.end(), 0);
@@ -342,46 +359,64 @@ void Solver::updateActivity() {
       continue;
     active_bodies_.push_back(static_cast<std::uint32_t>(b));
     rank_nodes_[static_cast<std::size_t>(owner(b))] += body.node_end - body.node_begin;
-    // Every process moves every active node; it computes the elements of the bodies it owns.
-    appendInPieces(node_ranges_, 0, Range{body.node_begin, body.node_end}, node_block,
-                   [](const Range &) { return true; });
     active_elements_ += body.element_end - body.element_begin - body.eroded;
-    if (!owns(b))
-      continue;
-    const Material *material = m_.materials[body.material].get();
-    const bool averaged = s_.anti_locking && material->plastic();
-    // A work unit holds whole bodies (no node is shared between units, so each unit adds its
-    // elements' forces into the nodes without races, in element order).
-    const bool new_unit = units_.empty() || unit_elements >= unit_target;
-    if (new_unit) {
-      units_.push_back({chunks_.size(), chunks_.size(), unit_nodes_.size(), unit_nodes_.size(),
-                        body.node_begin, body.node_end, false});
-      unit_elements = 0;
-    }
-    Unit &unit = units_.back();
-    // The body's elements in runs without eroded ones.
-    for (std::size_t e = body.element_begin; e < body.element_end;) {
-      std::size_t end = body.element_end;
-      if (body.eroded > 0) {
-        while (e < end && m_.elements.eroded[e])
-          ++e;
-        end = e;
-        while (end < body.element_end && !m_.elements.eroded[end])
-          ++end;
+  }
+  const bool by_body = levels();
+  const int n_levels = s_.max_level + 1;
+  level_units_.assign(n_levels + 1, 0);
+  level_blocks_.assign(n_levels + 1, 0);
+  for (int l = 0; l < n_levels; ++l) {
+    const std::size_t first_unit = units_.size(), first_block = node_ranges_.size();
+    std::size_t unit_elements = 0;
+    for (std::uint32_t b : active_bodies_) {
+      if (level_[b] != l)
+        continue;
+      const Body &body = m_.bodies[b];
+      // Every process moves every active node; it computes the elements of the bodies it owns.
+      appendInPieces(node_ranges_, first_block, Range{body.node_begin, body.node_end}, node_block,
+                     [](const Range &) { return true; });
+      if (!owns(b))
+        continue;
+      const Material *material = m_.materials[body.material].get();
+      const bool averaged = s_.anti_locking && material->plastic();
+      // A work unit holds whole bodies (no node is shared between units, so each unit adds its
+      // elements' forces into the nodes without races, in element order).
+      // (with levels, a unit holds consecutive bodies: its nodes stay together)
+      const bool new_unit = units_.size() == first_unit || unit_elements >= unit_target ||
+                            (by_body && units_.back().node_hi != body.node_begin);
+      if (new_unit) {
+        units_.push_back({chunks_.size(), chunks_.size(), unit_nodes_.size(), unit_nodes_.size(),
+                          body.node_begin, body.node_end, false});
+        unit_elements = 0;
       }
-      appendInPieces(
-          chunks_, unit.chunk_begin, Chunk{{e, end}, material, averaged}, s_.chunk,
-          [&](const Chunk &c) { return c.material == material && c.averaged_volume == averaged; });
-      unit_elements += end - e;
-      e = end;
+      Unit &unit = units_.back();
+      // The body's elements in runs without eroded ones.
+      for (std::size_t e = body.element_begin; e < body.element_end;) {
+        std::size_t end = body.element_end;
+        if (body.eroded > 0) {
+          while (e < end && m_.elements.eroded[e])
+            ++e;
+          end = e;
+          while (end < body.element_end && !m_.elements.eroded[end])
+            ++end;
+        }
+        appendInPieces(chunks_, unit.chunk_begin, Chunk{{e, end}, material, averaged}, s_.chunk,
+                       [&](const Chunk &c) {
+                         return c.material == material && c.averaged_volume == averaged;
+                       });
+        unit_elements += end - e;
+        e = end;
+      }
+      appendInPieces(unit_nodes_, unit.nodes_begin, Range{body.node_begin, body.node_end},
+                     std::numeric_limits<std::size_t>::max(), [](const Range &) { return true; });
+      unit.chunk_end = chunks_.size();
+      unit.nodes_end = unit_nodes_.size();
+      unit.node_lo = std::min(unit.node_lo, body.node_begin);
+      unit.node_hi = std::max(unit.node_hi, body.node_end);
+      unit.averaged_volume = unit.averaged_volume || averaged;
     }
-    appendInPieces(unit_nodes_, unit.nodes_begin, Range{body.node_begin, body.node_end},
-                   std::numeric_limits<std::size_t>::max(), [](const Range &) { return true; });
-    unit.chunk_end = chunks_.size();
-    unit.nodes_end = unit_nodes_.size();
-    unit.node_lo = std::min(unit.node_lo, body.node_begin);
-    unit.node_hi = std::max(unit.node_hi, body.node_end);
-    unit.averaged_volume = unit.averaged_volume || averaged;
+    level_units_[l + 1] = units_.size();
+    level_blocks_[l + 1] = node_ranges_.size();
   }
   sums_.resize(chunks_.size());
   shareAmongThreads();
@@ -530,21 +565,45 @@ PartitionReport Solver::partition() const {
 // they came and the blocks in halves, run 6 to 0.4 length took 3 % longer on two threads).
 void Solver::shareAmongThreads() {
   const auto threads = static_cast<std::size_t>(omp_get_max_threads());
-  std::vector<std::size_t> elements(units_.size(), 0);
-  for (std::size_t u = 0; u < units_.size(); ++u)
-    for (std::size_t c = units_[u].chunk_begin; c < units_[u].chunk_end; ++c)
-      elements[u] += chunks_[c].end - chunks_[c].begin;
-  thread_units_ = contiguousShares(elements, threads);
-  // A block goes with the units that hold its first node.
-  thread_blocks_.assign(threads + 1, node_ranges_.size());
-  thread_blocks_[0] = 0;
-  for (std::size_t t = 1, i = 0; t < threads; ++t) {
-    const std::size_t first_node = thread_units_[t] < units_.size()
-                                       ? units_[thread_units_[t]].node_lo
-                                       : std::numeric_limits<std::size_t>::max();
-    while (i < node_ranges_.size() && node_ranges_[i].begin < first_node)
-      ++i;
-    thread_blocks_[t] = i;
+  auto share = [&](std::size_t unit_begin, std::size_t unit_end, std::size_t block_begin,
+                   std::size_t block_end, std::vector<std::size_t> &thread_units,
+                   std::vector<std::size_t> &thread_blocks) {
+    std::vector<std::size_t> elements(unit_end - unit_begin, 0);
+    for (std::size_t u = unit_begin; u < unit_end; ++u)
+      for (std::size_t c = units_[u].chunk_begin; c < units_[u].chunk_end; ++c)
+        elements[u - unit_begin] += chunks_[c].end - chunks_[c].begin;
+    thread_units = contiguousShares(elements, threads);
+    for (std::size_t &bound : thread_units)
+      bound += unit_begin;
+    // A block goes with the units that hold its first node.
+    thread_blocks.assign(threads + 1, block_end);
+    thread_blocks[0] = block_begin;
+    for (std::size_t t = 1, i = block_begin; t < threads; ++t) {
+      const std::size_t first_node = thread_units[t] < unit_end
+                                         ? units_[thread_units[t]].node_lo
+                                         : std::numeric_limits<std::size_t>::max();
+      while (i < block_end && node_ranges_[i].begin < first_node)
+        ++i;
+      thread_blocks[t] = i;
+    }
+  };
+  share(0, units_.size(), 0, node_ranges_.size(), thread_units_, thread_blocks_);
+  if (!levels())
+    return;
+  // With levels, each level's units apart (their node blocks split by node count: a level's
+  // units are not in node order).
+  const auto n_levels = static_cast<std::size_t>(s_.max_level + 1);
+  level_thread_units_.resize(n_levels);
+  level_thread_blocks_.resize(n_levels);
+  for (std::size_t l = 0; l < n_levels; ++l) {
+    share(level_units_[l], level_units_[l + 1], level_blocks_[l], level_blocks_[l + 1],
+          level_thread_units_[l], level_thread_blocks_[l]);
+    std::vector<std::size_t> nodes;
+    for (std::size_t i = level_blocks_[l]; i < level_blocks_[l + 1]; ++i)
+      nodes.push_back(node_ranges_[i].end - node_ranges_[i].begin);
+    level_thread_blocks_[l] = contiguousShares(nodes, threads);
+    for (std::size_t &bound : level_thread_blocks_[l])
+      bound += level_blocks_[l];
   }
 }
 
@@ -621,8 +680,8 @@ void Solver::applyConstraints(double half_dt, bool second_half) {
     friction_work_ += f_friction * shift;
     kick_work_ += nd.mass[a] * gravity * shift;
     if (second_half)
-      energy_.kinetic +=
-          0.5 * nd.mass[a] * (target * target - sq(target - before) - v * v + sq(v - before));
+      addKinetic(a, 0.5 * nd.mass[a] *
+                        (target * target - sq(target - before) - v * v + sq(v - before)));
     else
       position += 2.0 * half_dt * (target - v);
     v = target;
@@ -1105,6 +1164,9 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
       }
     }
   }
+  // With levels, each element's step, for its body's (bodySums).
+  if (levels())
+    std::copy(step, step + n, level_step_.data() + e0);
   // Into the unit's nodes, in element order.
   for (std::size_t i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) {
@@ -1174,6 +1236,10 @@ void Solver::erode() {
       nd.fy[v[k]] += 0.5 * (sxy * gx + syy * gy);
     }
   }
+  if (levels()) // their energy leaves their body's sum (until its next update sums it anew)
+    for (std::uint32_t e : failed)
+      if (!el.eroded[e])
+        body_internal_[el.body[e]] -= el.energy[e];
   const double energy = erodeElements(m_, failed);
   energy_.eroded += energy;
   eroded_elements_ += failed.size();
@@ -1219,8 +1285,10 @@ void Solver::scaleMasses(double half_dt) {
       for (std::uint32_t a : c.nodes)
         constrained_[a] |= (c.constrain_x ? 1 : 0) | (c.constrain_y ? 2 : 0);
   }
+  // (with levels, over half the window of the node's body)
   auto kinetic = [&](std::size_t a) {
-    const double dvx = half_dt * nd.fx[a] / nd.mass[a], dvy = half_dt * nd.fy[a] / nd.mass[a];
+    const double h = levels() ? 0.5 * m_.window[nd.body[a]] : half_dt;
+    const double dvx = h * nd.fx[a] / nd.mass[a], dvy = h * nd.fy[a] / nd.mass[a];
     return 0.5 * nd.mass[a] * (nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a] - dvx * dvx - dvy * dvy);
   };
   for (auto [e, needed] : scaled) {
@@ -1237,7 +1305,7 @@ void Solver::scaleMasses(double half_dt) {
       if (!(constrained_[a] & 2))
         nd.vy[a] *= ratio;
       const double change = kinetic(a) - before;
-      energy_.kinetic += change;
+      addKinetic(a, change);
       energy_.mass_scaling -= change;
     }
   }

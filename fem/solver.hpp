@@ -55,6 +55,10 @@ struct SolverSettings {
   double rebalance_imbalance = 0.1;
   std::size_t rebalance_every = 0;
   std::size_t chunk = 256; // elements per material batch
+  // Multiple time stepping by body (docs/solver.md, "Multiple time stepping"): the largest level.
+  // A body at level l steps every 2^l base steps (the base step is the shortest body's), within
+  // its own stable step and no coarser than the bodies it may meet; 0: every body every step.
+  int max_level = 0;
 };
 
 // Energies per metre of depth [J/m]. Internal includes the plastic and viscous work done.
@@ -86,6 +90,12 @@ public:
   virtual double stepStiffness() const { return 0.0; }
   // The boundaries of `bodies` changed (elements eroded): what was built from them is taken anew.
   virtual void boundaryChanged(const Model &, const std::vector<std::uint32_t> & /*bodies*/) {}
+  // Multiple time stepping: whether it honours Model::due and Model::window, and, from each
+  // body's own level, the finest level of the bodies each body may meet through it (`cap`, lowered
+  // only), so that bodies step together before they touch.
+  virtual bool takesLevels() const { return false; }
+  virtual void capLevels(const std::vector<std::uint8_t> & /*own*/,
+                         std::vector<std::uint8_t> & /*cap*/) const {}
 };
 
 // A run that cannot go on (an inverted element, a step collapsed by a sliver); the message says
@@ -142,6 +152,12 @@ public:
   void addForceProvider(ForceProvider *provider);
   // Elements updated in the last step (bodies at rest and eroded elements are skipped).
   std::size_t activeElements() const { return active_elements_; }
+  // Over the run (this process's steps): the element updates computed, and those a single-rate
+  // run would have computed (the active elements of every step); equal without levels.
+  double elementSteps() const { return element_steps_; }
+  double singleRateElementSteps() const { return single_rate_element_steps_; }
+  // With levels: the active elements at each level now.
+  std::vector<std::size_t> elementsByLevel() const;
   std::size_t erodedElements() const { return eroded_elements_; } // over the run
   // Of those, the ones eroded for a collapsed step (erode_step_ratio).
   std::size_t collapsedElements() const { return collapsed_elements_; }
@@ -250,6 +266,17 @@ private:
   void shareNodes();
   void accountEnergy();
   void bodyStepsFromElements();
+  // Multiple time stepping (fem/solver_levels.cpp).
+  bool levels() const { return s_.max_level > 0; }
+  void stepLevels();
+  void kickAndDriftLevels(int top, const double *tau);
+  void forcesLevels(int top, const double *tau);
+  void halfKickLevels(std::size_t a, double half_dt, double half_external, double fx, double fy,
+                      bool second_half, double &vx, double &vy, KickSums &sums) const;
+  void chooseLevels(int top);
+  void startLevels();
+  void bodySums(std::size_t unit_begin, std::size_t unit_end);
+  void addKinetic(std::size_t node, double change);
 
   Model &m_;
   SolverSettings s_;
@@ -309,6 +336,23 @@ private:
   // work, and whether any element failed or asked for mass.
   std::array<double, 3> step_sums_{};
   bool failing_ = false, scaling_ = false;
+  // Multiple time stepping (levels()): per body its level, the level its own step allows, its
+  // shortest element step at its last update (before the safety factor), its kinetic and internal
+  // energy then; per level l the time at the last step whose number is a multiple of 2^l; the
+  // work ranges by level (units [level_units_[l], level_units_[l + 1]), node blocks likewise) and
+  // each level's share per thread; the levels the ranges were laid out for.
+  std::vector<std::uint8_t> level_, own_level_, laid_levels_;
+  std::vector<double> body_step_min_, body_kinetic_, body_internal_, level_start_;
+  std::vector<double> level_step_; // per element: its step in its last pass
+  std::vector<std::size_t> level_units_, level_blocks_;
+  std::vector<std::vector<std::size_t>> level_thread_units_, level_thread_blocks_;
+  double element_steps_ = 0.0, single_rate_element_steps_ = 0.0;
+  struct Scratch {
+    std::vector<NodeState> state;
+    std::vector<NodeForce> force;
+    std::vector<double> jacobian;
+  };
+  std::vector<Scratch> unit_scratch_; // per thread
 };
 
 } // namespace mesopen::fem

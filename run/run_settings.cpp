@@ -15,7 +15,8 @@ fem::SolverSettings solverSettings(const Scene &scene, double max_dt) {
           .erode_step_ratio = run.erode_step_ratio,
           .mass_scaling_step_ratio = run.mass_scaling_step_ratio,
           .rebalance_imbalance = run.rebalance_imbalance,
-          .rebalance_every = static_cast<std::size_t>(run.rebalance_every)};
+          .rebalance_every = static_cast<std::size_t>(run.rebalance_every),
+          .max_level = static_cast<int>(run.max_level)};
 }
 
 fem::ContactSettings contactSettings(const Scene &scene, bool walls) {

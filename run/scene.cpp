@@ -322,6 +322,11 @@ const std::vector<Key> &keys() {
                 "body's own stable step, its level on the step taken, the pairs and rings across "
                 "levels and the work they would take (/levels in run.h5, `levels` in "
                 "summary.json; docs/solver.md); 0: none"),
+        integer("run", "max_level", r, &R::max_level, 0, 3,
+                "multiple time stepping by body: the largest level, a body stepping every "
+                "2^level base steps (the shortest body's step) within its own stable step and "
+                "no coarser than the bodies it may meet, a contact pair when both its bodies "
+                "step (docs/solver.md, one process); 0: every body every step"),
         real("run", "end_depth", r, &R::end_depth, "", 0, false, 100,
              "stop when the projectile's depth reaches this many projectile lengths (thesis: 1); "
              "0: run to end_time"),
@@ -424,6 +429,10 @@ std::string knownIn(const std::string &table) {
 void checkTogether(const Scene &s) {
   const TargetSpec &t = s.target;
   auto bad = [&](const std::string &what) { throw InputError(s.path + ": " + what); };
+  if (s.run.max_level > 0 && (s.run.checkpoints() || s.run.representation != Representation::fe))
+    bad("run.max_level = " + std::to_string(s.run.max_level) +
+        " (multiple time stepping) takes neither checkpoints nor DEM grains (representation "
+        "\"fe\" only); allowed: max_level = 0 with them");
   if (t.width < 4 * t.diameter_max || t.height < 4 * t.diameter_max)
     bad("target.width and target.height must be at least 4 grain diameters (" +
         show(4 * t.diameter_max) + " m); they are " + show(t.width) + " and " + show(t.height));

@@ -60,6 +60,9 @@ struct RunSpec {
   // steps between samples of the census of multiple time stepping's levels (fem/levels.hpp); 0:
   // none
   std::int64_t level_census_interval = 0;
+  // multiple time stepping: the largest level, a batch of elements updating every 2^level base
+  // steps within its own stable step (fem/solver.hpp); 0: every element every step
+  std::int64_t max_level = fem::SolverSettings{}.max_level;
   double end_depth = 0.0;       // stop when the depth reaches this many projectile lengths
   double frame_interval = 1e-7; // simulated time between frames [s]; 0: no frames
   bool vtk = true;              // frames also as VTK files for ParaView

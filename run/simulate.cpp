@@ -142,6 +142,16 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
                                       world.size, rank_figures, dem);
   if (census)
     summary["levels"] = levelFigures(*census, report.loop, assembly.contact.get());
+  if (scene.run.max_level > 0) {
+    const fem::Solver &solver = *assembly.solver;
+    const double single = solver.singleRateElementSteps();
+    summary["multiple_time_stepping"] = {
+        {"max_level", scene.run.max_level},
+        {"element_updates", solver.elementSteps()},
+        {"single_rate_element_updates", single},
+        {"element_update_share", single > 0.0 ? solver.elementSteps() / single : 1.0},
+        {"active_elements_by_level_at_end", solver.elementsByLevel()}};
+  }
   if (checkpoints.on() || checkpoints.resumed())
     summary["checkpoints"] = {{"written", checkpoints.written()},
                               {"resumed", checkpoints.resumed()},

@@ -2,12 +2,15 @@
 // the solver measures when asked (and only then, without changing the run), and the census's
 // counts of elements, rings and pairs by level and of the work they would take.
 #include "levels.hpp"
+#include "contact.hpp"
 #include "meshes.hpp"
 #include "solver.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <omp.h>
 #include <set>
 
 using namespace mesopen;
@@ -22,6 +25,19 @@ TEST(Levels, PowerOfTwoBelowTheBodysStep) {
   EXPECT_EQ(fem::stepLevel(100.0, 1.0, 3), 3);
   EXPECT_EQ(fem::stepLevel(0.5, 1.0, 3), 0);
   EXPECT_EQ(fem::stepLevel(HUGE_VAL, 1.0, 2), 2); // at rest
+}
+
+// A body's own level falls at once and rises only with a margin of 1.3 over the higher level's
+// step: near a level's bound it would otherwise switch to and fro, and each fall stiffens its
+// contacts (their penalty follows its own level).
+TEST(Levels, OwnLevelRisesWithAMarginAndFallsAtOnce) {
+  EXPECT_EQ(fem::ownLevel(4.1, 1.0, 1, 3), 1);  // holds level 2, not with the margin
+  EXPECT_EQ(fem::ownLevel(5.3, 1.0, 1, 3), 2);  // with it
+  EXPECT_EQ(fem::ownLevel(10.0, 1.0, 1, 3), 2); // level 3 needs 8 x 1.3
+  EXPECT_EQ(fem::ownLevel(10.5, 1.0, 1, 3), 3);
+  EXPECT_EQ(fem::ownLevel(3.9, 1.0, 2, 3), 1); // falls at once
+  EXPECT_EQ(fem::ownLevel(1.5, 1.0, 3, 3), 0);
+  EXPECT_EQ(fem::ownLevel(HUGE_VAL, 1.0, 0, 2), 2); // at rest
 }
 
 // Two free bodies in translation, of the same shape, one with cells four times smaller: their own
@@ -125,4 +141,69 @@ TEST(Levels, CensusCountsLevelsRingsAndWork) {
     }
   ASSERT_GT(on_contact_nodes.size(), ring.size());
   EXPECT_EQ(census.total("contact_node_elements"), 2.0 * on_contact_nodes.size());
+}
+
+namespace {
+// A fine block (cells of 62.5 um) at 200 m/s into a coarse one (cells of 500 um, 8 times larger)
+// that a second coarse one, with a third beside it, meets at 50 m/s: the fine block's own level is
+// 0, the coarse ones' 2 (L = 2); the first coarse block is held at level 0 by the fine one it
+// meets, so that the pair of the first two coarse blocks is computed every fourth step while one
+// of them steps every step (a pair across levels).
+struct LevelsImpact {
+  fem::Energy energy;
+  fem::ContactStatistics contact;
+  double element_steps = 0.0, single_rate = 0.0;
+  std::vector<double> x, vx;
+};
+
+LevelsImpact levelsImpact(int max_level, int threads) {
+  omp_set_num_threads(threads);
+  TestMesh mesh;
+  mesh.addRectangle(0, 0.875e-3, 0.25e-3, 0.25e-3, 4, 4);
+  mesh.addRectangle(0.27e-3, 0, 2e-3, 2e-3, 4, 4);
+  mesh.addRectangle(2.29e-3, 0, 2e-3, 2e-3, 4, 4);
+  mesh.addRectangle(4.31e-3, 0, 2e-3, 2e-3, 4, 4);
+  fem::Model model = mesh.model(test::oneMaterial("quartz"));
+  fem::setBodyVelocity(model, 0, 200.0, 0.0);
+  fem::setBodyVelocity(model, 1, 0.0, 1.0);
+  fem::setBodyVelocity(model, 2, -50.0, 0.0);
+  fem::setBodyVelocity(model, 3, -50.0, 0.0);
+  fem::Contact contact(model, {});
+  fem::Solver solver(model, {.max_level = max_level});
+  solver.addForceProvider(&contact);
+  solver.endAt(1.5e-6);
+  while (solver.time() < 1.5e-6)
+    solver.step();
+  return {solver.energy(),       contact.statistics(),
+          solver.elementSteps(), solver.singleRateElementSteps(),
+          model.nodes.x,         model.nodes.vx};
+}
+} // namespace
+
+// Levels by whole body (Solver, max_level): two of the coarse blocks update at a quarter of the
+// rate, the energy balance closes within the goal of 2e-3 of the initial kinetic energy, the
+// contacts take energy out as at a single rate (a penalty stiffening at every change of a body's
+// level would put it in), none is found suddenly deep (a depth pushed at a pair's last step is kept
+// until that pair's next, not cleared at the steps of its finer body), and the run is the same
+// for one and two threads.
+TEST(Levels, ImpactAcrossLevelsKeepsEnergyAndContact) {
+  const LevelsImpact single = levelsImpact(0, 1);
+  const LevelsImpact levels = levelsImpact(2, 1);
+  EXPECT_EQ(single.element_steps, single.single_rate);
+  EXPECT_LT(levels.element_steps, 0.8 * levels.single_rate);
+  EXPECT_LT(std::abs(levels.energy.balance_error), 2e-3);
+  EXPECT_GT(single.energy.contact, 0.0);
+  EXPECT_GT(levels.energy.contact, 0.0);
+  EXPECT_EQ(levels.contact.sudden, 0u);
+  EXPECT_LT(levels.contact.max_depth, 1.5 * single.contact.max_depth);
+  const LevelsImpact two = levelsImpact(2, 2);
+  EXPECT_EQ(two.x, levels.x);
+  EXPECT_EQ(two.vx, levels.vx);
+  omp_set_num_threads(omp_get_num_procs());
+  std::printf("single rate: contact %.4g J/m, depth %.3g; levels: contact %.4g J/m, depth %.3g, "
+              "balance %.2e, element updates %.3f of single rate, kinetic %.4g / %.4g\n",
+              single.energy.contact, single.contact.max_depth, levels.energy.contact,
+              levels.contact.max_depth, levels.energy.balance_error,
+              levels.element_steps / levels.single_rate, levels.energy.kinetic,
+              single.energy.kinetic);
 }

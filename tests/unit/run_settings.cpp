@@ -24,6 +24,10 @@ TEST(RunSettings, SceneDefaultsAreTheSolversDefaults) {
   EXPECT_EQ(s.erode_step_ratio, d.erode_step_ratio);
   EXPECT_EQ(s.mass_scaling_step_ratio, d.mass_scaling_step_ratio);
   EXPECT_EQ(s.chunk, d.chunk);
+  EXPECT_EQ(s.max_level, d.max_level);
+  Scene levels;
+  levels.run.max_level = 2;
+  EXPECT_EQ(solverSettings(levels, HUGE_VAL).max_level, 2);
 }
 
 TEST(RunSettings, SceneDefaultsAreTheContactsDefaults) {

@@ -1,0 +1,320 @@
+// Multiple time stepping by body (SolverSettings::max_level > 0; docs/solver.md, "Multiple time
+// stepping"). Each body b steps at its level e_b: every 2^e_b base steps, a whole central-
+// difference step over its window tau = the time since its last step,
+//   v += tau'/2 f/m + J/(2m),  x += tau' v,  f = internal(x, v) + f_ext,  v += tau/2 f/m + J/(2m),
+// its nodes standing still in between. A pair of bodies is computed only at steps where both
+// step; its penalty and friction take the pair's window tau_p (the coarser body's) and it gives
+// each body the impulse J = tau_p f as a force over the body's own window (Model::window), half in
+// this step's second half-kick and half in the next first half-kick: the impulse (r-RESPA,
+// Tuckerman et al. 1992; asynchronous variational integrators, Lew et al. 2003) form of the
+// contact across levels. A body's level is the longest power of two of base steps within its own
+// stable step, no coarser than the own level of any body it may meet (the contact's Verlet pairs,
+// found before the bodies touch), chosen at its own steps (aligned: a level l begins at a step
+// number that is a multiple of 2^l). Bodies with imposed velocities stay at level 0.
+#include "levels.hpp"
+#include "solver.hpp"
+#include "threads.hpp"
+
+#include <bit>
+#include <cmath>
+#include <sstream>
+
+namespace mesopen::fem {
+
+void Solver::startLevels() {
+  if (comm_.size() > 1)
+    throw std::invalid_argument("multiple time stepping (max_level " +
+                                std::to_string(s_.max_level) + ") runs on one process, not " +
+                                std::to_string(comm_.size()));
+  if (s_.max_level > 7)
+    throw std::invalid_argument("max_level " + std::to_string(s_.max_level) +
+                                ": at most 7 levels above the base step");
+  const std::size_t n = m_.bodies.size();
+  m_.due.assign(n, 1);
+  m_.window.assign(n, 0.0);
+  m_.own_step.assign(n, 0.0);
+  own_level_.assign(n, static_cast<std::uint8_t>(s_.max_level));
+  body_step_min_.assign(n, HUGE_VAL);
+  body_kinetic_.assign(n, 0.0);
+  body_internal_.assign(n, 0.0);
+  level_start_.assign(static_cast<std::size_t>(s_.max_level) + 1, 0.0);
+  level_step_.assign(m_.elements.size(), HUGE_VAL);
+}
+
+void Solver::addKinetic(std::size_t node, double change) {
+  energy_.kinetic += change;
+  if (levels())
+    body_kinetic_[m_.nodes.body[node]] += change;
+}
+
+// The internal energy and shortest element step of the bodies of units [unit_begin, unit_end)
+// from their elements after the last pass (their energy, their steps in level_step_).
+void Solver::bodySums(std::size_t unit_begin, std::size_t unit_end) {
+  const Elements &el = m_.elements;
+  std::size_t b = static_cast<std::size_t>(-1);
+  double internal = 0.0, step = HUGE_VAL;
+  for (std::size_t u = unit_begin; u < unit_end; ++u)
+    for (std::size_t c = units_[u].chunk_begin; c < units_[u].chunk_end; ++c)
+      for (std::size_t e = chunks_[c].begin; e < chunks_[c].end; ++e) {
+        if (el.body[e] != b) {
+          if (b != static_cast<std::size_t>(-1))
+            body_internal_[b] = internal, body_step_min_[b] = step;
+          b = el.body[e], internal = 0.0, step = HUGE_VAL;
+        }
+        internal += el.energy[e];
+        step = std::min(step, level_step_[e]);
+      }
+  if (b != static_cast<std::size_t>(-1))
+    body_internal_[b] = internal, body_step_min_[b] = step;
+}
+
+std::vector<std::size_t> Solver::elementsByLevel() const {
+  std::vector<std::size_t> count(static_cast<std::size_t>(s_.max_level) + 1, 0);
+  for (std::uint32_t b : active_bodies_) {
+    const Body &body = m_.bodies[b];
+    count[level_[b]] += body.element_end - body.element_begin - body.eroded;
+  }
+  return count;
+}
+
+// A half-kick as halfKick, the external force taken over half_external (half the window it was
+// computed for: its impulse's half), the elements' force and gravity over half_dt; the work sums in
+// joules (not to be multiplied by the half step).
+void Solver::halfKickLevels(std::size_t a, double half_dt, double half_external, double fx,
+                            double fy, bool second_half, double &vx, double &vy,
+                            KickSums &sums) const {
+  const Nodes &nd = m_.nodes;
+  double dvx = half_dt * fx * inv_mass_[a], dvy = half_dt * fy * inv_mass_[a];
+  const bool loaded = nd.is_loaded[a];
+  if (loaded && half_external != half_dt) {
+    const Nodes::External &e = nd.external[a];
+    dvx += (half_external - half_dt) * e.fx * inv_mass_[a];
+    dvy += (half_external - half_dt) * e.fy * inv_mass_[a];
+  }
+  const double mean_vx = vx + 0.5 * dvx, mean_vy = vy + 0.5 * dvy;
+  if (loaded) {
+    const Nodes::External &e = nd.external[a];
+    sums.provider += half_external * (e.fx * mean_vx + e.fy * mean_vy);
+    sums.friction += half_external * (e.friction_x * mean_vx + e.friction_y * mean_vy);
+  }
+  if (s_.gravity_x != 0.0 || s_.gravity_y != 0.0)
+    sums.gravity += half_dt * nd.mass[a] * (s_.gravity_x * mean_vx + s_.gravity_y * mean_vy);
+  vx += dvx, vy += dvy;
+  if (second_half)
+    sums.kinetic += 0.5 * nd.mass[a] * (vx * vx + vy * vy - dvx * dvx - dvy * dvy);
+}
+
+// The time loop's step with levels: the bodies due at this step (level at most `top`) step over
+// their windows tau[level], the pairs of two due bodies load them, the others stand still.
+void Solver::stepLevels() {
+  const double stable = dt_, remaining = end_at_ - time_;
+  const double steps_left = remaining > 0.0 && remaining < 20.0 * stable
+                                ? std::ceil(remaining / stable * (1.0 - 1e-12))
+                                : 0.0;
+  const bool last = steps_left == 1.0;
+  const double dt = steps_left > 0.0 ? remaining / steps_left : stable;
+  const std::size_t k = steps_ + 1;
+  const int top = std::min(s_.max_level, std::countr_zero(k));
+  const double time_new = last ? end_at_ : time_ + dt;
+  double tau[8];
+  for (int l = 0; l <= top; ++l)
+    tau[l] = time_new - level_start_[static_cast<std::size_t>(l)];
+  kick_work_ = provider_work_ = friction_work_ = 0.0;
+  kickAndDriftLevels(top, tau); // v += tau'/2 f / m + J / 2m; x += tau' v (due bodies)
+  Nodes &nd = m_.nodes;
+  for (std::size_t b = 0; b < m_.bodies.size(); ++b) {
+    const bool due = m_.at_rest[b] || level_[b] <= top;
+    m_.due[b] = due;
+    if (due)
+      m_.window[b] = tau[level_[b]];
+    m_.own_step[b] = std::ldexp(dt, own_level_[b]);
+  }
+  { // the due bodies' external forces cleared; the others keep theirs for their next half-kick
+    std::size_t kept = 0;
+    for (std::uint32_t a : nd.loaded)
+      if (m_.due[nd.body[a]])
+        nd.external[a] = {}, nd.is_loaded[a] = 0;
+      else
+        nd.loaded[kept++] = a;
+    nd.loaded.resize(kept);
+  }
+  for (auto *provider : providers_) // pairs of due bodies: contact at x(n+1)
+    provider->addForces(m_, time_new, dt);
+  updateActivity(); // bodies the providers woke take part (at level 0)
+  single_rate_element_steps_ += static_cast<double>(active_elements_);
+  forcesLevels(top, tau);
+  applyConstraints(0.5 * dt, true); // bodies with imposed velocities are at level 0
+  scaleMasses(0.5 * dt);
+  time_ = time_new;
+  ++steps_;
+  if (steps_ == 1)
+    first_dt_ = stable;
+  // The step falls at once; it rises only at whole cycles (every body due) every rise interval.
+  const std::size_t cycle = std::size_t{1} << s_.max_level;
+  const std::size_t rise = (s_.dt_rise_interval + cycle - 1) / cycle * cycle;
+  shortest_allowed_ = std::min(shortest_allowed_, next_dt_);
+  if (next_dt_ < stable)
+    dt_ = std::min(next_dt_, s_.max_dt);
+  else if (steps_ % rise == 0)
+    dt_ = std::min({shortest_allowed_, s_.max_dt, s_.max_dt_growth * stable});
+  if (steps_ % rise == 0)
+    shortest_allowed_ = std::numeric_limits<double>::infinity();
+  if (next_dt_ < s_.min_dt_ratio * first_dt_) {
+    std::ostringstream msg;
+    msg << "the stable step fell to " << next_dt_ << " s, below " << s_.min_dt_ratio
+        << " of the first (" << first_dt_ << " s), at t = " << time_ << " s, step " << steps_
+        << "; the thinnest element: " << thinnestElement();
+    throw RunFailure(msg.str());
+  }
+  for (int l = 0; l <= top; ++l)
+    level_start_[static_cast<std::size_t>(l)] = time_;
+  chooseLevels(top);
+  accountEnergy();
+  if (!std::isfinite(energy_.kinetic) || !std::isfinite(energy_.internal))
+    throw RunFailure(notFinite());
+  erode();
+}
+
+// The first half-kick and the drift of the due bodies' nodes, level by level.
+void Solver::kickAndDriftLevels(int top, const double *tau) {
+  Nodes &nd = m_.nodes;
+  const std::size_t blocks = level_blocks_[static_cast<std::size_t>(top) + 1];
+  kick_sums_.assign(blocks, KickSums{});
+  for (int l = 0; l <= top; ++l) {
+    const auto level = static_cast<std::size_t>(l);
+    const double t = tau[l], half = 0.5 * t;
+#pragma omp parallel if (level_blocks_[level + 1] - level_blocks_[level] > 1)
+    for (auto [i, end] = threadShare(level_thread_blocks_[level]); i < end; ++i) {
+      KickSums sums;
+      for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
+        double vx = nd.vx[a], vy = nd.vy[a];
+        const double half_external = nd.is_loaded[a] ? 0.5 * m_.window[nd.body[a]] : half;
+        halfKickLevels(a, half, half_external, nd.fx[a], nd.fy[a], false, vx, vy, sums);
+        nd.vx[a] = vx, nd.vy[a] = vy;
+        nd.x[a] += t * vx;
+        nd.y[a] += t * vy;
+      }
+      kick_sums_[i] = sums;
+    }
+  }
+  addKickSums(kick_sums_, 1.0);
+  applyConstraints(0.5 * tau[0], false);
+}
+
+// The element pass and second half-kick of the due bodies (levels 0 to top, each over its window),
+// then the step's sums: each body keeps its internal and kinetic energy and its shortest step from
+// its last update, the run's are their sums.
+void Solver::forcesLevels(int top, const double *tau) {
+  Nodes &nd = m_.nodes;
+  const double gx = s_.gravity_x, gy = s_.gravity_y;
+  const bool gravity = gx != 0.0 || gy != 0.0;
+  const std::size_t units_end = level_units_[static_cast<std::size_t>(top) + 1];
+  std::vector<KickSums> unit_sums(units_end);
+  unit_scratch_.resize(static_cast<std::size_t>(omp_get_max_threads()));
+  for (int l = 0; l <= top; ++l) {
+    const auto level = static_cast<std::size_t>(l);
+    const double dt = tau[l];
+#pragma omp parallel if (level_units_[level + 1] - level_units_[level] > 1)
+    {
+      // (kept from step to step: a level's unit may span many nodes not its own)
+      Scratch &scratch = unit_scratch_[static_cast<std::size_t>(omp_get_thread_num())];
+      std::vector<NodeState> &state = scratch.state;
+      std::vector<NodeForce> &force = scratch.force;
+      std::vector<double> &jacobian = scratch.jacobian;
+      for (auto [u, end] = threadShare(level_thread_units_[level]); u < end; ++u) {
+        const Unit &unit = units_[u];
+        const std::size_t base = unit.node_lo;
+        state.resize(unit.node_hi - base);
+        force.resize(state.size());
+        jacobian.resize(unit.averaged_volume ? state.size() : 0);
+        for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
+          for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
+            state[a - base] = {nd.x[a], nd.y[a], nd.vx[a], nd.vy[a]};
+            force[a - base] =
+                gravity ? NodeForce{nd.mass[a] * gx, nd.mass[a] * gy} : NodeForce{0.0, 0.0};
+          }
+        const UnitNodes nodes{state.data(), force.data(), jacobian.data(), base};
+        if (unit.averaged_volume)
+          nodalVolumes(unit, nodes);
+        for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
+          elementPass(chunks_[i], dt, nodes, sums_[i]);
+        KickSums sums; // the kinetic energy body by body into body_kinetic_
+        std::uint32_t body = nd.body[unit.node_lo];
+        for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
+          for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
+            if (nd.body[a] != body)
+              body_kinetic_[body] = std::exchange(sums.kinetic, 0.0), body = nd.body[a];
+            double fx = force[a - base].x, fy = force[a - base].y;
+            if (nd.is_loaded[a])
+              fx += nd.external[a].fx, fy += nd.external[a].fy;
+            nd.fx[a] = fx, nd.fy[a] = fy;
+            double vx = state[a - base].vx, vy = state[a - base].vy;
+            halfKickLevels(a, 0.5 * dt, 0.5 * dt, fx, fy, true, vx, vy, sums);
+            nd.vx[a] = vx, nd.vy[a] = vy;
+          }
+        body_kinetic_[body] = std::exchange(sums.kinetic, 0.0);
+        unit_sums[u] = sums;
+      }
+    }
+  }
+  // The step's sums, in unit order (the same for any thread count).
+  const std::size_t chunks_end = units_end > 0 ? units_[units_end - 1].chunk_end : 0;
+  double plastic = 0.0, viscous = 0.0;
+  long inverted = -1;
+  failing_ = scaling_ = false;
+  for (std::size_t i = 0; i < chunks_end; ++i) {
+    plastic += sums_[i].plastic;
+    viscous += sums_[i].viscous;
+    failing_ = failing_ || sums_[i].eroding;
+    scaling_ = scaling_ || !sums_[i].scaled.empty();
+    if (inverted < 0)
+      inverted = sums_[i].inverted;
+    element_steps_ += static_cast<double>(chunks_[i].end - chunks_[i].begin);
+  }
+  if (inverted >= 0) {
+    const auto e = static_cast<std::size_t>(inverted);
+    const Body &body = m_.bodies[m_.elements.body[e]];
+    std::ostringstream msg;
+    msg << "element " << e << " of body " << body.name << " (material "
+        << m_.materials[body.material]->type() << ") is inverted: area " << m_.elements.area[e]
+        << " m^2, initially " << m_.elements.area0[e] << " m^2, at t = " << time_ + tau[0]
+        << " s, step " << steps_ + 1;
+    throw RunFailure(msg.str());
+  }
+  bodySums(0, units_end);
+  double internal = 0.0, kinetic = 0.0, dt_min = HUGE_VAL;
+  for (std::uint32_t b : active_bodies_) {
+    internal += body_internal_[b];
+    kinetic += body_kinetic_[b];
+    dt_min = std::min(dt_min, body_step_min_[b]);
+  }
+  step_sums_ = {internal, plastic, viscous};
+  energy_.kinetic = kinetic;
+  addKickSums(unit_sums, 1.0);
+  next_dt_ = s_.safety * step_scale_ * dt_min;
+  shortest_step_ = dt_min;
+}
+
+// The levels of the bodies that stepped: each body's own level from its own step on the base step
+// to come, no coarser than the own level of a body it may meet, nor than the step number allows.
+void Solver::chooseLevels(int top) {
+  const std::size_t n = m_.bodies.size();
+  const auto max_level = static_cast<std::uint8_t>(s_.max_level);
+  for (std::size_t b = 0; b < n; ++b)
+    if (m_.at_rest[b])
+      own_level_[b] = max_level;
+    else if (level_[b] <= top)
+      own_level_[b] = static_cast<std::uint8_t>(
+          ownLevel(s_.safety * step_scale_ * body_step_min_[b], dt_, own_level_[b], s_.max_level));
+  std::vector<std::uint8_t> cap(n, max_level);
+  for (auto *provider : providers_)
+    provider->capLevels(own_level_, cap);
+  for (const auto &c : m_.constraints)
+    for (std::uint32_t a : c.nodes)
+      cap[m_.nodes.body[a]] = 0;
+  for (std::size_t b = 0; b < n; ++b)
+    if (!m_.at_rest[b] && level_[b] <= top)
+      level_[b] = std::min({own_level_[b], cap[b], static_cast<std::uint8_t>(top)});
+}
+
+} // namespace mesopen::fem
