@@ -133,7 +133,8 @@ int runCommand(const RunOptions &given) {
     if (scene.run.max_level > 0 && world.size > 1)
       throw InputError(scene.path + ": run.max_level = " + std::to_string(scene.run.max_level) +
                        " (multiple time stepping) runs on one process, not " +
-                       std::to_string(world.size) + " MPI ranks; allowed: max_level = 0 under "
+                       std::to_string(world.size) +
+                       " MPI ranks; allowed: max_level = 0 under "
                        "mpirun");
   } catch (const InputError &e) {
     std::cerr << "mesopen run: " << e.what() << '\n';
