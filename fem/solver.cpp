@@ -293,15 +293,27 @@ void Solver::step() {
   ++steps_;
   if (steps_ == 1)
     first_dt_ = stable;
-  // The step falls at once to what the elements allow; it rises only every dt_rise_interval steps,
-  // to the shortest step allowed over them: a step that followed the elements' fastest oscillation
-  // up and down would pump energy into it (a leapfrog of varying step is not symplectic).
+  nextStep(stable, s_.dt_rise_interval);
+  accountEnergy();
+  // A state no longer finite (a material driven where its law has no value) would run on as NaN
+  // and be reported as completed: it ends the run here, naming where it began.
+  if (!std::isfinite(energy_.kinetic) || !std::isfinite(energy_.internal))
+    throw RunFailure(notFinite());
+  erode(); // elements that failed in this step leave the model
+}
+
+// The step to come from the one just taken (`stable`, before the end's equal steps) and the
+// elements' next_dt_. The step falls at once to what the elements allow; it rises only every
+// `rise_interval` steps, to the shortest step allowed over them: a step that followed the elements'
+// fastest oscillation up and down would pump energy into it (a leapfrog of varying step is not
+// symplectic). A step below min_dt_ratio of the first ends the run.
+void Solver::nextStep(double stable, std::size_t rise_interval) {
   shortest_allowed_ = std::min(shortest_allowed_, next_dt_);
   if (next_dt_ < stable)
     dt_ = std::min(next_dt_, s_.max_dt);
-  else if (steps_ % s_.dt_rise_interval == 0)
+  else if (steps_ % rise_interval == 0)
     dt_ = std::min({shortest_allowed_, s_.max_dt, s_.max_dt_growth * stable});
-  if (steps_ % s_.dt_rise_interval == 0)
+  if (steps_ % rise_interval == 0)
     shortest_allowed_ = std::numeric_limits<double>::infinity();
   if (next_dt_ < s_.min_dt_ratio * first_dt_) {
     std::ostringstream msg;
@@ -310,12 +322,6 @@ void Solver::step() {
         << "; the thinnest element: " << thinnestElement();
     throw RunFailure(msg.str());
   }
-  accountEnergy();
-  // A state no longer finite (a material driven where its law has no value) would run on as NaN
-  // and be reported as completed: it ends the run here, naming where it began.
-  if (!std::isfinite(energy_.kinetic) || !std::isfinite(energy_.internal))
-    throw RunFailure(notFinite());
-  erode(); // elements that failed in this step leave the model
 }
 
 std::string Solver::notFinite() const {
@@ -701,39 +707,48 @@ void Solver::applyConstraints(double half_dt, bool second_half) {
 
 void Solver::internalForces(double dt) { forces(dt, false); }
 
+// Gravity and the elements' forces of a unit at its nodes' current state, into this thread's
+// copies of its nodes (numbered from unit.node_lo), over a step dt.
+void Solver::unitPass(const Unit &unit, double dt, UnitScratch &scratch) {
+  const Nodes &nd = m_.nodes;
+  const double gx = s_.gravity_x, gy = s_.gravity_y;
+  const bool gravity = gx != 0.0 || gy != 0.0;
+  const std::size_t base = unit.node_lo;
+  std::vector<NodeState> &state = scratch.state;
+  std::vector<NodeForce> &force = scratch.force;
+  state.resize(unit.node_hi - base);
+  force.resize(state.size());
+  scratch.jacobian.resize(unit.averaged_volume ? state.size() : 0);
+  for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
+    for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
+      state[a - base] = {nd.x[a], nd.y[a], nd.vx[a], nd.vy[a]};
+      force[a - base] = gravity ? NodeForce{nd.mass[a] * gx, nd.mass[a] * gy} : NodeForce{0.0, 0.0};
+    }
+  const UnitNodes nodes{state.data(), force.data(), scratch.jacobian.data(), base};
+  if (unit.averaged_volume)
+    nodalVolumes(unit, nodes);
+  for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
+    elementPass(chunks_[i], dt, nodes, sums_[i]);
+}
+
 // Unit by unit (whole bodies, so that a unit's nodes and elements stay in cache between the
 // nodal volumes, the element pass and the kick): gravity first, the elements add theirs, the
 // external forces at the loaded nodes; with `kick`, the second half-kick of the unit's nodes.
 void Solver::forces(double dt, bool kick) {
   Nodes &nd = m_.nodes;
-  const double gx = s_.gravity_x, gy = s_.gravity_y;
-  const bool gravity = gx != 0.0 || gy != 0.0;
   const long units = static_cast<long>(units_.size());
   kick_sums_.assign(kick ? units : 0, KickSums{});
   if (measure_body_steps_)
     element_step_.assign(m_.elements.size(), HUGE_VAL);
 #pragma omp parallel if (units > 1)
   {
-    std::vector<NodeState> state; // this thread's copies of a unit's nodes (cache-resident)
-    std::vector<NodeForce> force;
-    std::vector<double> jacobian;
+    UnitScratch scratch;
     for (auto [u, end] = threadShare(thread_units_); u < end; ++u) {
       const Unit &unit = units_[u];
       const std::size_t base = unit.node_lo;
-      state.resize(unit.node_hi - base);
-      force.resize(state.size());
-      jacobian.resize(unit.averaged_volume ? state.size() : 0);
-      for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
-        for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
-          state[a - base] = {nd.x[a], nd.y[a], nd.vx[a], nd.vy[a]};
-          force[a - base] =
-              gravity ? NodeForce{nd.mass[a] * gx, nd.mass[a] * gy} : NodeForce{0.0, 0.0};
-        }
-      const UnitNodes nodes{state.data(), force.data(), jacobian.data(), base};
-      if (unit.averaged_volume)
-        nodalVolumes(unit, nodes);
-      for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
-        elementPass(chunks_[i], dt, nodes, sums_[i]);
+      unitPass(unit, dt, scratch);
+      const std::vector<NodeState> &state = scratch.state;
+      const std::vector<NodeForce> &force = scratch.force;
       KickSums sums; // in registers: the node arrays' stores could alias kick_sums_
       for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
         for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {

@@ -230,6 +230,12 @@ private:
     double *jacobian;
     std::size_t base;
   };
+  // A thread's copies of a unit's nodes (cache-resident) and the forces being assembled on them.
+  struct UnitScratch {
+    std::vector<NodeState> state;
+    std::vector<NodeForce> force;
+    std::vector<double> jacobian;
+  };
   struct ChunkSums {
     double internal, plastic, viscous, dt_min;
     long inverted; // an inverted element, or -1
@@ -250,11 +256,13 @@ private:
   void kickAndDrift(double dt);
   void forces(double dt, bool kick);
   void nodalVolumes(const Unit &unit, const UnitNodes &nodes);
+  void unitPass(const Unit &unit, double dt, UnitScratch &scratch);
   void storeReferenceShapes();
   void elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums);
   void applyConstraints(double half_dt, bool second_half);
   void erode();
   void scaleMasses(double half_dt);
+  void nextStep(double stable, std::size_t rise_interval);
   std::string thinnestElement() const;
   std::string notFinite() const; // where a state that is not finite is (RunFailure's message)
   bool owns(std::size_t body) const { return owner_[body] == comm_.rank(); }
@@ -347,12 +355,6 @@ private:
   std::vector<std::size_t> level_units_, level_blocks_;
   std::vector<std::vector<std::size_t>> level_thread_units_, level_thread_blocks_;
   double element_steps_ = 0.0, single_rate_element_steps_ = 0.0;
-  struct Scratch {
-    std::vector<NodeState> state;
-    std::vector<NodeForce> force;
-    std::vector<double> jacobian;
-  };
-  std::vector<Scratch> unit_scratch_; // per thread
 };
 
 } // namespace mesopen::fem

@@ -152,20 +152,7 @@ void Solver::stepLevels() {
   // The step falls at once; it rises only at whole cycles (every body due) every rise interval.
   const std::size_t cycle = std::size_t{1} << s_.max_level;
   const std::size_t rise = (s_.dt_rise_interval + cycle - 1) / cycle * cycle;
-  shortest_allowed_ = std::min(shortest_allowed_, next_dt_);
-  if (next_dt_ < stable)
-    dt_ = std::min(next_dt_, s_.max_dt);
-  else if (steps_ % rise == 0)
-    dt_ = std::min({shortest_allowed_, s_.max_dt, s_.max_dt_growth * stable});
-  if (steps_ % rise == 0)
-    shortest_allowed_ = std::numeric_limits<double>::infinity();
-  if (next_dt_ < s_.min_dt_ratio * first_dt_) {
-    std::ostringstream msg;
-    msg << "the stable step fell to " << next_dt_ << " s, below " << s_.min_dt_ratio
-        << " of the first (" << first_dt_ << " s), at t = " << time_ << " s, step " << steps_
-        << "; the thinnest element: " << thinnestElement();
-    throw RunFailure(msg.str());
-  }
+  nextStep(stable, rise);
   for (int l = 0; l <= top; ++l)
     level_start_[static_cast<std::size_t>(l)] = time_;
   chooseLevels(top);
@@ -206,38 +193,20 @@ void Solver::kickAndDriftLevels(int top, const double *tau) {
 // its last update, the run's are their sums.
 void Solver::forcesLevels(int top, const double *tau) {
   Nodes &nd = m_.nodes;
-  const double gx = s_.gravity_x, gy = s_.gravity_y;
-  const bool gravity = gx != 0.0 || gy != 0.0;
   const std::size_t units_end = level_units_[static_cast<std::size_t>(top) + 1];
   std::vector<KickSums> unit_sums(units_end);
-  unit_scratch_.resize(static_cast<std::size_t>(omp_get_max_threads()));
   for (int l = 0; l <= top; ++l) {
     const auto level = static_cast<std::size_t>(l);
     const double dt = tau[l];
 #pragma omp parallel if (level_units_[level + 1] - level_units_[level] > 1)
     {
-      // (kept from step to step: a level's unit may span many nodes not its own)
-      Scratch &scratch = unit_scratch_[static_cast<std::size_t>(omp_get_thread_num())];
-      std::vector<NodeState> &state = scratch.state;
-      std::vector<NodeForce> &force = scratch.force;
-      std::vector<double> &jacobian = scratch.jacobian;
+      UnitScratch scratch;
       for (auto [u, end] = threadShare(level_thread_units_[level]); u < end; ++u) {
         const Unit &unit = units_[u];
         const std::size_t base = unit.node_lo;
-        state.resize(unit.node_hi - base);
-        force.resize(state.size());
-        jacobian.resize(unit.averaged_volume ? state.size() : 0);
-        for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
-          for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
-            state[a - base] = {nd.x[a], nd.y[a], nd.vx[a], nd.vy[a]};
-            force[a - base] =
-                gravity ? NodeForce{nd.mass[a] * gx, nd.mass[a] * gy} : NodeForce{0.0, 0.0};
-          }
-        const UnitNodes nodes{state.data(), force.data(), jacobian.data(), base};
-        if (unit.averaged_volume)
-          nodalVolumes(unit, nodes);
-        for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
-          elementPass(chunks_[i], dt, nodes, sums_[i]);
+        unitPass(unit, dt, scratch);
+        const std::vector<NodeState> &state = scratch.state;
+        const std::vector<NodeForce> &force = scratch.force;
         KickSums sums; // the kinetic energy body by body into body_kinetic_
         std::uint32_t body = nd.body[unit.node_lo];
         for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
