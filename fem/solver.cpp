@@ -343,8 +343,7 @@ std::string Solver::notFinite() const {
 }
 
 // Work ranges over the bodies that move: element chunks of one material, node blocks. With levels,
-// level by level (each level's units and blocks together), a chunk and a unit's node range of one
-// body each.
+// level by level (each level's units and blocks together), a unit holding consecutive bodies.
 void Solver::updateActivity() {
   const std::size_t n_bodies = m_.bodies.size();
   if (at_rest_seen_ == m_.at_rest && !rebalance_due_ && laid_levels_ == level_)
@@ -571,45 +570,45 @@ PartitionReport Solver::partition() const {
 // they came and the blocks in halves, run 6 to 0.4 length took 3 % longer on two threads).
 void Solver::shareAmongThreads() {
   const auto threads = static_cast<std::size_t>(omp_get_max_threads());
-  auto share = [&](std::size_t unit_begin, std::size_t unit_end, std::size_t block_begin,
-                   std::size_t block_end, std::vector<std::size_t> &thread_units,
-                   std::vector<std::size_t> &thread_blocks) {
+  // Contiguous runs of `weights` (of the items from `first` on) of about equal sums.
+  auto shares = [&](const std::vector<std::size_t> &weights, std::size_t first) {
+    std::vector<std::size_t> bounds = contiguousShares(weights, threads);
+    for (std::size_t &bound : bounds)
+      bound += first;
+    return bounds;
+  };
+  auto unitShares = [&](std::size_t unit_begin, std::size_t unit_end) {
     std::vector<std::size_t> elements(unit_end - unit_begin, 0);
     for (std::size_t u = unit_begin; u < unit_end; ++u)
       for (std::size_t c = units_[u].chunk_begin; c < units_[u].chunk_end; ++c)
         elements[u - unit_begin] += chunks_[c].end - chunks_[c].begin;
-    thread_units = contiguousShares(elements, threads);
-    for (std::size_t &bound : thread_units)
-      bound += unit_begin;
-    // A block goes with the units that hold its first node.
-    thread_blocks.assign(threads + 1, block_end);
-    thread_blocks[0] = block_begin;
-    for (std::size_t t = 1, i = block_begin; t < threads; ++t) {
-      const std::size_t first_node = thread_units[t] < unit_end
-                                         ? units_[thread_units[t]].node_lo
-                                         : std::numeric_limits<std::size_t>::max();
-      while (i < block_end && node_ranges_[i].begin < first_node)
-        ++i;
-      thread_blocks[t] = i;
-    }
+    return shares(elements, unit_begin);
   };
-  share(0, units_.size(), 0, node_ranges_.size(), thread_units_, thread_blocks_);
+  thread_units_ = unitShares(0, units_.size());
+  // A block goes with the units that hold its first node.
+  thread_blocks_.assign(threads + 1, node_ranges_.size());
+  thread_blocks_[0] = 0;
+  for (std::size_t t = 1, i = 0; t < threads; ++t) {
+    const std::size_t first_node = thread_units_[t] < units_.size()
+                                       ? units_[thread_units_[t]].node_lo
+                                       : std::numeric_limits<std::size_t>::max();
+    while (i < node_ranges_.size() && node_ranges_[i].begin < first_node)
+      ++i;
+    thread_blocks_[t] = i;
+  }
   if (!levels())
     return;
-  // With levels, each level's units apart (their node blocks split by node count: a level's
-  // units are not in node order).
+  // With levels, each level's units apart, and its node blocks by node count (a level's units
+  // are not all the units around their nodes).
   const auto n_levels = static_cast<std::size_t>(s_.max_level + 1);
   level_thread_units_.resize(n_levels);
   level_thread_blocks_.resize(n_levels);
   for (std::size_t l = 0; l < n_levels; ++l) {
-    share(level_units_[l], level_units_[l + 1], level_blocks_[l], level_blocks_[l + 1],
-          level_thread_units_[l], level_thread_blocks_[l]);
+    level_thread_units_[l] = unitShares(level_units_[l], level_units_[l + 1]);
     std::vector<std::size_t> nodes;
     for (std::size_t i = level_blocks_[l]; i < level_blocks_[l + 1]; ++i)
       nodes.push_back(node_ranges_[i].end - node_ranges_[i].begin);
-    level_thread_blocks_[l] = contiguousShares(nodes, threads);
-    for (std::size_t &bound : level_thread_blocks_[l])
-      bound += level_blocks_[l];
+    level_thread_blocks_[l] = shares(nodes, level_blocks_[l]);
   }
 }
 
