@@ -261,17 +261,24 @@ void Solver::addForceProvider(ForceProvider *provider) {
 // The steps that end a run at endAt's time: the last end_steps stable steps or less are made equal.
 constexpr double end_steps = 20.0;
 
-// The time loop's step: each line one stage of the central-difference scheme.
-void Solver::step() {
-  if (levels())
-    return stepLevels();
-  // Within end_steps stable steps of endAt's time, the rest in equal steps (past it: stable steps).
+// The step to take from the stable one: within end_steps stable steps of endAt's time, the rest in
+// equal steps (past it: stable steps); `last` whether it ends at that time.
+double Solver::stepToTake(bool &last) const {
   const double stable = dt_, remaining = end_at_ - time_;
   const double steps_left = remaining > 0.0 && remaining < end_steps * stable
                                 ? std::ceil(remaining / stable * (1.0 - 1e-12))
                                 : 0.0;
-  const bool last = steps_left == 1.0;
-  const double dt = steps_left > 0.0 ? remaining / steps_left : stable;
+  last = steps_left == 1.0;
+  return steps_left > 0.0 ? remaining / steps_left : stable;
+}
+
+// The time loop's step: each line one stage of the central-difference scheme.
+void Solver::step() {
+  if (levels())
+    return stepLevels();
+  const double stable = dt_;
+  bool last = false;
+  const double dt = stepToTake(last);
   kick_work_ = provider_work_ = friction_work_ = 0.0;
   if (comm_.size() > 1 && s_.rebalance_every > 0 && steps_ > 0 && steps_ % s_.rebalance_every == 0)
     rebalance_due_ = true;

@@ -262,6 +262,7 @@ private:
   void applyConstraints(double half_dt, bool second_half);
   void erode();
   void scaleMasses(double half_dt);
+  double stepToTake(bool &last) const;
   void nextStep(double stable, std::size_t rise_interval);
   std::string thinnestElement() const;
   std::string notFinite() const; // where a state that is not finite is (RunFailure's message)

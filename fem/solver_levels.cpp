@@ -107,12 +107,9 @@ void Solver::halfKickLevels(std::size_t a, double half_dt, double half_external,
 // The time loop's step with levels: the bodies due at this step (level at most `top`) step over
 // their windows tau[level], the pairs of two due bodies load them, the others stand still.
 void Solver::stepLevels() {
-  const double stable = dt_, remaining = end_at_ - time_;
-  const double steps_left = remaining > 0.0 && remaining < 20.0 * stable
-                                ? std::ceil(remaining / stable * (1.0 - 1e-12))
-                                : 0.0;
-  const bool last = steps_left == 1.0;
-  const double dt = steps_left > 0.0 ? remaining / steps_left : stable;
+  const double stable = dt_;
+  bool last = false;
+  const double dt = stepToTake(last);
   const std::size_t k = steps_ + 1;
   const int top = std::min(s_.max_level, std::countr_zero(k));
   const double time_new = last ? end_at_ : time_ + dt;
