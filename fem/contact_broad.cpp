@@ -54,7 +54,8 @@ bool BodyPairs::update(const Model &model, ContactBoundaries &boundaries) {
   double farthest = 0.0; // the largest travel since the last search for pairs
 #pragma omp parallel for schedule(static) reduction(max : farthest) if (n_moving > 64)
   for (long i = 0; i < n_moving; ++i) {
-    boundaries.measure(model, moving_[i]);
+    if (model.due.empty() || model.due[moving_[i]]) // with levels, the others stood still
+      boundaries.measure(model, moving_[i]);
     farthest = std::max(farthest, boundaries.travel[moving_[i]] - travel_searched_[moving_[i]]);
   }
   if (run_pairs_.empty() || 2.0 * farthest > search_margin_) {

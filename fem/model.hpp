@@ -102,7 +102,7 @@ struct Model {
   // window as a force over the body's window. Empty: every body steps every step.
   std::vector<std::uint8_t> due;
   std::vector<double> window;
-  // Per body: the step of its own level (2^level base steps within its own stable step), which
+  // Per due body: the step of its own level (2^level base steps within its own stable step), which
   // sets the stiffness of its contacts (a pair's penalty takes the finer body's, at least the
   // pair's window): a penalty tied to the pair's window would stiffen fourfold or more each time
   // a body moves down a level and push the overlap apart.

@@ -1141,6 +1141,21 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   // element bound for their material's state: L_s / c times criticalStepGain, the damping factor
   // unchanged.
   const double refine_below = refine_margin * shortest_step_;
+  // With levels, the gain on its step each element is known to have: the exact one
+  // (criticalStepGain) where the step may set its body's (its least gain over shapes,
+  // leastStepGain, brings it below the body's last shortest with a margin for this step's change),
+  // the least over shapes elsewhere (a lower bound: the body's step never comes out too long);
+  // 1 for those refined for the step below, which have it already.
+  alignas(64) double known_gain[max_chunk];
+  if (levels())
+    for (std::size_t i = 0; i < n; ++i) {
+      known_gain[i] = leastStepGain(shear_share[i]);
+      if (step[i] * known_gain[i] < refine_margin * body_step_min_[el.body[e0 + i]]) {
+        const double g_x[3] = {gx[0][i], gx[1][i], gx[2][i]},
+                     g_y[3] = {gy[0][i], gy[1][i], gy[2][i]};
+        known_gain[i] = criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i], shear_share[i]);
+      }
+    }
   if (dt_min < refine_below) {
     dt_min = HUGE_VAL;
     for (std::size_t i = 0; i < n; ++i) {
@@ -1148,6 +1163,7 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
         const double g_x[3] = {gx[0][i], gx[1][i], gx[2][i]},
                      g_y[3] = {gy[0][i], gy[1][i], gy[2][i]};
         step[i] *= criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i], shear_share[i]);
+        known_gain[i] = 1.0;
       }
       dt_min = std::min(dt_min, step[i]);
     }
@@ -1185,9 +1201,11 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
       }
     }
   }
-  // With levels, each element's step, for its body's (bodySums).
+  // With levels, each element's step for its body's (bodySums), the known gain on the cheap bound
+  // taken (mass scaling lowers all of an element's frequencies alike: the gain holds).
   if (levels())
-    std::copy(step, step + n, level_step_.data() + e0);
+    for (std::size_t i = 0; i < n; ++i)
+      level_step_[e0 + i] = step[i] * known_gain[i];
   // Into the unit's nodes, in element order.
   for (std::size_t i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) {

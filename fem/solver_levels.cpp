@@ -15,6 +15,7 @@
 #include "solver.hpp"
 #include "threads.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <sstream>
@@ -119,12 +120,14 @@ void Solver::stepLevels() {
   kick_work_ = provider_work_ = friction_work_ = 0.0;
   kickAndDriftLevels(top, tau); // v += tau'/2 f / m + J / 2m; x += tau' v (due bodies)
   Nodes &nd = m_.nodes;
+  double own_steps[8];
+  for (int l = 0; l <= s_.max_level; ++l)
+    own_steps[l] = std::ldexp(dt, l);
   for (std::size_t b = 0; b < m_.bodies.size(); ++b) {
     const bool due = m_.at_rest[b] || level_[b] <= top;
     m_.due[b] = due;
     if (due)
-      m_.window[b] = tau[level_[b]];
-    m_.own_step[b] = std::ldexp(dt, own_level_[b]);
+      m_.window[b] = tau[level_[b]], m_.own_step[b] = own_steps[own_level_[b]];
   }
   { // the due bodies' external forces cleared; the others keep theirs for their next half-kick
     std::size_t kept = 0;
@@ -192,35 +195,41 @@ void Solver::forcesLevels(int top, const double *tau) {
   Nodes &nd = m_.nodes;
   const std::size_t units_end = level_units_[static_cast<std::size_t>(top) + 1];
   std::vector<KickSums> unit_sums(units_end);
-  for (int l = 0; l <= top; ++l) {
-    const auto level = static_cast<std::size_t>(l);
-    const double dt = tau[l];
-#pragma omp parallel if (level_units_[level + 1] - level_units_[level] > 1)
-    {
-      UnitScratch scratch;
-      for (auto [u, end] = threadShare(level_thread_units_[level]); u < end; ++u) {
-        const Unit &unit = units_[u];
-        const std::size_t base = unit.node_lo;
-        unitPass(unit, dt, scratch);
-        const std::vector<NodeState> &state = scratch.state;
-        const std::vector<NodeForce> &force = scratch.force;
-        KickSums sums; // the kinetic energy body by body into body_kinetic_
-        std::uint32_t body = nd.body[unit.node_lo];
-        for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
-          for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
-            if (nd.body[a] != body)
-              body_kinetic_[body] = std::exchange(sums.kinetic, 0.0), body = nd.body[a];
-            double fx = force[a - base].x, fy = force[a - base].y;
-            if (nd.is_loaded[a])
-              fx += nd.external[a].fx, fy += nd.external[a].fy;
-            nd.fx[a] = fx, nd.fy[a] = fy;
-            double vx = state[a - base].vx, vy = state[a - base].vy;
-            halfKickLevels(a, 0.5 * dt, 0.5 * dt, fx, fy, true, vx, vy, sums);
-            nd.vx[a] = vx, nd.vy[a] = vy;
-          }
-        body_kinetic_[body] = std::exchange(sums.kinetic, 0.0);
-        unit_sums[u] = sums;
-      }
+  // The due levels' units in one pass, taken as threads come free (their results do not depend on
+  // which thread computes them): a large body (the projectile, a unit of its own) then runs beside
+  // the other levels' units instead of holding up its level's.
+#pragma omp parallel if (units_end > 1)
+  {
+    UnitScratch scratch;
+#pragma omp for schedule(dynamic, 1)
+    for (long i = 0; i < static_cast<long>(units_end); ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      const Unit &unit = units_[u];
+      const auto level = static_cast<std::size_t>(
+          std::upper_bound(level_units_.begin() + 1, level_units_.end(), u) -
+          (level_units_.begin() + 1));
+      const double dt = tau[level];
+      const std::size_t base = unit.node_lo;
+      unitPass(unit, dt, scratch);
+      bodySums(u, u + 1); // a unit holds whole bodies
+      const std::vector<NodeState> &state = scratch.state;
+      const std::vector<NodeForce> &force = scratch.force;
+      KickSums sums; // the kinetic energy body by body into body_kinetic_
+      std::uint32_t body = nd.body[unit.node_lo];
+      for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
+        for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end; ++a) {
+          if (nd.body[a] != body)
+            body_kinetic_[body] = std::exchange(sums.kinetic, 0.0), body = nd.body[a];
+          double fx = force[a - base].x, fy = force[a - base].y;
+          if (nd.is_loaded[a])
+            fx += nd.external[a].fx, fy += nd.external[a].fy;
+          nd.fx[a] = fx, nd.fy[a] = fy;
+          double vx = state[a - base].vx, vy = state[a - base].vy;
+          halfKickLevels(a, 0.5 * dt, 0.5 * dt, fx, fy, true, vx, vy, sums);
+          nd.vx[a] = vx, nd.vy[a] = vy;
+        }
+      body_kinetic_[body] = std::exchange(sums.kinetic, 0.0);
+      unit_sums[u] = sums;
     }
   }
   // The step's sums, in unit order (the same for any thread count).
@@ -247,7 +256,6 @@ void Solver::forcesLevels(int top, const double *tau) {
         << " s, step " << steps_ + 1;
     throw RunFailure(msg.str());
   }
-  bodySums(0, units_end);
   double internal = 0.0, kinetic = 0.0, dt_min = HUGE_VAL;
   for (std::uint32_t b : active_bodies_) {
     internal += body_internal_[b];

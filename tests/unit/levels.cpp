@@ -6,11 +6,13 @@
 #include "meshes.hpp"
 #include "solver.hpp"
 
+#include <Eigen/Dense>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <omp.h>
+#include <random>
 #include <set>
 
 using namespace mesopen;
@@ -38,6 +40,53 @@ TEST(Levels, OwnLevelRisesWithAMarginAndFallsAtOnce) {
   EXPECT_EQ(fem::ownLevel(3.9, 1.0, 2, 3), 1); // falls at once
   EXPECT_EQ(fem::ownLevel(1.5, 1.0, 3, 3), 0);
   EXPECT_EQ(fem::ownLevel(HUGE_VAL, 1.0, 0, 2), 2); // at rest
+}
+
+// The least gain of a triangle's critical step on its cheap bound L_s / c, over all shapes: the
+// exact 2 / omega_max of the lumped constant-strain triangle (the 6 x 6 eigenproblem, as
+// StableStep.ExactForEveryTriangleShape) is never below it, for random triangles of every aspect
+// and shear shares across [0, 3/4]; and it is reached: by the equilateral triangle at g <= 1/3 and
+// g >= 2/3, by flat right triangles between (the bound is their limit, to 1e-4 at height 1e-3).
+TEST(Levels, LeastStepGainBoundsEveryTriangle) {
+  auto gain = [](const double x[3], const double y[3], double g) {
+    const double M = 1.0, G = g * M, lam = M - 2.0 * G; // rho = 1, c = 1
+    const double A = 0.5 * std::abs((x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]));
+    Eigen::Matrix3d C;
+    C << M, lam, 0, lam, M, 0, 0, 0, G;
+    Eigen::Matrix<double, 3, 6> B = Eigen::Matrix<double, 3, 6>::Zero();
+    double longest = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      const int j = (i + 1) % 3, k = (i + 2) % 3;
+      B(0, 2 * i) = B(2, 2 * i + 1) = (y[j] - y[k]) / (2 * A);
+      B(1, 2 * i + 1) = B(2, 2 * i) = (x[k] - x[j]) / (2 * A);
+      longest = std::max(longest, std::hypot(x[j] - x[k], y[j] - y[k]));
+    }
+    // the sign of the area does not matter: B changes sign, K_e does not
+    const Eigen::Matrix<double, 6, 6> K = A * B.transpose() * C * B / (A / 3.0);
+    const double omega = std::sqrt(
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(K).eigenvalues().maxCoeff());
+    const double cheap = (2.0 / 3.0) * (2.0 * A / longest); // L_s / c
+    return (2.0 / omega) / cheap;
+  };
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int trial = 0; trial < 4000; ++trial) {
+    double x[3], y[3];
+    for (int k = 0; k < 3; ++k)
+      x[k] = u(rng), y[k] = trial % 2 ? u(rng) : 1e-3 * u(rng); // half of them slivers
+    if (0.5 * std::abs((x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0])) < 1e-9)
+      continue;
+    const double g = 0.75 * (trial % 31) / 30.0;
+    ASSERT_GE(gain(x, y, g), fem::leastStepGain(g) * (1 - 1e-9)) << "trial " << trial << " g " << g;
+  }
+  const double ex[3] = {0, 1, 0.5}, ey[3] = {0, 0, std::sqrt(0.75)};
+  const double rx[3] = {0, 1, 0}, ry[3] = {0, 0, 1e-3};
+  for (double g : {0.0, 0.2, 1.0 / 3.0, 0.7, 0.75})
+    EXPECT_NEAR(gain(ex, ey, g), fem::leastStepGain(g), 1e-9) << "g " << g;
+  for (double g : {0.35, 0.46, 0.5, 0.6})
+    EXPECT_NEAR(gain(rx, ry, g), fem::leastStepGain(g), 1e-4) << "g " << g;
+  EXPECT_NEAR(fem::leastStepGain(0.46), std::sqrt(1.5), 1e-15); // quartz
+  EXPECT_EQ(fem::leastStepGain(-1.0), 1.0);                     // unknown: the worst material
 }
 
 // Two free bodies in translation, of the same shape, one with cells four times smaller: their own
