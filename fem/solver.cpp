@@ -605,13 +605,11 @@ void Solver::shareAmongThreads() {
   }
   if (!levels())
     return;
-  // With levels, each level's units apart, and its node blocks by node count (a level's units
-  // are not all the units around their nodes).
+  // With levels, each level's node blocks by node count (a level's units are not all the units
+  // around their nodes; the units are taken as threads come free, forcesLevels).
   const auto n_levels = static_cast<std::size_t>(s_.max_level + 1);
-  level_thread_units_.resize(n_levels);
   level_thread_blocks_.resize(n_levels);
   for (std::size_t l = 0; l < n_levels; ++l) {
-    level_thread_units_[l] = unitShares(level_units_[l], level_units_[l + 1]);
     std::vector<std::size_t> nodes;
     for (std::size_t i = level_blocks_[l]; i < level_blocks_[l + 1]; ++i)
       nodes.push_back(node_ranges_[i].end - node_ranges_[i].begin);
