@@ -73,14 +73,16 @@ def main():
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--seeds", default="1,1001,2001,3001,4001")
     args = ap.parse_args()
-    if not 1 <= args.level <= 7:
-        ap.error(f"--level {args.level}: allowed 1 <= level <= 7")
+    if not 1 <= args.level <= 3:
+        ap.error(f"--level {args.level}: allowed 1 <= level <= 3 (run.max_level)")
     if not 1 <= args.runs <= 100:
         ap.error(f"--runs {args.runs}: allowed 1 <= runs <= 100")
     try:
         seeds = [int(s) for s in args.seeds.split(",")]
     except ValueError:
         ap.error(f"--seeds {args.seeds}: a comma-separated list of integers")
+    if not os.access(args.mesopen, os.X_OK):
+        ap.error(f"--mesopen {args.mesopen}: not an executable (build first: tools/test.sh)")
     os.makedirs(args.out, exist_ok=True)
     with open(args.scene) as f:
         base = without_frames(f.read())
