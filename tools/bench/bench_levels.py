@@ -18,6 +18,7 @@ Frames are off. Writes OUT/bench_levels.json (atomically).
 import argparse
 import json
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -40,8 +41,8 @@ SUMMARY = {
 
 
 def with_target_key(scene_text, key, value):
-    """The scene with `key = value` in its [target] table (in place of the scene's own)."""
-    import re
+    """The scene with `key = value` in its [target] table (in place of the scene's first `key =`
+    line, which the scenes of examples/thesis have in [target])."""
     text = re.sub(rf"(?m)^{key}\s*=.*$", "", scene_text, count=1)
     return re.sub(r"(?m)^\[target\]\s*$", f"[target]\n{key} = {value}", text, count=1)
 
