@@ -1139,21 +1139,11 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   // element bound for their material's state: L_s / c times criticalStepGain, the damping factor
   // unchanged.
   const double refine_below = refine_margin * shortest_step_;
-  // With levels, the gain on its step each element is known to have: the exact one
-  // (criticalStepGain) where the step may set its body's (its least gain over shapes,
-  // leastStepGain, brings it below the body's last shortest with a margin for this step's change),
-  // the least over shapes elsewhere (a lower bound: the body's step never comes out too long);
-  // 1 for those refined for the step below, which have it already.
+  // With levels, the gain on its step each element is known to have (below): 1 for those refined
+  // here, which have it already.
   alignas(64) double known_gain[max_chunk];
   if (levels())
-    for (std::size_t i = 0; i < n; ++i) {
-      known_gain[i] = leastStepGain(shear_share[i]);
-      if (step[i] * known_gain[i] < refine_margin * body_step_min_[el.body[e0 + i]]) {
-        const double g_x[3] = {gx[0][i], gx[1][i], gx[2][i]},
-                     g_y[3] = {gy[0][i], gy[1][i], gy[2][i]};
-        known_gain[i] = criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i], shear_share[i]);
-      }
-    }
+    std::fill(known_gain, known_gain + n, 0.0);
   if (dt_min < refine_below) {
     dt_min = HUGE_VAL;
     for (std::size_t i = 0; i < n; ++i) {
@@ -1166,6 +1156,21 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
       dt_min = std::min(dt_min, step[i]);
     }
   }
+  // For the others: the exact gain (criticalStepGain) where the step may set its body's (its least
+  // gain over shapes, leastStepGain, brings it below the body's last shortest with a margin for
+  // this step's change), the least over shapes elsewhere (a lower bound: the body's step never
+  // comes out too long).
+  if (levels())
+    for (std::size_t i = 0; i < n; ++i) {
+      if (known_gain[i] == 1.0)
+        continue;
+      known_gain[i] = leastStepGain(shear_share[i]);
+      if (step[i] * known_gain[i] < refine_margin * body_step_min_[el.body[e0 + i]]) {
+        const double g_x[3] = {gx[0][i], gx[1][i], gx[2][i]},
+                     g_y[3] = {gy[0][i], gy[1][i], gy[2][i]};
+        known_gain[i] = criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i], shear_share[i]);
+      }
+    }
   // Selective mass scaling: an element whose step is below scale_below_ needs the mass
   //   m_e ((scale_below_ / dt_e)^2 - 1)
   // added on its nodes, a third on each: the lumped element's frequencies scale as 1 / sqrt(mass),
