@@ -615,7 +615,6 @@ void Solver::shareAmongThreads() {
       nodes.push_back(node_ranges_[i].end - node_ranges_[i].begin);
     level_thread_blocks_[l] = shares(nodes, level_blocks_[l]);
   }
-  splitLevelUnits();
 }
 
 // A half-kick of node a from velocity (vx, vy) under the force (fx, fy). The work of the external
@@ -715,18 +714,12 @@ void Solver::internalForces(double dt) { forces(dt, false); }
 // Gravity and the elements' forces of a unit at its nodes' current state, into this thread's
 // copies of its nodes (numbered from unit.node_lo), over a step dt.
 void Solver::unitPass(const Unit &unit, double dt, UnitScratch &scratch) {
-  unitPass(unit, unit.chunk_begin, unit.chunk_end, dt, true, scratch, scratch.force);
-}
-
-// The element pass of the unit's chunks [chunk_begin, chunk_end) into `force` (the unit's nodes,
-// from unit.node_lo; gravity first if `gravity`), from its nodes' state gathered into `scratch`.
-void Solver::unitPass(const Unit &unit, std::size_t chunk_begin, std::size_t chunk_end, double dt,
-                      bool gravity, UnitScratch &scratch, std::vector<NodeForce> &force) {
   const Nodes &nd = m_.nodes;
   const double gx = s_.gravity_x, gy = s_.gravity_y;
-  gravity = gravity && (gx != 0.0 || gy != 0.0);
+  const bool gravity = gx != 0.0 || gy != 0.0;
   const std::size_t base = unit.node_lo;
   std::vector<NodeState> &state = scratch.state;
+  std::vector<NodeForce> &force = scratch.force;
   state.resize(unit.node_hi - base);
   force.resize(state.size());
   scratch.jacobian.resize(unit.averaged_volume ? state.size() : 0);
@@ -738,7 +731,7 @@ void Solver::unitPass(const Unit &unit, std::size_t chunk_begin, std::size_t chu
   const UnitNodes nodes{state.data(), force.data(), scratch.jacobian.data(), base};
   if (unit.averaged_volume)
     nodalVolumes(unit, nodes);
-  for (std::size_t i = chunk_begin; i < chunk_end; ++i)
+  for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
     elementPass(chunks_[i], dt, nodes, sums_[i]);
 }
 
@@ -1167,21 +1160,17 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   // gain over shapes, leastStepGain, brings it below the body's last shortest with a margin for
   // this step's change), the least over shapes elsewhere (a lower bound: the body's step never
   // comes out too long).
-  if (levels()) {
-    alignas(64) double least[max_chunk]; // (a loop of its own: vectorised)
-    for (std::size_t i = 0; i < n; ++i)
-      least[i] = leastStepGain(shear_share[i]);
+  if (levels())
     for (std::size_t i = 0; i < n; ++i) {
       if (known_gain[i] == 1.0)
         continue;
-      known_gain[i] = least[i];
+      known_gain[i] = leastStepGain(shear_share[i]);
       if (step[i] * known_gain[i] < refine_margin * body_step_min_[el.body[e0 + i]]) {
         const double g_x[3] = {gx[0][i], gx[1][i], gx[2][i]},
                      g_y[3] = {gy[0][i], gy[1][i], gy[2][i]};
         known_gain[i] = criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i], shear_share[i]);
       }
     }
-  }
   // Selective mass scaling: an element whose step is below scale_below_ needs the mass
   //   m_e ((scale_below_ / dt_e)^2 - 1)
   // added on its nodes, a third on each: the lumped element's frequencies scale as 1 / sqrt(mass),

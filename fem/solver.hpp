@@ -257,8 +257,6 @@ private:
   void forces(double dt, bool kick);
   void nodalVolumes(const Unit &unit, const UnitNodes &nodes);
   void unitPass(const Unit &unit, double dt, UnitScratch &scratch);
-  void unitPass(const Unit &unit, std::size_t chunk_begin, std::size_t chunk_end, double dt,
-                bool gravity, UnitScratch &scratch, std::vector<NodeForce> &force);
   void storeReferenceShapes();
   void elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums);
   void applyConstraints(double half_dt, bool second_half);
@@ -357,24 +355,6 @@ private:
   std::vector<double> level_step_; // per element: its step in its last pass
   std::vector<std::size_t> level_units_, level_blocks_;
   std::vector<std::vector<std::size_t>> level_thread_blocks_;
-  // The work items of the levels' pass (forcesLevels), level by level (items [level_items_[l],
-  // level_items_[l + 1])): a whole unit (piece npos), or a piece of a unit of more than
-  // piece_elements elements, its chunks computed into forces of its own (piece_force_); a split
-  // unit's pieces are then summed in piece order and its nodes kicked in blocks of one body
-  // (split_blocks_, [level_split_blocks_[l], level_split_blocks_[l + 1])), so that its forces do
-  // not depend on which thread computed which piece.
-  struct LevelItem {
-    std::size_t unit, chunk_begin, chunk_end, piece;
-  };
-  struct SplitBlock {
-    std::size_t unit, first_piece, pieces, begin, end;
-    std::uint32_t body;
-  };
-  std::vector<LevelItem> level_items_;
-  std::vector<SplitBlock> split_blocks_;
-  std::vector<std::size_t> level_item_begin_, level_split_blocks_;
-  std::vector<std::vector<NodeForce>> piece_force_;
-  void splitLevelUnits();
   double element_steps_ = 0.0, single_rate_element_steps_ = 0.0;
 };
 

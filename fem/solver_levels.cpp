@@ -118,7 +118,7 @@ void Solver::stepLevels() {
   for (int l = 0; l <= top; ++l)
     tau[l] = time_new - level_start_[static_cast<std::size_t>(l)];
   kick_work_ = provider_work_ = friction_work_ = 0.0;
-  updateActivity();             // the node blocks and units of the levels chosen at the last step
+  updateActivity(); // the node blocks and units of the levels chosen at the last step
   kickAndDriftLevels(top, tau); // v += tau'/2 f / m + J / 2m; x += tau' v (due bodies)
   Nodes &nd = m_.nodes;
   double own_steps[8];
@@ -189,89 +189,30 @@ void Solver::kickAndDriftLevels(int top, const double *tau) {
   applyConstraints(0.5 * tau[0], false);
 }
 
-namespace {
-// A unit of more elements than this is computed in pieces of about as many (forcesLevels): the
-// projectile, one body, would otherwise hold up the steps of its level on one thread.
-constexpr std::size_t piece_elements = 4096;
-constexpr std::size_t split_block_nodes = 2048; // nodes per block of a split unit's kick
-constexpr std::size_t whole_unit = static_cast<std::size_t>(-1);
-} // namespace
-
-// The work items of the levels' pass from the units of each level (see level_items_).
-void Solver::splitLevelUnits() {
-  const Nodes &nd = m_.nodes;
-  const std::size_t n_levels = level_units_.size() - 1;
-  level_items_.clear(), split_blocks_.clear();
-  level_item_begin_.assign(n_levels + 1, 0);
-  level_split_blocks_.assign(n_levels + 1, 0);
-  std::size_t pieces = 0;
-  for (std::size_t l = 0; l < n_levels; ++l) {
-    for (std::size_t u = level_units_[l]; u < level_units_[l + 1]; ++u) {
-      const Unit &unit = units_[u];
-      std::size_t elements = 0;
-      for (std::size_t c = unit.chunk_begin; c < unit.chunk_end; ++c)
-        elements += chunks_[c].end - chunks_[c].begin;
-      if (elements <= piece_elements) {
-        level_items_.push_back({u, unit.chunk_begin, unit.chunk_end, whole_unit});
-        continue;
-      }
-      const std::size_t first_piece = pieces;
-      for (std::size_t c = unit.chunk_begin, in_piece = 0; c < unit.chunk_end; ++c) {
-        if (in_piece == 0)
-          level_items_.push_back({u, c, c, pieces++});
-        level_items_.back().chunk_end = c + 1;
-        in_piece += chunks_[c].end - chunks_[c].begin;
-        if (in_piece >= piece_elements)
-          in_piece = 0;
-      }
-      for (std::size_t r = unit.nodes_begin; r < unit.nodes_end; ++r)
-        for (std::size_t a = unit_nodes_[r].begin; a < unit_nodes_[r].end;) {
-          const std::uint32_t body = nd.body[a];
-          const std::size_t end =
-              std::min({unit_nodes_[r].end, m_.bodies[body].node_end, a + split_block_nodes});
-          split_blocks_.push_back({u, first_piece, pieces - first_piece, a, end, body});
-          a = end;
-        }
-    }
-    level_item_begin_[l + 1] = level_items_.size();
-    level_split_blocks_[l + 1] = split_blocks_.size();
-  }
-  if (piece_force_.size() < pieces)
-    piece_force_.resize(pieces);
-}
-
 // The element pass and second half-kick of the due bodies (levels 0 to top, each over its window),
 // then the step's sums: each body keeps its internal and kinetic energy and its shortest step from
 // its last update, the run's are their sums.
 void Solver::forcesLevels(int top, const double *tau) {
   Nodes &nd = m_.nodes;
-  const auto levels_end = static_cast<std::size_t>(top) + 1;
-  const std::size_t units_end = level_units_[levels_end];
-  const std::size_t items_end = level_item_begin_[levels_end];
-  const std::size_t blocks_end = level_split_blocks_[levels_end];
-  std::vector<KickSums> unit_sums(units_end), block_sums(blocks_end);
-  // The due levels' items in one pass, taken as threads come free (their results do not depend on
-  // which thread computes them), then the split units' kicks block by block.
-#pragma omp parallel if (items_end > 1)
+  const std::size_t units_end = level_units_[static_cast<std::size_t>(top) + 1];
+  std::vector<KickSums> unit_sums(units_end);
+  // The due levels' units in one pass, taken as threads come free (their results do not depend on
+  // which thread computes them): a large body (the projectile, a unit of its own) then runs beside
+  // the other levels' units instead of holding up its level's.
+#pragma omp parallel if (units_end > 1)
   {
     UnitScratch scratch;
 #pragma omp for schedule(dynamic, 1)
-    for (long i = 0; i < static_cast<long>(items_end); ++i) {
-      const LevelItem &item = level_items_[static_cast<std::size_t>(i)];
-      const Unit &unit = units_[item.unit];
-      const auto level = static_cast<std::size_t>(std::upper_bound(level_item_begin_.begin() + 1,
-                                                                   level_item_begin_.end(),
-                                                                   static_cast<std::size_t>(i)) -
-                                                  (level_item_begin_.begin() + 1));
+    for (long i = 0; i < static_cast<long>(units_end); ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      const Unit &unit = units_[u];
+      const auto level = static_cast<std::size_t>(
+          std::upper_bound(level_units_.begin() + 1, level_units_.end(), u) -
+          (level_units_.begin() + 1));
       const double dt = tau[level];
-      if (item.piece != whole_unit) {
-        unitPass(unit, item.chunk_begin, item.chunk_end, dt, item.chunk_begin == unit.chunk_begin,
-                 scratch, piece_force_[item.piece]);
-        continue;
-      }
       const std::size_t base = unit.node_lo;
       unitPass(unit, dt, scratch);
-      bodySums(item.unit, item.unit + 1); // a unit holds whole bodies
+      bodySums(u, u + 1); // a unit holds whole bodies
       const std::vector<NodeState> &state = scratch.state;
       const std::vector<NodeForce> &force = scratch.force;
       KickSums sums; // the kinetic energy body by body into body_kinetic_
@@ -289,43 +230,8 @@ void Solver::forcesLevels(int top, const double *tau) {
           nd.vx[a] = vx, nd.vy[a] = vy;
         }
       body_kinetic_[body] = std::exchange(sums.kinetic, 0.0);
-      unit_sums[item.unit] = sums;
+      unit_sums[u] = sums;
     }
-#pragma omp for schedule(dynamic, 1)
-    for (long j = 0; j < static_cast<long>(blocks_end); ++j) {
-      const SplitBlock &block = split_blocks_[static_cast<std::size_t>(j)];
-      const auto level = static_cast<std::size_t>(std::upper_bound(level_split_blocks_.begin() + 1,
-                                                                   level_split_blocks_.end(),
-                                                                   static_cast<std::size_t>(j)) -
-                                                  (level_split_blocks_.begin() + 1));
-      const double dt = tau[level];
-      const std::size_t base = units_[block.unit].node_lo;
-      KickSums sums;
-      for (std::size_t a = block.begin; a < block.end; ++a) {
-        double fx = 0.0, fy = 0.0; // the pieces' forces, in piece order
-        for (std::size_t p = block.first_piece; p < block.first_piece + block.pieces; ++p)
-          fx += piece_force_[p][a - base].x, fy += piece_force_[p][a - base].y;
-        if (nd.is_loaded[a])
-          fx += nd.external[a].fx, fy += nd.external[a].fy;
-        nd.fx[a] = fx, nd.fy[a] = fy;
-        double vx = nd.vx[a], vy = nd.vy[a];
-        halfKickLevels(a, 0.5 * dt, 0.5 * dt, fx, fy, true, vx, vy, sums);
-        nd.vx[a] = vx, nd.vy[a] = vy;
-      }
-      block_sums[static_cast<std::size_t>(j)] = sums;
-    }
-  }
-  // The split units' sums, block by block in order.
-  for (std::size_t j = 0; j < blocks_end; ++j) {
-    const SplitBlock &block = split_blocks_[j];
-    const KickSums &sums = block_sums[j];
-    if (j == 0 || split_blocks_[j - 1].unit != block.unit)
-      bodySums(block.unit, block.unit + 1);
-    if (j == 0 || split_blocks_[j - 1].body != block.body)
-      body_kinetic_[block.body] = 0.0;
-    body_kinetic_[block.body] += sums.kinetic;
-    KickSums &unit = unit_sums[block.unit];
-    unit.gravity += sums.gravity, unit.provider += sums.provider, unit.friction += sums.friction;
   }
   // The step's sums, in unit order (the same for any thread count).
   const std::size_t chunks_end = units_end > 0 ? units_[units_end - 1].chunk_end : 0;
