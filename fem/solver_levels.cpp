@@ -118,7 +118,8 @@ void Solver::stepLevels() {
   for (int l = 0; l <= top; ++l)
     tau[l] = time_new - level_start_[static_cast<std::size_t>(l)];
   kick_work_ = provider_work_ = friction_work_ = 0.0;
-  updateActivity(); // the node blocks and units of the levels chosen at the last step
+  // the work laid out for the levels chosen at the last step, before their bodies move
+  updateActivity();
   kickAndDriftLevels(top, tau); // v += tau'/2 f / m + J / 2m; x += tau' v (due bodies)
   Nodes &nd = m_.nodes;
   double own_steps[8];
