@@ -1,4 +1,5 @@
 #include "solver.hpp"
+#include "element_step.hpp"
 #include "levels.hpp"
 #include "materials/hyperelastic.hpp"
 #include "threads.hpp"
@@ -15,10 +16,11 @@ namespace mesopen::fem {
 
 namespace {
 double sq(double x) { return x * x; }
-constexpr std::size_t max_chunk = 256;    // elements per material batch (scratch on the stack)
-constexpr std::size_t node_block = 4096;  // nodes per block of the node loops
-constexpr std::size_t unit_target = 4096; // elements per work unit of the element pass
-constexpr double refine_margin = 1.05;    // refine the steps below this times the last shortest
+constexpr std::size_t max_chunk = 256;        // elements per material batch (scratch on the stack)
+constexpr std::size_t node_block = 4096;      // nodes per block of the node loops
+constexpr std::size_t level_node_block = 512; // with levels
+constexpr std::size_t unit_target = 4096;     // elements per work unit of the element pass
+constexpr double refine_margin = 1.05;        // refine the steps below this times the last shortest
 
 // Whether an element of a material that erodes (erosion strain `erosion`, infinite when it does
 // not) has failed: at its erosion strain, or crushed to a fifth of its area (a grain corner driven
@@ -45,73 +47,6 @@ void appendInPieces(std::vector<R> &ranges, std::size_t first, R piece, std::siz
       piece.begin = piece.end;
     }
   }
-}
-
-// The largest root y of y^3 - 3y = 2c, c in [-1, 1]: y = 2 cos(acos(c) / 3), in [1, 2] (the
-// trigonometric solution of a cubic with three real roots). Without acos and cos, a third of the
-// time: y is analytic in s = sqrt((1 + c) / 2), and a polynomial of degree 6 in s is within 9e-7
-// of it (least squares, Chebyshev basis); Newton steps from there end above the root (the cubic is
-// convex for y > 0) and close on it quadratically. Where two roots nearly meet (c near -1) Newton
-// is slow, and the trigonometric form is taken.
-double largestCubicRoot(double c) {
-  const double s = std::sqrt(std::max(0.5 * (1.0 + c), 0.0));
-  double y =
-      1.00000087 +
-      s * (1.15465022 +
-           s * (-0.22151017 +
-                s * (0.102632071 + s * (-0.0523143943 + s * (0.0206477273 + s * -0.00410657997)))));
-  for (int k = 0; k < 3; ++k) {
-    const double step = (y * (y * y - 3.0) - 2.0 * c) / (3.0 * (y * y - 1.0));
-    y -= step;
-    if (std::abs(step) < 1e-9) // what is left is about step^2 / (y - 1)
-      return y;
-  }
-  return 2.0 * std::cos(std::acos(c) / 3.0);
-}
-
-// The largest eigenvalue of S Dhat(g) for a constant-strain triangle: S = B B^T from the shape
-// function gradients (gx, gy over 2A, engineering shear), Dhat(g) = C / M the plane-strain
-// elasticity over the longitudinal modulus M = K + 4G/3, g = G / M in [0, 3/4]:
-//   S = [P 0 R; 0 Q R; R R P+Q],  Dhat = [1 1-2g 0; 1-2g 1 0; 0 0 g] = L L^T,
-//   L = [1 0 0; 1-2g s 0; 0 0 sqrt g],  s = 2 sqrt(g (1 - g)),
-// S Dhat is similar to the symmetric T = L^T S L (its eigenvalues by the trigonometric solution of
-// the cubic, largestCubicRoot). g = 0 is the rank-one limit u u^T, u = (1, 1, 0): P + Q.
-double shapeStiffness(double P, double Q, double R, double g) {
-  const double d = 1.0 - 2.0 * g, s = 2.0 * std::sqrt(g * (1.0 - g)), r = std::sqrt(g);
-  const double t00 = P + d * d * Q, t01 = s * d * Q, t02 = r * (1.0 + d) * R;
-  const double t11 = s * s * Q, t12 = s * r * R, t22 = g * (P + Q);
-  const double off = t01 * t01 + t02 * t02 + t12 * t12, q = (t00 + t11 + t22) / 3.0;
-  double largest = q;
-  const double p2 = sq(t00 - q) + sq(t11 - q) + sq(t22 - q) + 2.0 * off;
-  if (p2 > 0.0) {
-    const double p = std::sqrt(p2 / 6.0), b00 = (t00 - q) / p, b11 = (t11 - q) / p,
-                 b22 = (t22 - q) / p, b01 = t01 / p, b02 = t02 / p, b12 = t12 / p;
-    const double det = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) +
-                              b02 * (b01 * b12 - b11 * b02));
-    largest = q + p * largestCubicRoot(std::clamp(det, -1.0, 1.0));
-  }
-  return std::max(largest, g == 0.0 ? P + Q : 0.0);
-}
-
-// How much longer than L_s / c the critical step 2 / omega_max of a constant-strain triangle with
-// lumped masses is (Flanagan & Belytschko 1981 bound the element's highest frequency; this is its
-// exact value): omega_max^2 = 3 c^2 lambda_max(S Dhat(g)), c^2 = M / rho. For the element's own
-// shear share g; when that is not known (outside [0, 3/4]), for the worst material: lambda_max is
-// convex in g (T is affine in g after a change of basis), so the larger of its values at g = 0 and
-// g = 3/4 bounds it. About 1.34 for an equilateral quartz triangle (1.19 steel, 1 at g = 0) and up
-// to sqrt(2) for slivers, the elements that set the step.
-// (always inlined: the element pass calls it at two places, and its arithmetic there is the same
-// as with one)
-[[gnu::always_inline]] inline double criticalStepGain(const double gx[3], const double gy[3],
-                                                      double area, double ls, double g) {
-  const double inv = 1.0 / (2.0 * area);
-  double P = 0.0, Q = 0.0, R = 0.0;
-  for (int k = 0; k < 3; ++k)
-    P += sq(gx[k] * inv), Q += sq(gy[k] * inv), R += gx[k] * gy[k] * inv * inv;
-  const double largest =
-      g >= 0.0 && g <= 0.75 ? shapeStiffness(P, Q, R, g)
-                            : std::max(shapeStiffness(P, Q, R, 0.0), shapeStiffness(P, Q, R, 0.75));
-  return (2.0 / ls) / std::sqrt(3.0 * largest);
 }
 
 // Node values of a batch's elements are read by the two helpers below rather than inside the
@@ -385,8 +320,10 @@ void Solver::updateActivity() {
         continue;
       const Body &body = m_.bodies[b];
       // Every process moves every active node; it computes the elements of the bodies it owns.
-      appendInPieces(node_ranges_, first_block, Range{body.node_begin, body.node_end}, node_block,
-                     [](const Range &) { return true; });
+      // (with levels, in smaller blocks: the due levels' blocks are shared among the threads by
+      // node count, and a level 0 of a few thousand nodes is then shared evenly)
+      appendInPieces(node_ranges_, first_block, Range{body.node_begin, body.node_end},
+                     by_body ? level_node_block : node_block, [](const Range &) { return true; });
       if (!owns(b))
         continue;
       const Material *material = m_.materials[body.material].get();
@@ -605,15 +542,16 @@ void Solver::shareAmongThreads() {
   }
   if (!levels())
     return;
-  // With levels, each level's node blocks by node count (a level's units are not all the units
-  // around their nodes; the units are taken as threads come free, forcesLevels).
+  // With levels, the node blocks of levels 0 to top (those due at a step whose coarsest due level
+  // is top: the first level_blocks_[top + 1]) by node count, for each top (a level's units are not
+  // all the units around their nodes; the units are taken as threads come free, forcesLevels).
   const auto n_levels = static_cast<std::size_t>(s_.max_level + 1);
-  level_thread_blocks_.resize(n_levels);
-  for (std::size_t l = 0; l < n_levels; ++l) {
-    std::vector<std::size_t> nodes;
-    for (std::size_t i = level_blocks_[l]; i < level_blocks_[l + 1]; ++i)
+  due_thread_blocks_.resize(n_levels);
+  std::vector<std::size_t> nodes;
+  for (std::size_t top = 0; top < n_levels; ++top) {
+    for (std::size_t i = nodes.size(); i < level_blocks_[top + 1]; ++i)
       nodes.push_back(node_ranges_[i].end - node_ranges_[i].begin);
-    level_thread_blocks_[l] = shares(nodes, level_blocks_[l]);
+    due_thread_blocks_[top] = shares(nodes, 0);
   }
 }
 
@@ -1160,17 +1098,24 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   // gain over shapes, leastStepGain, brings it below the body's last shortest with a margin for
   // this step's change), the least over shapes elsewhere (a lower bound: the body's step never
   // comes out too long).
-  if (levels())
+  if (levels()) {
+    alignas(64) double least[max_chunk], exact[max_chunk];
+    alignas(64) std::uint32_t pick[max_chunk]; // the elements that take the exact gain
+#pragma omp simd
+    for (std::size_t i = 0; i < n; ++i)
+      least[i] = leastStepGain(shear_share[i]);
+    const std::uint32_t *body = el.body.data() + e0;
+    std::size_t picked = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      if (known_gain[i] == 1.0)
-        continue;
-      known_gain[i] = leastStepGain(shear_share[i]);
-      if (step[i] * known_gain[i] < refine_margin * body_step_min_[el.body[e0 + i]]) {
-        const double g_x[3] = {gx[0][i], gx[1][i], gx[2][i]},
-                     g_y[3] = {gy[0][i], gy[1][i], gy[2][i]};
-        known_gain[i] = criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i], shear_share[i]);
-      }
+      const bool refined = known_gain[i] == 1.0;
+      pick[picked] = static_cast<std::uint32_t>(i);
+      picked += !refined && step[i] * least[i] < refine_margin * body_step_min_[body[i]];
+      known_gain[i] = refined ? 1.0 : least[i];
     }
+    criticalStepGains(pick, picked, gx, gy, area, len, shear_share, exact);
+    for (std::size_t j = 0; j < picked; ++j)
+      known_gain[pick[j]] = exact[j];
+  }
   // Selective mass scaling: an element whose step is below scale_below_ needs the mass
   //   m_e ((scale_below_ / dt_e)^2 - 1)
   // added on its nodes, a third on each: the lumped element's frequencies scale as 1 / sqrt(mass),

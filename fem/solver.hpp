@@ -349,12 +349,13 @@ private:
   // shortest element step at its last update (before the safety factor), its kinetic and internal
   // energy then; per level l the time at the last step whose number is a multiple of 2^l; the
   // work ranges by level (units [level_units_[l], level_units_[l + 1]), node blocks likewise) and
-  // each level's node blocks per thread; the levels the ranges were laid out for.
+  // the node blocks of levels 0 to top per thread, for each top; the levels the ranges were laid
+  // out for.
   std::vector<std::uint8_t> level_, own_level_, laid_levels_;
   std::vector<double> body_step_min_, body_kinetic_, body_internal_, level_start_;
   std::vector<double> level_step_; // per element: its step in its last pass
   std::vector<std::size_t> level_units_, level_blocks_;
-  std::vector<std::vector<std::size_t>> level_thread_blocks_;
+  std::vector<std::vector<std::size_t>> due_thread_blocks_;
   double element_steps_ = 0.0, single_rate_element_steps_ = 0.0;
 };
 

@@ -164,16 +164,21 @@ void Solver::stepLevels() {
   erode();
 }
 
-// The first half-kick and the drift of the due bodies' nodes, level by level.
+// The first half-kick and the drift of the due bodies' nodes (levels 0 to top, each over its
+// window), in one pass over their blocks.
 void Solver::kickAndDriftLevels(int top, const double *tau) {
   Nodes &nd = m_.nodes;
-  const std::size_t blocks = level_blocks_[static_cast<std::size_t>(top) + 1];
+  const auto due = static_cast<std::size_t>(top) + 1;
+  const std::size_t blocks = level_blocks_[due];
   kick_sums_.assign(blocks, KickSums{});
-  for (int l = 0; l <= top; ++l) {
-    const auto level = static_cast<std::size_t>(l);
-    const double t = tau[l], half = 0.5 * t;
-#pragma omp parallel if (level_blocks_[level + 1] - level_blocks_[level] > 1)
-    for (auto [i, end] = threadShare(level_thread_blocks_[level]); i < end; ++i) {
+#pragma omp parallel if (blocks > 1)
+  {
+    auto [i, end] = threadShare(due_thread_blocks_[due - 1]);
+    std::size_t level = 0;
+    for (; i < end; ++i) {
+      while (i >= level_blocks_[level + 1])
+        ++level;
+      const double t = tau[level], half = 0.5 * t;
       KickSums sums;
       for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
         double vx = nd.vx[a], vy = nd.vy[a];

@@ -3,6 +3,7 @@
 // counts of elements, rings and pairs by level and of the work they would take.
 #include "levels.hpp"
 #include "contact.hpp"
+#include "element_step.hpp"
 #include "meshes.hpp"
 #include "solver.hpp"
 
@@ -87,6 +88,82 @@ TEST(Levels, LeastStepGainBoundsEveryTriangle) {
     EXPECT_NEAR(gain(rx, ry, g), fem::leastStepGain(g), 1e-4) << "g " << g;
   EXPECT_NEAR(fem::leastStepGain(0.46), std::sqrt(1.5), 1e-15); // quartz
   EXPECT_EQ(fem::leastStepGain(-1.0), 1.0);                     // unknown: the worst material
+}
+
+// The exact gains of a batch's elements as the levels take them, in SIMD lanes
+// (fem::criticalStepGains), against the same gains one element at a time (fem::criticalStepGain,
+// which the refinement near the shortest step takes) and against the critical step of the lumped
+// triangle from its 6 x 6 eigenproblem: equal to round-off (1e-13; the lanes may contract a
+// product and a sum into one rounding where the scalar code does not) and within 1e-7 of the
+// eigenvalue's (where two eigenvalues meet, as the equilateral triangle's shear modes, the root is
+// as exact as the square root of the cubic's rounding, about 1e-8). The batch mixes shapes
+// (slivers), shear shares in [0, 3/4], the limits 0 and 3/4, shares not known (-1, 2: the worst
+// material), and picks every other element; the cubic's Newton steps must hand over to the
+// trigonometric root where two roots nearly meet.
+TEST(Levels, ExactGainsInLanesAreTheGainsOneByOne) {
+  constexpr std::size_t N = 256;
+  double gx[3][N], gy[3][N], area[N], len[N], g[N];
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double shares[] = {0.0, 0.2, 0.46, 0.75, -1.0, 2.0, 0.3, 1.0 / 3.0};
+  for (std::size_t i = 0; i < N; ++i) {
+    double x[3], y[3], A;
+    do {
+      for (int k = 0; k < 3; ++k)
+        x[k] = u(rng), y[k] = i % 3 ? u(rng) : 1e-3 * u(rng); // a third slivers
+      A = 0.5 * ((x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]));
+    } while (A < 1e-9);
+    if (i == 3 || i == 7 || i == 11) // equilateral: above g = 1/2 its two shear modes are highest
+      x[0] = 0, x[1] = 1, x[2] = 0.5, y[0] = 0, y[1] = 0, y[2] = std::sqrt(0.75);
+    double longest = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const int j = (k + 1) % 3, m = (k + 2) % 3;
+      gx[k][i] = y[j] - y[m], gy[k][i] = x[m] - x[j];
+      longest = std::max(longest, std::hypot(x[j] - x[m], y[j] - y[m]));
+    }
+    area[i] = 0.5 * (gx[0][i] * gy[1][i] - gx[1][i] * gy[0][i]);
+    len[i] = 2.0 * area[i] / longest;
+    g[i] = i % 2 ? shares[(i / 2) % 8] : 0.75 * u(rng);
+  }
+  g[3] = 0.6, g[7] = 0.75, g[11] = 0.46;
+  std::uint32_t pick[N];
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < N; i += 2)
+    pick[n++] = static_cast<std::uint32_t>(i + (i / 2) % 2);
+  double lanes[N];
+  fem::criticalStepGains(pick, n, gx, gy, area, len, g, lanes);
+  for (std::size_t j = 0; j < n; ++j) {
+    const std::uint32_t i = pick[j];
+    const double gi[3] = {gx[0][i], gx[1][i], gx[2][i]}, gj[3] = {gy[0][i], gy[1][i], gy[2][i]};
+    const double one = fem::criticalStepGain(gi, gj, area[i], (2.0 / 3.0) * len[i], g[i]);
+    ASSERT_NEAR(lanes[j], one, 1e-13 * one) << "element " << i << " g " << g[i];
+    // the eigenproblem, rho = 1, M = 1 (c = 1); an unknown share takes the worse of 0 and 3/4
+    auto exact = [&](double share) {
+      const double G = share, lam = 1.0 - 2.0 * G, A = area[i];
+      Eigen::Matrix3d C;
+      C << 1.0, lam, 0, lam, 1.0, 0, 0, 0, G;
+      Eigen::Matrix<double, 3, 6> B = Eigen::Matrix<double, 3, 6>::Zero();
+      for (int k = 0; k < 3; ++k) {
+        B(0, 2 * k) = B(2, 2 * k + 1) = gx[k][i] / (2 * A);
+        B(1, 2 * k + 1) = B(2, 2 * k) = gy[k][i] / (2 * A);
+      }
+      const Eigen::Matrix<double, 6, 6> K = A * B.transpose() * C * B / (A / 3.0);
+      const double omega = std::sqrt(
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(K).eigenvalues().maxCoeff());
+      return (2.0 / omega) / ((2.0 / 3.0) * len[i]);
+    };
+    const bool known = g[i] >= 0.0 && g[i] <= 0.75;
+    const double expected = known ? exact(g[i]) : std::min(exact(0.0), exact(0.75));
+    ASSERT_NEAR(lanes[j], expected, 1e-7 * expected) << "element " << i << " g " << g[i];
+  }
+  // Where two roots of y^3 - 3y = 2c nearly meet (c near -1), Newton does not close in three steps:
+  // the lanes say so, and the root is the trigonometric one.
+  bool newton = true;
+  const double c = -1.0 + 1e-14;
+  fem::largestCubicRootByNewton(c, newton);
+  EXPECT_FALSE(newton);
+  EXPECT_NEAR(fem::largestCubicRoot(c), 2.0 * std::cos(std::acos(c) / 3.0), 1e-15);
+  EXPECT_NEAR(fem::largestCubicRoot(0.3), 2.0 * std::cos(std::acos(0.3) / 3.0), 1e-12);
 }
 
 // Two free bodies in translation, of the same shape, one with cells four times smaller: their own
