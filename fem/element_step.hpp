@@ -11,6 +11,7 @@
 
 namespace mesopen::fem {
 
+// x^2 (the element pass takes it too)
 inline double square(double x) { return x * x; }
 
 // The largest root y of y^3 - 3y = 2c, c in [-1, 1]: y = 2 cos(acos(c) / 3), in [1, 2] (the

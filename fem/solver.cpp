@@ -15,7 +15,6 @@
 namespace mesopen::fem {
 
 namespace {
-double sq(double x) { return x * x; }
 constexpr std::size_t max_chunk = 256;        // elements per material batch (scratch on the stack)
 constexpr std::size_t node_block = 4096;      // nodes per block of the node loops
 constexpr std::size_t level_node_block = 512; // with levels
@@ -629,7 +628,7 @@ void Solver::applyConstraints(double half_dt, bool second_half) {
     kick_work_ += nd.mass[a] * gravity * shift;
     if (second_half)
       addKinetic(a, 0.5 * nd.mass[a] *
-                        (target * target - sq(target - before) - v * v + sq(v - before)));
+                        (target * target - square(target - before) - v * v + square(v - before)));
     else
       position += 2.0 * half_dt * (target - v);
     v = target;
@@ -1125,7 +1124,7 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
     for (std::size_t i = 0; i < n; ++i) {
       if (step[i] < scale_below_) {
         const auto e = static_cast<std::uint32_t>(e0 + i);
-        const double mass = rho0 * area0[i], needed = mass * (sq(scale_below_ / step[i]) - 1.0);
+        const double mass = rho0 * area0[i], needed = mass * (square(scale_below_ / step[i]) - 1.0);
         const auto it = added_mass_.find(e);
         const double added = it == added_mass_.end() ? 0.0 : it->second;
         if (needed > added)
