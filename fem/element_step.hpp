@@ -83,8 +83,8 @@ inline double shapeStiffness(double P, double Q, double R, double g) {
 // convex in g (T is affine in g after a change of basis), so the larger of its values at g = 0 and
 // g = 3/4 bounds it. About 1.34 for an equilateral quartz triangle (1.19 steel, 1 at g = 0) and up
 // to sqrt(2) for slivers, the elements that set the step.
-// (always inlined: the element pass calls it at two places, and its arithmetic there is the same
-// as with one)
+// (always inlined: the element pass calls it at two places and criticalStepGains for its fallback,
+// and its arithmetic is the same at each)
 [[gnu::always_inline]] inline double criticalStepGain(const double gx[3], const double gy[3],
                                                       double area, double ls, double g) {
   const double inv = 1.0 / (2.0 * area);

@@ -17,7 +17,7 @@ namespace mesopen::fem {
 namespace {
 constexpr std::size_t max_chunk = 256;        // elements per material batch (scratch on the stack)
 constexpr std::size_t node_block = 4096;      // nodes per block of the node loops
-constexpr std::size_t level_node_block = 512; // with levels
+constexpr std::size_t level_node_block = 512; // the same with levels (shared by node count)
 constexpr std::size_t unit_target = 4096;     // elements per work unit of the element pass
 constexpr double refine_margin = 1.05;        // refine the steps below this times the last shortest
 
