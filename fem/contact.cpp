@@ -98,7 +98,7 @@ double Contact::penetration(std::size_t B, double px, double py, Scratch &scratc
   if (!boundaries_.inside(B, px, py))
     return 0.0;
   // every segment of B lies in its box
-  nearSegments(B, boundaries_.ends(B), boundaries_.endsEnd(B), boundaries_.boxes[B], scratch);
+  nearSegments(B, boundaries_.ends(B), boundaries_.endsEnd(B), boundaries_.boxes[B], scratch.near);
   return std::sqrt(narrow::closest(scratch.near, px, py, nullptr).distance);
 }
 
@@ -317,7 +317,7 @@ void Contact::refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &sc
 std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region, double margin,
                                 Scratch &scratch) const {
   const ContactBoundaries &bd = boundaries_;
-  nearSegments(B, bd.ends(B), bd.endsEnd(B), region, scratch);
+  nearSegments(B, bd.ends(B), bd.endsEnd(B), region, scratch.near);
   const Near &near = scratch.near;
   std::vector<std::uint32_t> &items = scratch.items;
   std::vector<double> &distance = scratch.distance;
@@ -346,9 +346,9 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region,
 // (see narrow::nearSegments; the reach: see touch)
 MESOPEN_INLINE Contact::Box Contact::nearSegments(std::size_t body, const std::uint32_t *ends,
                                                   const std::uint32_t *ends_end, const Box &region,
-                                                  Scratch &scratch) const {
+                                                  Near &near) const {
   const Box wide = region.widened(check_depth * boundaries_.size[body]);
-  narrow::nearSegments(boundaries_.points.data(), ends, ends_end, wide, scratch.near);
+  narrow::nearSegments(boundaries_.points.data(), ends, ends_end, wide, near);
   return wide;
 }
 
@@ -399,7 +399,7 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
   if (candidates.empty())
     return;
   const double h = bd.size[B];
-  const Box wide = nearSegments(B, ends, ends_end, region, scratch);
+  const Box wide = nearSegments(B, ends, ends_end, region, scratch.near);
   const Near &near = scratch.near;
   if (near.count == 0) {
     std::copy(candidates.begin(), candidates.end(), hot);
@@ -410,34 +410,48 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
   for (const std::uint32_t i : candidates) {
     const std::uint32_t k = nodes[i];
     const double px = bd.points[k].x, py = bd.points[k].y;
-    // The closest point of B's boundary: on a segment's inside (the node is in contact when behind
-    // it) or a vertex (when behind its vertex normal; see atVertex).
-    narrow::Closest c = narrow::closest(near, px, py, nullptr);
-    if (c.segment == no_node) {
-      hot[n_hot++] = i;
-      continue;
-    }
-    // w2: the weight of the segment's end, set if the node meets a vertex, else along / length
+    // The near segments cover `wide`: a segment left out lies at least `edge` from the node.
+    double edge =
+        std::min(std::min(px - wide.x0, wide.x1 - px), std::min(py - wide.y0, wide.y1 - py));
+    // The closest point of B's boundary among `near`: on a segment's inside (the node is in
+    // contact when behind it) or a vertex (when behind its vertex normal; see atVertex).
+    // w2: the weight of the segment's end, set if the node meets a vertex, else along / length.
+    const Near *searched = &near;
+    narrow::Closest c;
     double depth = 0.0, nx = 0.0, ny = 0.0, w2 = -1.0;
     using narrow::At;
-    const At at = narrow::atInside(near, c)
-                      ? At::segment
-                      : narrow::atVertex(near, bd.points.data(), bd.pinched.data(), c, px, py,
-                                         depth, nx, ny, w2);
-    if (at == At::unknown) { // beyond a segment's end, the other segment there not near
+    auto locate = [&]() {
+      c = narrow::closest(*searched, px, py, nullptr);
+      if (c.segment == no_node)
+        return At::unknown;
+      depth = 0.0, w2 = -1.0;
+      const At at = narrow::atInside(*searched, c)
+                        ? At::segment
+                        : narrow::atVertex(*searched, bd.points.data(), bd.pinched.data(), c, px,
+                                           py, depth, nx, ny, w2);
+      if (at == At::segment)
+        depth = -c.g, nx = (*searched).nx[c.segment], ny = (*searched).ny[c.segment];
+      return at;
+    };
+    At at = locate();
+    // Behind the closest near segment, but farther from it than from the edge of `wide` (a node
+    // deeper than the reach, at the edge of the overlap): B's closest segment may be one left
+    // out, beyond the edge, and the depth far less than measured (an eroding tip, a dented grain).
+    // Sought again among all the pair's listed segments within that distance of the node.
+    if (at != At::unknown && depth >= 0.0 && c.distance > edge * edge) {
+      const double d = std::sqrt(c.distance);
+      nearSegments(B, ends, ends_end, Box{px - d, py - d, px + d, py + d}, scratch.node_near);
+      searched = &scratch.node_near, edge = d;
+      at = locate();
+    }
+    if (at == At::unknown) { // none near, or beyond a segment's end, the other segment not near
       hot[n_hot++] = i;
       continue;
     }
     // Outside B, the node is as far from it as from the closest point found, or from the edge
     // of the region the near segments cover (the segments beyond lie beyond it).
-    auto outside = [&] {
-      const double edge =
-          std::min(std::min(px - wide.x0, wide.x1 - px), std::min(py - wide.y0, wide.y1 - py));
-      until = std::min(until, travel + std::min(std::sqrt(c.distance), edge));
-    };
-    const narrow::Segment s = near[c.segment];
-    if (at == At::segment)
-      depth = -c.g, nx = s.nx, ny = s.ny;
+    auto outside = [&] { until = std::min(until, travel + std::min(std::sqrt(c.distance), edge)); };
+    const Near &found = *searched;
     if (depth < 0.0) { // in front of the closest segment or vertex
       outside();
       continue;
@@ -456,8 +470,8 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
         allowed > 0.0 && (depth -= allowed) <= touching * h)
       continue; // a depth allowed for (erosion's overlap, a sudden depth), still opening
     hits.found.push_back({static_cast<std::uint32_t>(A), k, static_cast<std::uint32_t>(B),
-                          near.ends[2 * c.segment], near.ends[2 * c.segment + 1],
-                          w2 < 0.0 ? c.along / s.length : w2, nx, ny, depth, h, mu});
+                          found.ends[2 * c.segment], found.ends[2 * c.segment + 1],
+                          w2 < 0.0 ? c.along / found.length[c.segment] : w2, nx, ny, depth, h, mu});
   }
 }
 

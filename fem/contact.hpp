@@ -150,7 +150,7 @@ private:
   };
   // A thread's working lists: segments near a node set, distances.
   struct Scratch {
-    Near near;
+    Near near, node_near; // the segments near a pair's overlap; near one node (see touch)
     std::vector<std::uint32_t> items, candidates;
     std::vector<double> distance;
     std::vector<char> keep;
@@ -164,9 +164,9 @@ private:
 
   // Narrow phase (on the geometry of contact_narrow.hpp) and forces (the law of contact_law.hpp).
   // The segments of `body` given by their ends that come within its reach (check_depth of an
-  // element) of `region`, into scratch.near; returns the region widened by that reach.
+  // element) of `region`, into `near`; returns the region widened by that reach.
   Box nearSegments(std::size_t body, const std::uint32_t *ends, const std::uint32_t *ends_end,
-                   const Box &region, Scratch &scratch) const;
+                   const Box &region, Near &near) const;
   void refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &scratch) const;
   std::uint32_t listNear(std::size_t A, std::size_t B, const Box &region, double margin,
                          Scratch &scratch) const;

@@ -253,3 +253,30 @@ TEST(Contact, SuddenDeepOverlapOpensGently) {
   EXPECT_LT(contact.statistics().depth, 0.05);
   EXPECT_LT(worst_momentum, 1e-12 * mass * one_step);
 }
+
+// A grain's corner nodes 0.07 of an element inside a thin bar, just above its lower face: the
+// grain's box ends at those nodes, so the bar's lower face lies 0.07 elements beyond the overlap
+// of the two boxes, out of the narrow phase's reach around it (0.05 elements), while the bar's
+// upper face, 0.43 elements away, is within it. The depth is the distance to the closest
+// boundary, 0.07 elements (an eroding tip meets grains this way); measured against the upper
+// face instead, the contact would be 0.43 deep and its excess let go as a sudden depth. Tolerance
+// 0.002: the nodes move by 1e-9 of an element in the step.
+TEST(Contact, DepthIsToTheClosestSegmentBeyondTheOverlapsReach) {
+  const double h = 10e-6, inside = 0.07 * h;
+  TestMesh mesh;
+  mesh.addRectangle(0.0, 0.0, 0.8 * h, 0.8 * h, 1, 1, 0.0, 1);            // the grain
+  mesh.addRectangle(-4.1 * h, -inside, 10.0 * h, 0.5 * h, 10, 1, 0.0, 2); // the bar
+  fem::Model model = mesh.model(test::oneMaterial("quartz"));
+  fem::setBodyVelocity(model, 0, 0.0, -1.0); // closing slowly (bodies at rest are not computed)
+  fem::setBodyVelocity(model, 1, 0.0, 1.0);
+  fem::ContactSettings cs;
+  cs.friction = {0.0};
+  fem::Contact contact(model, cs);
+  fem::Solver solver(model, {});
+  solver.addForceProvider(&contact);
+  solver.step();
+  std::printf("grain nodes %.3f elements inside the bar: deepest contact %.4f elements\n",
+              inside / h, contact.statistics().depth);
+  EXPECT_GT(contact.statistics().contacts, 0u);
+  EXPECT_NEAR(contact.statistics().depth, 0.07, 0.002);
+}
