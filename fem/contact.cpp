@@ -311,27 +311,51 @@ void Contact::refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &sc
 
 // Appends to scratch.items body A's nodes in the rectangle that are behind their closest segment
 // of body B or nearer to it than `margin`, then (as node pairs) B's segments that are nearer to
-// one of them than its closest segment plus `margin`. While the two bodies move by less than
+// one of them than its closest segment plus `margin` (for a node deeper than the margin, sought
+// among all of B's segments). While the two bodies move by less than
 // margin / 2 together, these hold every node that can come into contact and its closest segment.
 // Returns the end of the nodes.
 std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region, double margin,
                                 Scratch &scratch) const {
   const ContactBoundaries &bd = boundaries_;
-  nearSegments(B, bd.ends(B), bd.endsEnd(B), region, scratch.near);
+  const Box wide = nearSegments(B, bd.ends(B), bd.endsEnd(B), region, scratch.near);
   const Near &near = scratch.near;
   std::vector<std::uint32_t> &items = scratch.items;
   std::vector<double> &distance = scratch.distance;
+  std::vector<std::uint64_t> &beyond = scratch.beyond; // segments beyond `wide` (ends as one key)
   distance.resize(near.size);
   scratch.keep.assign(near.size, 0);
+  beyond.clear();
   for (std::size_t k = bd.node_begin[A]; k < bd.node_begin[A + 1] && near.count > 0; ++k) {
     const double px = bd.points[k].x, py = bd.points[k].y;
     if (!region.contains(px, py))
       continue;
     const narrow::Closest c = narrow::closest(near, px, py, distance.data());
-    const double clearance = std::sqrt(c.distance);
+    double clearance = std::sqrt(c.distance);
     if (clearance >= margin && c.g >= 0.0)
       continue;
     items.push_back(static_cast<std::uint32_t>(k));
+    // A node behind B's boundary farther from its closest near segment than from the edge of
+    // `wide` (deeper than the margin): its closest segments may lie beyond, among all of B's.
+    const double edge =
+        std::min(std::min(px - wide.x0, wide.x1 - px), std::min(py - wide.y0, wide.y1 - py));
+    if (c.g < 0.0 && clearance > edge) {
+      const Near &around = scratch.node_near;
+      nearSegments(B, bd.ends(B), bd.endsEnd(B),
+                   Box{px - clearance, py - clearance, px + clearance, py + clearance},
+                   scratch.node_near);
+      clearance = std::sqrt(narrow::closest(around, px, py, nullptr).distance);
+      for (std::size_t i = 0; i < around.size; ++i) {
+        if (!around.in(i))
+          continue;
+        // (the test of narrow::nearSegments on the same points: a segment is in `near` or here)
+        const Point &a = bd.points[around.ends[2 * i]], &b = bd.points[around.ends[2 * i + 1]];
+        const bool in_wide = wide.x0 <= std::max(a.x, b.x) && std::min(a.x, b.x) <= wide.x1 &&
+                             wide.y0 <= std::max(a.y, b.y) && std::min(a.y, b.y) <= wide.y1;
+        if (!in_wide && around[i].foot(px, py).distance < sq(clearance + margin))
+          beyond.push_back(std::uint64_t{around.ends[2 * i]} << 32 | around.ends[2 * i + 1]);
+      }
+    }
     const double reach = sq(clearance + margin);
     for (std::size_t i = 0; i < near.size; ++i)
       scratch.keep[i] |= distance[i] < reach;
@@ -340,6 +364,11 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region,
   for (std::size_t i = 0; i < near.size; ++i)
     if (scratch.keep[i])
       items.push_back(near.ends[2 * i]), items.push_back(near.ends[2 * i + 1]);
+  std::sort(beyond.begin(), beyond.end());
+  beyond.erase(std::unique(beyond.begin(), beyond.end()), beyond.end());
+  for (const std::uint64_t ends : beyond)
+    items.push_back(static_cast<std::uint32_t>(ends >> 32)),
+        items.push_back(static_cast<std::uint32_t>(ends));
   return nodes_end;
 }
 

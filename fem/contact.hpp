@@ -154,6 +154,7 @@ private:
     std::vector<std::uint32_t> items, candidates;
     std::vector<double> distance;
     std::vector<char> keep;
+    std::vector<std::uint64_t> beyond;
   };
 
   // The phases of a step after the broad phase (see addForces).

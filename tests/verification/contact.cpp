@@ -280,3 +280,28 @@ TEST(Contact, DepthIsToTheClosestSegmentBeyondTheOverlapsReach) {
   EXPECT_GT(contact.statistics().contacts, 0u);
   EXPECT_NEAR(contact.statistics().depth, 0.07, 0.002);
 }
+
+// The same grain 0.5 h inside a bar 1.2 h thick (its element size, its longest edge, then 1.2 h):
+// its corner nodes lie deeper than a pair's list margin and the reach (0.5 of the smaller element
+// size and 0.05 of the bar's: 0.46 h), so the bar's lower face lies beyond the region the lists
+// are taken in, and the upper face, 0.7 h away, inside it. The lists hold every node's closest
+// segment: the depth is 0.5 h (0.417 of the bar's element), not 0.7 h (0.583). Tolerance as above.
+TEST(Contact, ListsHoldTheClosestSegmentOfANodeDeeperThanTheMargin) {
+  const double h = 10e-6, inside = 0.5 * h;
+  TestMesh mesh;
+  mesh.addRectangle(0.0, 0.0, 0.8 * h, 0.8 * h, 1, 1, 0.0, 1);            // the grain
+  mesh.addRectangle(-4.1 * h, -inside, 10.0 * h, 1.2 * h, 10, 1, 0.0, 2); // the bar
+  fem::Model model = mesh.model(test::oneMaterial("quartz"));
+  fem::setBodyVelocity(model, 0, 0.0, -1.0);
+  fem::setBodyVelocity(model, 1, 0.0, 1.0);
+  fem::ContactSettings cs;
+  cs.friction = {0.0};
+  fem::Contact contact(model, cs);
+  fem::Solver solver(model, {});
+  solver.addForceProvider(&contact);
+  solver.step();
+  std::printf("grain nodes %.3f of the bar's elements inside it: deepest contact %.4f\n",
+              inside / (1.2 * h), contact.statistics().depth);
+  EXPECT_GT(contact.statistics().contacts, 0u);
+  EXPECT_NEAR(contact.statistics().depth, 0.5 / 1.2, 0.002);
+}
