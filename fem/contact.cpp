@@ -335,14 +335,15 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region,
     if (clearance >= margin && c.g >= 0.0)
       continue;
     items.push_back(static_cast<std::uint32_t>(k));
-    // A node behind B's boundary farther from its closest near segment than from the edge of
-    // `wide` (deeper than the margin): its closest segments may lie beyond, among all of B's.
+    // A node behind B's boundary whose segments within its clearance plus the margin may reach
+    // beyond the edge of `wide` (a node about as deep as the margin): those are sought among all
+    // of B's segments (a segment beyond lies at least `edge` from the node).
     const double edge =
         std::min(std::min(px - wide.x0, wide.x1 - px), std::min(py - wide.y0, wide.y1 - py));
-    if (c.g < 0.0 && clearance > edge) {
+    if (c.g < 0.0 && clearance + margin > edge) {
       const Near &around = scratch.node_near;
-      nearSegments(B, bd.ends(B), bd.endsEnd(B),
-                   Box{px - clearance, py - clearance, px + clearance, py + clearance},
+      const double r = clearance + margin;
+      nearSegments(B, bd.ends(B), bd.endsEnd(B), Box{px - r, py - r, px + r, py + r},
                    scratch.node_near);
       clearance = std::sqrt(narrow::closest(around, px, py, nullptr).distance);
       for (std::size_t i = 0; i < around.size; ++i) {
@@ -401,8 +402,9 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
   const ContactBoundaries &bd = boundaries_;
   // A node inside B is in the overlap of the two boxes: the listed nodes there, if any, are
   // checked against the segments within `reach` of the overlap (a node behind one of them by less
-  // than `reach` finds its closest segment among them; deeper contacts are checked by the crossing
-  // count).
+  // than `reach` finds its closest segment among them; a node farther from them than from the
+  // edge of the region they cover seeks it among all the listed segments; deeper contacts are
+  // confirmed by the crossing count).
   const Box &box = bd.boxes[B];
   const Box region = bd.boxes[A].overlap(box);
   std::vector<std::uint32_t> &candidates = scratch.candidates; // positions in `nodes`
@@ -463,11 +465,12 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
       return at;
     };
     At at = locate();
-    // Behind the closest near segment, but farther from it than from the edge of `wide` (a node
-    // deeper than the reach, at the edge of the overlap): B's closest segment may be one left
-    // out, beyond the edge, and the depth far less than measured (an eroding tip, a dented grain).
-    // Sought again among all the pair's listed segments within that distance of the node.
-    if (at != At::unknown && depth >= 0.0 && c.distance > edge * edge) {
+    // Farther from the closest near segment than from the edge of `wide` (a node deeper than the
+    // reach at the edge of the overlap, or clear by more; or beyond a segment's end whose other
+    // segment at that vertex is left out): B's closest segment may be one left out, beyond the
+    // edge, and the node's depth, or its side of B, other than measured (an eroding tip, a dented
+    // grain). Sought again among all the pair's listed segments within that distance of the node.
+    if (c.segment != no_node && !(c.distance < edge * edge)) {
       const double d = std::sqrt(c.distance);
       nearSegments(B, ends, ends_end, Box{px - d, py - d, px + d, py + d}, scratch.node_near);
       searched = &scratch.node_near, edge = d;

@@ -150,7 +150,7 @@ private:
   };
   // A thread's working lists: segments near a node set, distances.
   struct Scratch {
-    Near near, node_near; // the segments near a pair's overlap; near one node (see touch)
+    Near near, node_near; // the segments near a pair's overlap; near one node (touch, listNear)
     std::vector<std::uint32_t> items, candidates;
     std::vector<double> distance;
     std::vector<char> keep;

@@ -260,7 +260,7 @@ TEST(Contact, SuddenDeepOverlapOpensGently) {
 // upper face, 0.43 elements away, is within it. The depth is the distance to the closest
 // boundary, 0.07 elements (an eroding tip meets grains this way); measured against the upper
 // face instead, the contact would be 0.43 deep and its excess let go as a sudden depth. Tolerance
-// 0.002: the nodes move by 1e-9 of an element in the step.
+// 0.002: the nodes move by about 1e-4 of an element in the step.
 TEST(Contact, DepthIsToTheClosestSegmentBeyondTheOverlapsReach) {
   const double h = 10e-6, inside = 0.07 * h;
   TestMesh mesh;
