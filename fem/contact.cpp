@@ -311,9 +311,9 @@ void Contact::refresh(Pair &pair, std::vector<std::uint32_t> &arena, Scratch &sc
 
 // Appends to scratch.items body A's nodes in the rectangle that are behind their closest segment
 // of body B or nearer to it than `margin`, then (as node pairs) B's segments that are nearer to
-// one of them than its closest segment plus `margin` (for a node deeper than the margin, sought
-// among all of B's segments). While the two bodies move by less than
-// margin / 2 together, these hold every node that can come into contact and its closest segment.
+// one of them than its closest segment plus `margin` (for a node about as deep as the margin,
+// sought among all of B's segments). While the two bodies move by less than margin / 2 together,
+// these hold every node that can come into contact and its closest segment.
 // Returns the end of the nodes.
 std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region, double margin,
                                 Scratch &scratch) const {
@@ -337,10 +337,8 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region,
     items.push_back(static_cast<std::uint32_t>(k));
     // A node behind B's boundary whose segments within its clearance plus the margin may reach
     // beyond the edge of `wide` (a node about as deep as the margin): those are sought among all
-    // of B's segments (a segment beyond lies at least `edge` from the node).
-    const double edge =
-        std::min(std::min(px - wide.x0, wide.x1 - px), std::min(py - wide.y0, wide.y1 - py));
-    if (c.g < 0.0 && clearance + margin > edge) {
+    // of B's segments (a segment beyond lies at least wide.edgeDistance from the node).
+    if (c.g < 0.0 && clearance + margin > wide.edgeDistance(px, py)) {
       const Near &around = scratch.node_near;
       const double r = clearance + margin;
       nearSegments(B, bd.ends(B), bd.endsEnd(B), Box{px - r, py - r, px + r, py + r},
@@ -351,9 +349,8 @@ std::uint32_t Contact::listNear(std::size_t A, std::size_t B, const Box &region,
           continue;
         // (the test of narrow::nearSegments on the same points: a segment is in `near` or here)
         const Point &a = bd.points[around.ends[2 * i]], &b = bd.points[around.ends[2 * i + 1]];
-        const bool in_wide = wide.x0 <= std::max(a.x, b.x) && std::min(a.x, b.x) <= wide.x1 &&
-                             wide.y0 <= std::max(a.y, b.y) && std::min(a.y, b.y) <= wide.y1;
-        if (!in_wide && around[i].foot(px, py).distance < sq(clearance + margin))
+        if (!wide.meets(a.x, a.y, b.x, b.y) &&
+            around[i].foot(px, py).distance < sq(clearance + margin))
           beyond.push_back(std::uint64_t{around.ends[2 * i]} << 32 | around.ends[2 * i + 1]);
       }
     }
@@ -442,8 +439,7 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
     const std::uint32_t k = nodes[i];
     const double px = bd.points[k].x, py = bd.points[k].y;
     // The near segments cover `wide`: a segment left out lies at least `edge` from the node.
-    double edge =
-        std::min(std::min(px - wide.x0, wide.x1 - px), std::min(py - wide.y0, wide.y1 - py));
+    double edge = wide.edgeDistance(px, py);
     // The closest point of B's boundary among `near`: on a segment's inside (the node is in
     // contact when behind it) or a vertex (when behind its vertex normal; see atVertex).
     // w2: the weight of the segment's end, set if the node meets a vertex, else along / length.
@@ -461,7 +457,7 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
                         : narrow::atVertex(*searched, bd.points.data(), bd.pinched.data(), c, px,
                                            py, depth, nx, ny, w2);
       if (at == At::segment)
-        depth = -c.g, nx = (*searched).nx[c.segment], ny = (*searched).ny[c.segment];
+        depth = -c.g, nx = searched->nx[c.segment], ny = searched->ny[c.segment];
       return at;
     };
     At at = locate();

@@ -42,6 +42,15 @@ struct Box {
   bool overlaps(const Box &o) const { return x0 <= o.x1 && o.x0 <= x1 && y0 <= o.y1 && o.y0 <= y1; }
   bool contains(double x, double y) const { return x >= x0 && x <= x1 && y >= y0 && y <= y1; }
   Box widened(double margin) const { return {x0 - margin, y0 - margin, x1 + margin, y1 + margin}; }
+  // Whether the box of the segment from (ax, ay) to (bx, by) meets it (no branch).
+  bool meets(double ax, double ay, double bx, double by) const {
+    return (x0 <= std::max(ax, bx)) & (std::min(ax, bx) <= x1) & (y0 <= std::max(ay, by)) &
+           (std::min(ay, by) <= y1);
+  }
+  // How far (x, y), inside, lies from its edge: whatever lies outside is at least as far.
+  double edgeDistance(double x, double y) const {
+    return std::min(std::min(x - x0, x1 - x), std::min(y - y0, y1 - y));
+  }
   // the intersection (empty if x0 > x1 or y0 > y1)
   Box overlap(const Box &o) const {
     return {std::max(x0, o.x0), std::max(y0, o.y0), std::min(x1, o.x1), std::min(y1, o.y1)};
@@ -178,8 +187,7 @@ MESOPEN_INLINE void nearSegments(const Point *points, const std::uint32_t *ends,
     const Point &a = points[ends[2 * i]], &b = points[ends[2 * i + 1]];
     ax[m] = a.x, ay[m] = a.y, tx[m] = b.x, ty[m] = b.y;
     near.ends[2 * m] = ends[2 * i], near.ends[2 * m + 1] = ends[2 * i + 1];
-    m += (wide.x0 <= std::max(a.x, b.x)) & (std::min(a.x, b.x) <= wide.x1) &
-         (wide.y0 <= std::max(a.y, b.y)) & (std::min(a.y, b.y) <= wide.y1);
+    m += wide.meets(a.x, a.y, b.x, b.y);
   }
   const std::size_t size = (m + L - 1) / L * L;
   for (std::size_t i = m; i < size; ++i) {
