@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <span>
@@ -52,6 +53,7 @@ Contact::Contact(const Model &model, ContactSettings settings)
   block_loaded_.resize(owner_blocks);
   block_pushed_.resize(owner_blocks);
   pushed_.assign(model.nodes.size(), 0.0);
+  node_body_ = model.nodes.body;
 }
 
 // Erosion changed the boundaries of `bodies`: the lists, which hold indices into the boundaries,
@@ -141,6 +143,8 @@ void Contact::narrowPhase(const Model &model, double dt) {
         Pair &pair = run[i];
         if (levels && !(model.due[pair.a] && model.due[pair.b]))
           continue;
+        if (!mine(pair.a) && !mine(pair.b)) // another process's pair
+          continue;
         if (!bd.boxes[pair.a].overlaps(bd.boxes[pair.b]))
           continue;
         ++overlapping;
@@ -155,17 +159,24 @@ void Contact::narrowPhase(const Model &model, double dt) {
         const std::uint32_t *items = arena.data() + pair.begin;
         const std::uint32_t part[5] = {0, pair.end[0], pair.end[1], pair.end[2], pair.end[3]};
         std::uint32_t *hot = arena.data() + pair.begin + pair.end[3];
+        const std::uint64_t place = static_cast<std::uint64_t>(&pair - pairs_.pairs().data());
         for (int side = 0; side < 2; ++side) {
+          if (!mine(side ? pair.b : pair.a)) // the side of the other process's body
+            continue;
           const bool all = !(travel < pair.until[side]);
           if (!all && pair.hot[side] == 0) {
             ++skipped;
             continue;
           }
           partial += !all;
+          const std::size_t before = hits.found.size();
           touch(model, side ? pair.b : pair.a, side ? pair.a : pair.b, items + part[2 * side],
                 items + part[2 * side + 1], items + part[2 * side + 1], items + part[2 * side + 2],
                 travel, pair.until[side], hot + (side ? pair.end[0] : 0), pair.hot[side], hits,
                 scratch);
+          for (std::size_t j = before; j < hits.found.size(); ++j)
+            hits.found[j].order = place << 32 | static_cast<std::uint64_t>(side) << 31 |
+                                  static_cast<std::uint64_t>(j - before) << 2;
         }
       }
       // The forces after the search: their nodes' masses and velocities, scattered in memory, are
@@ -229,6 +240,8 @@ void Contact::addHits(Model &model) {
       block_loads[k] += hits.loads[k].size(), n_loads += hits.loads[k].size();
     contacts += hits.count, deep_steps += hits.deep, deepest = std::max(deepest, hits.depth);
   }
+  if (shared())
+    sendLoads(model);
   const std::vector<std::size_t> bounds =
       contiguousShares(block_loads, static_cast<std::size_t>(omp_get_max_threads()));
 #pragma omp parallel if (n_loads > 1024)
@@ -263,23 +276,168 @@ void Contact::addBlock(Model &model, std::size_t k) {
       pushed_[p] = 0.0;
     block_pushed_[k].clear();
   }
+  // With the work shared, this process's loads on its own nodes and those the others sent, merged
+  // in the order of their contacts.
+  static const std::vector<Load> none;
+  const std::vector<Load> &received = block_received_.empty() ? none : block_received_[k];
+  std::size_t next = 0;
+  auto add = [&](const Load &l) {
+    if (levels) {
+      if (l.depth > 0.0 && (pushed_time_[l.node] != time_ || l.depth > pushed_[l.node]))
+        pushed_[l.node] = l.depth, pushed_time_[l.node] = time_;
+    } else if (l.depth > 0.0 && l.depth > pushed_[l.node]) { // (a reaction is pushed at 0)
+      if (pushed_[l.node] == 0.0)
+        block_pushed_[k].push_back(l.node);
+      pushed_[l.node] = l.depth;
+    }
+    nd.addExternal(l.node, l.fx, l.fy, l.friction_x, l.friction_y, block_loaded_[k]);
+    if (l.body != woken) // the loads of a body come together
+      model.wake(l.body), woken = l.body;
+  };
   for (const Hits &hits : run_hits_)
     for (std::size_t i = 0, n = hits.loads[k].size(); i < n; ++i) {
       const Load &l = hits.loads[k][i];
       if (i + prefetch_ahead < n)
         prefetchLoad(nd, hits.loads[k][i + prefetch_ahead]);
-      if (levels) {
-        if (l.depth > 0.0 && (pushed_time_[l.node] != time_ || l.depth > pushed_[l.node]))
-          pushed_[l.node] = l.depth, pushed_time_[l.node] = time_;
-      } else if (l.depth > 0.0 && l.depth > pushed_[l.node]) { // (a reaction is pushed at 0)
-        if (pushed_[l.node] == 0.0)
-          block_pushed_[k].push_back(l.node);
-        pushed_[l.node] = l.depth;
-      }
-      nd.addExternal(l.node, l.fx, l.fy, l.friction_x, l.friction_y, block_loaded_[k]);
-      if (l.body != woken) // the loads of a body come together
-        model.wake(l.body), woken = l.body;
+      if (!mine(l.body)) // sent to its owner (sendLoads)
+        continue;
+      for (; next < received.size() && received[next].order < l.order; ++next)
+        add(received[next]);
+      add(l);
     }
+  for (; next < received.size(); ++next)
+    add(received[next]);
+}
+
+// With the work shared: the loads on other processes' nodes go to their owners, and the bodies at
+// rest this process's contacts loaded to every process, which all wake them; the loads this
+// process receives wait in block_received_, by block of bodies, in the order of their contacts.
+// A message: the number of bodies woken, the bodies, then per load its order, node, fx, fy and
+// frictional part (the doubles' bits).
+void Contact::sendLoads(Model &model) {
+  const int me = processes_->rank();
+  const auto ranks = static_cast<std::size_t>(processes_->size());
+  std::vector<std::int64_t> woken;
+  for (const Hits &hits : run_hits_)
+    for (const auto &loads : hits.loads)
+      for (const Load &l : loads)
+        if (model.at_rest[l.body] && (woken.empty() || woken.back() != l.body))
+          woken.push_back(l.body);
+  std::sort(woken.begin(), woken.end());
+  woken.erase(std::unique(woken.begin(), woken.end()), woken.end());
+  std::vector<std::vector<std::int64_t>> to(ranks);
+  for (std::size_t r = 0; r < ranks; ++r)
+    if (static_cast<int>(r) != me) {
+      to[r].push_back(static_cast<std::int64_t>(woken.size()));
+      to[r].insert(to[r].end(), woken.begin(), woken.end());
+    }
+  for (const Hits &hits : run_hits_)
+    for (const auto &loads : hits.loads)
+      for (const Load &l : loads)
+        if (const int r = (*owner_)[l.body]; r != me)
+          to[static_cast<std::size_t>(r)].insert(
+              to[static_cast<std::size_t>(r)].end(),
+              {static_cast<std::int64_t>(l.order), l.node, std::bit_cast<std::int64_t>(l.fx),
+               std::bit_cast<std::int64_t>(l.fy), std::bit_cast<std::int64_t>(l.friction_x),
+               std::bit_cast<std::int64_t>(l.friction_y)});
+  const std::vector<std::vector<std::int64_t>> from = processes_->exchange(std::move(to));
+  for (std::int64_t b : woken)
+    model.wake(static_cast<std::size_t>(b));
+  for (auto &loads : block_received_)
+    loads.clear();
+  for (std::size_t r = 0; r < ranks; ++r) {
+    if (static_cast<int>(r) == me)
+      continue;
+    const std::vector<std::int64_t> &message = from[r];
+    const auto n_woken = static_cast<std::size_t>(message.at(0));
+    for (std::size_t i = 1; i <= n_woken; ++i)
+      model.wake(static_cast<std::size_t>(message[i]));
+    for (std::size_t i = 1 + n_woken; i + 6 <= message.size(); i += 6) {
+      const auto node = static_cast<std::uint32_t>(message[i + 1]);
+      const std::uint32_t body = model.nodes.body[node];
+      block_received_[block_[body]].push_back(
+          {node, body, std::bit_cast<double>(message[i + 2]), std::bit_cast<double>(message[i + 3]),
+           std::bit_cast<double>(message[i + 4]), std::bit_cast<double>(message[i + 5]), 0.0,
+           static_cast<std::uint64_t>(message[i])});
+    }
+  }
+  for (auto &loads : block_received_)
+    std::sort(loads.begin(), loads.end(),
+              [](const Load &a, const Load &b) { return a.order < b.order; });
+}
+
+void Contact::shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) {
+  processes_ = &processes, owner_ = &owner;
+  block_received_.assign(owner_blocks, {});
+}
+
+// Bodies about to change owner: the depths their nodes were pushed at and their allowances, kept
+// by their owner only, copied from it to every process; every side of every pair is looked at
+// whole at the next step (its clear nodes were measured by the process that computed it).
+void Contact::bodiesMoving(const Model &model, const std::vector<std::uint32_t> &bodies) {
+  if (!shared())
+    return;
+  const std::size_t values = 3; // per node: pushed depth, allowance, release per step
+  std::size_t count = 0;
+  for (std::uint32_t b : bodies)
+    if (mine(b))
+      count += values * (model.bodies[b].node_end - model.bodies[b].node_begin);
+  auto pack = [&](double *out) {
+    for (std::uint32_t b : bodies)
+      if (mine(b))
+        for (std::size_t a = model.bodies[b].node_begin; a < model.bodies[b].node_end; ++a) {
+          const auto p = static_cast<std::uint32_t>(a);
+          const double allowance = allowances_.of(p);
+          *out++ = pushed_[a], *out++ = allowance;
+          *out++ = allowance > 0.0 ? allowances_.rate(p) : 0.0;
+        }
+  };
+  auto unpack = [&](const double *all) {
+    for (int r = 0; r < processes_->size(); ++r)
+      for (std::uint32_t b : bodies)
+        if ((*owner_)[b] == r)
+          for (std::size_t a = model.bodies[b].node_begin; a < model.bodies[b].node_end;
+               ++a, all += values) {
+            const auto p = static_cast<std::uint32_t>(a);
+            if (all[0] != 0.0 && pushed_[a] == 0.0)
+              block_pushed_[block_[b]].push_back(p);
+            pushed_[a] = all[0];
+            if (all[1] > 0.0 || allowances_.of(p) > 0.0)
+              allowances_.set(p, all[1], all[2]);
+          }
+  };
+  processes_->share(count, pack, unpack);
+  for (std::size_t r = 0; r < pairs_.runs(); ++r)
+    for (Pair &pair : pairs_.run(r))
+      pair.until[0] = pair.until[1] = 0.0, pair.hot[0] = pair.hot[1] = 0;
+}
+
+ContactStatistics Contact::statisticsOfAll() const {
+  if (!shared())
+    return stats_;
+  const ContactStatistics &s = stats_;
+  const std::vector<std::int64_t> counts = processes_->allGather(std::vector<std::int64_t>{
+      static_cast<std::int64_t>(s.pairs), static_cast<std::int64_t>(s.contacts),
+      static_cast<std::int64_t>(s.deep), static_cast<std::int64_t>(s.refreshed),
+      static_cast<std::int64_t>(s.searches), static_cast<std::int64_t>(s.pair_steps),
+      static_cast<std::int64_t>(s.sides), static_cast<std::int64_t>(s.skipped),
+      static_cast<std::int64_t>(s.partial), static_cast<std::int64_t>(s.sudden)});
+  const std::vector<double> depths =
+      processes_->allGather(std::vector<double>{s.depth, s.max_depth, s.seconds});
+  ContactStatistics all;
+  for (std::size_t at = 0; at < counts.size(); at += 10) {
+    all.pairs += counts[at], all.contacts += counts[at + 1], all.deep += counts[at + 2];
+    all.refreshed += counts[at + 3];
+    all.searches = std::max(all.searches, static_cast<std::size_t>(counts[at + 4]));
+    all.pair_steps += counts[at + 5], all.sides += counts[at + 6], all.skipped += counts[at + 7];
+    all.partial += counts[at + 8], all.sudden += counts[at + 9];
+  }
+  for (std::size_t at = 0; at < depths.size(); at += 3) {
+    all.depth = std::max(all.depth, depths[at]);
+    all.max_depth = std::max(all.max_depth, depths[at + 1]);
+    all.seconds = std::max(all.seconds, depths[at + 2]);
+  }
+  return all;
 }
 
 // A pair's lists, taken in the overlap of the two boxes widened by the margin: the nodes of each
@@ -499,7 +657,8 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
       continue; // a depth allowed for (erosion's overlap, a sudden depth), still opening
     hits.found.push_back({static_cast<std::uint32_t>(A), k, static_cast<std::uint32_t>(B),
                           found.ends[2 * c.segment], found.ends[2 * c.segment + 1],
-                          w2 < 0.0 ? c.along / found.length[c.segment] : w2, nx, ny, depth, h, mu});
+                          w2 < 0.0 ? c.along / found.length[c.segment] : w2, nx, ny, depth, h, mu,
+                          0});
   }
 }
 
@@ -510,8 +669,10 @@ void Contact::walls(const Model &model, double dt, Hits &hits) const {
              bottom = !std::isnan(s_.wall_bottom);
   if (!left && !right && !bottom)
     return;
+  // (after every pair's contacts, in the order of the bodies and their nodes)
+  std::uint64_t order = static_cast<std::uint64_t>(pairs_.size()) << 32;
   for (std::uint32_t b : pairs_.moving()) {
-    if (!model.due.empty() && !model.due[b])
+    if ((!model.due.empty() && !model.due[b]) || !mine(b))
       continue;
     const Box &box = bd.boxes[b];
     if (!(left && box.x0 < s_.wall_left) && !(right && box.x1 > s_.wall_right) &&
@@ -524,10 +685,13 @@ void Contact::walls(const Model &model, double dt, Hits &hits) const {
                                        {right, x - s_.wall_right, -1.0, 0.0},
                                        {bottom, s_.wall_bottom - y, 0.0, 1.0}})
         if (on && depth > touching * h)
-          hit(model,
-              {b, static_cast<std::uint32_t>(k), no_node, no_node, no_node, 0.0, nx, ny, depth, h,
-               s_.wall_friction},
-              dt, hits);
+          if (on && depth > touching * h) {
+            hit(model,
+                {b, static_cast<std::uint32_t>(k), no_node, no_node, no_node, 0.0, nx, ny, depth, h,
+                 s_.wall_friction, order},
+                dt, hits);
+            order += 4;
+          }
     }
   }
 }
@@ -563,7 +727,7 @@ void Contact::prefetchHit(const Model &model, const Found &f) const {
 // mid-step; the reaction goes to the segment's nodes by weights 1 - w2, w2.
 MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, Hits &hits) const {
   const ContactBoundaries &bd = boundaries_;
-  const auto [A, k, B, k1, k2, w2, nx, ny, found_depth, h, mu] = f;
+  const auto [A, k, B, k1, k2, w2, nx, ny, found_depth, h, mu, order] = f;
   // With levels, over the pair's window (the coarser body's), each side's impulse as a force over
   // its own body's window; the penalty from the finer body's own step (Model::own_step), which
   // changes far less often than the pair's window.
@@ -607,14 +771,14 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
                friction_y = -f_c.ft * f_c.ty;
   const double scale_a = levels ? dt / model.window[A] : 1.0;
   hits.loads[block_[A]].push_back(
-      {p, A, scale_a * fx, scale_a * fy, scale_a * friction_x, scale_a * friction_y, depth});
+      {p, A, scale_a * fx, scale_a * fy, scale_a * friction_x, scale_a * friction_y, depth, order});
   if (k1 != no_node) {
     std::vector<Load> &loads = hits.loads[block_[B]];
     const double scale_b = levels ? dt / model.window[B] : 1.0;
-    for (auto [s, w] : {std::pair{k1, w1}, {k2, w2}}) {
+    for (auto [s, w, at] : {std::tuple{k1, w1, 1u}, {k2, w2, 2u}}) {
       const double ws = w * scale_b;
-      loads.push_back(
-          {bd.nodes[s], B, -ws * fx, -ws * fy, -ws * friction_x, -ws * friction_y, 0.0});
+      loads.push_back({bd.nodes[s], B, -ws * fx, -ws * fy, -ws * friction_x, -ws * friction_y, 0.0,
+                       order + at});
     }
   }
   ++hits.count;
@@ -641,13 +805,30 @@ Contact::State Contact::state() const {
     st.boxes.insert(st.boxes.end(), {b.x0, b.y0, b.x1, b.y1});
   for (const Point &p : boundaries_.points)
     st.points.insert(st.points.end(), {p.x, p.y});
+  // (with the work shared, each node's from its owner: every process's, in rank order)
+  const std::vector<std::uint32_t> &body = node_body_;
+  std::vector<std::int64_t> allowed, pushed;
+  std::vector<double> allowance, pushed_depth;
   for (const ContactAllowances::Allowed &a : allowances_.allowed())
-    st.allowed.push_back(a.node), st.allowance.push_back(allowances_.of(a.node)),
-        st.rate.push_back(a.rate);
+    if (mine(body[a.node]))
+      allowed.push_back(a.node),
+          allowance.insert(allowance.end(), {allowances_.of(a.node), a.rate});
   for (const auto &nodes : block_pushed_)
     for (std::uint32_t p : nodes)
-      st.pushed.push_back(p), st.pushed_depth.push_back(pushed_[p]);
-  st.statistics = stats_;
+      if (mine(body[p]) && pushed_[p] != 0.0)
+        pushed.push_back(p), pushed_depth.push_back(pushed_[p]);
+  if (shared()) {
+    allowed = processes_->allGather(std::move(allowed));
+    allowance = processes_->allGather(std::move(allowance));
+    pushed = processes_->allGather(std::move(pushed));
+    pushed_depth = processes_->allGather(std::move(pushed_depth));
+  }
+  for (std::size_t k = 0; k < allowed.size(); ++k)
+    st.allowed.push_back(static_cast<std::uint32_t>(allowed[k])),
+        st.allowance.push_back(allowance[2 * k]), st.rate.push_back(allowance[2 * k + 1]);
+  st.pushed.assign(pushed.begin(), pushed.end());
+  st.pushed_depth = pushed_depth;
+  st.statistics = statisticsOfAll();
   return st;
 }
 
@@ -687,7 +868,8 @@ void Contact::restore(const Model &model, const State &st) {
     pushed_[p] = st.pushed_depth[k];
     block_pushed_[block_[model.nodes.body[p]]].push_back(p);
   }
-  stats_ = st.statistics;
+  // (with the work shared, the counts go on from the first process's: statisticsOfAll sums them)
+  stats_ = !shared() || processes_->rank() == 0 ? st.statistics : ContactStatistics{};
 }
 
 } // namespace mesopen::fem

@@ -106,8 +106,17 @@ public:
   bool takesLevels() const override { return true; }
   void capLevels(const std::vector<std::uint8_t> &own,
                  std::vector<std::uint8_t> &cap) const override;
+  // This process's statistics (with the work shared, of the pairs and sides it computed); of all
+  // processes together (every process calls it: counts summed, depths the largest).
   const ContactStatistics &statistics() const { return stats_; }
-  // The last step's contacts between bodies (the walls' left out), in pair order: a boundary node
+  ContactStatistics statisticsOfAll() const;
+  // The work shared by several processes: each computes the sides of the pairs (a body's nodes
+  // against the other's segments) of the bodies it owns, and sends the reactions on other
+  // processes' nodes to their owners, with the bodies it woke to all.
+  void shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) override;
+  void bodiesMoving(const Model &model, const std::vector<std::uint32_t> &bodies) override;
+  // The last step's contacts between bodies (the walls' left out; with the work shared, this
+  // process's), in pair order: a boundary node
   // of `node_body` pushed out of `segment_body` through the segment between two of its nodes
   // (model node indices).
   struct BodyContact {
@@ -124,17 +133,22 @@ private:
   using Pair = BodyPairs::Pair;
 
   // A contact force on a node (or a segment's node's share of the reaction), with its frictional
-  // part; `body` is the node's; the depth the node was pushed at (0 for a reaction).
+  // part; `body` is the node's; the depth the node was pushed at (0 for a reaction); `order`, its
+  // contact's (Found::order) plus 0 for the node, 1 and 2 for the segment's nodes.
   struct Load {
     std::uint32_t node, body;
     double fx, fy, friction_x, friction_y, depth;
+    std::uint64_t order;
   };
   // A contact: boundary node k (index into the boundary nodes) of body A, pushed out along
   // (nx, ny) by `depth` from the segment k1-k2 of body B (at weight w2 from k1) or from a wall
-  // (k1 = no_node); h the element size, mu the friction coefficient.
+  // (k1 = no_node); h the element size, mu the friction coefficient. `order`: where it comes in
+  // a step's contacts (its pair's place in the pairs, the side, its place in the side; the walls'
+  // after every pair), the order in which a node's forces add up on whichever process.
   struct Found {
     std::uint32_t A, k, B, k1, k2;
     double w2, nx, ny, depth, h, mu;
+    std::uint64_t order;
   };
   // A run's contacts as the narrow phase finds them, then their forces by block of bodies (see
   // addHits) in the order of the contacts, and their number, deepest penetration (over the
@@ -162,6 +176,9 @@ private:
   void walls(const Model &model, double dt, Hits &hits) const;
   void addHits(Model &model);
   void addBlock(Model &model, std::size_t k);
+  void sendLoads(Model &model);
+  bool shared() const { return processes_ != nullptr && processes_->size() > 1; }
+  bool mine(std::size_t body) const { return !shared() || (*owner_)[body] == processes_->rank(); }
 
   // Narrow phase (on the geometry of contact_narrow.hpp) and forces (the law of contact_law.hpp).
   // The segments of `body` given by their ends that come within its reach (check_depth of an
@@ -194,6 +211,12 @@ private:
   std::vector<std::uint8_t> block_; // per body: its block of bodies
   std::vector<std::vector<std::uint32_t>> block_loaded_; // per block of bodies: nodes it loaded
   std::vector<std::vector<std::uint32_t>> block_pushed_; // per block of bodies: nodes pushed_ holds
+  // With the work shared: the processes, every body's owner (the solver's), and per block of
+  // bodies the loads other processes sent this step, in order.
+  const parallel::Communicator *processes_ = nullptr;
+  const std::vector<int> *owner_ = nullptr;
+  std::vector<std::vector<Load>> block_received_;
+  std::vector<std::uint32_t> node_body_; // per model node: its body
   // The depth each model node was pushed at in the last step (the deepest of its contacts; 0 if
   // none; the nodes where it is not 0 are in block_pushed_).
   std::vector<double> pushed_;
@@ -218,6 +241,8 @@ public:
     std::vector<double> pushed_depth;    // and at what depth [m]
     ContactStatistics statistics;
   };
+  // (With the work shared every process calls it: the nodes' pushed depths and allowances come
+  // from their owners.)
   State state() const;
   // Continues from `state` once the model's state (its boundaries among it) was restored.
   // Throws std::invalid_argument when `state` is not of this model.

@@ -41,6 +41,26 @@ public:
       return allowance_[a.node] == 0.0;
     });
   }
+  // Model node `node`'s allowance and release per step set as they are (0: none), as another
+  // process kept them.
+  void set(std::uint32_t node, double allowance, double rate) {
+    if (allowance > 0.0 && allowance_.empty())
+      allowance_.assign(n_nodes_, 0.0);
+    if (allowance_.empty())
+      return;
+    if (allowance_[node] > 0.0)
+      std::erase_if(allowed_, [&](const Allowed &a) { return a.node == node; });
+    allowance_[node] = allowance;
+    if (allowance > 0.0)
+      allowed_.push_back({node, rate});
+  }
+  // The release per step of model node `node`'s allowance (0: none).
+  double rate(std::uint32_t node) const {
+    for (const Allowed &a : allowed_)
+      if (a.node == node)
+        return a.rate;
+    return 0.0;
+  }
   // The depth allowed for at model node `node` [m] (0 most steps, without a look-up).
   double of(std::uint32_t node) const { return allowed_.empty() ? 0.0 : allowance_[node]; }
 

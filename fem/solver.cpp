@@ -184,6 +184,7 @@ void Solver::addForceProvider(ForceProvider *provider) {
                                 ") with a force provider that steps every body every step (DEM "
                                 "coupling): allowed with FE-FE contact alone");
   providers_.push_back(provider);
+  provider->shareWork(comm_, owner_);
   const double scale = std::sqrt(std::max(0.0, 1.0 - 0.25 * provider->stepStiffness()));
   if (scale < step_scale_) { // the step already taken from the elements, scaled
     next_dt_ *= scale / step_scale_;
@@ -228,8 +229,8 @@ void Solver::step() {
   }
   forces(dt, true); // stresses at n+1, f(n+1), the next stable step, and unit by unit
                     // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
-  applyConstraints(0.5 * dt, true); // the imposed velocities at n+1
-  scaleMasses(0.5 * dt);            // mass for the elements whose step fell below scale_below_
+  applyConstraints(0.5 * dt, true, false); // the imposed velocities at n+1
+  scaleMasses(0.5 * dt); // mass for the elements whose step fell below scale_below_
   time_ = last ? end_at_ : time_ + dt;
   ++steps_;
   if (steps_ == 1)
@@ -489,6 +490,9 @@ void Solver::repartition(const std::vector<std::size_t> &load) {
     if (owner[b] != owner_[b])
       moving.push_back(static_cast<std::uint32_t>(b));
   shareOwned(moving, &Body::element_begin, &Body::element_end, elementState());
+  shareExternal(moving);
+  for (ForceProvider *provider : providers_)
+    provider->bodiesMoving(m_, moving);
   partition_.migrated_bodies += moving.size();
   owner_ = std::move(owner);
 }
@@ -566,7 +570,7 @@ void Solver::halfKick(std::size_t a, double half_dt, double fx, double fy, bool 
   const Nodes &nd = m_.nodes;
   const double dvx = half_dt * fx * inv_mass_[a], dvy = half_dt * fy * inv_mass_[a];
   const double mean_vx = vx + 0.5 * dvx, mean_vy = vy + 0.5 * dvy;
-  if (nd.is_loaded[a]) {
+  if (nd.is_loaded[a] && owns(nd.body[a])) { // (a node's external forces are its owner's)
     const Nodes::External &e = nd.external[a];
     sums.provider += e.fx * mean_vx + e.fy * mean_vy;
     sums.friction += e.friction_x * mean_vx + e.friction_y * mean_vy;
@@ -613,8 +617,9 @@ void Solver::kickAndDrift(double dt) {
 
 // Imposed velocities; the reactions' work, impulse . mean velocity, is external work. The kick
 // took the work of the other external forces, and the kinetic energy, at the velocity before the
-// constraint: corrected.
-void Solver::applyConstraints(double half_dt, bool second_half) {
+// constraint: corrected (the providers' forces at the nodes this process owns; after the second
+// half-kick the element pass took that part already, see constraintProviderWork).
+void Solver::applyConstraints(double half_dt, bool second_half, bool provider_work) {
   Nodes &nd = m_.nodes;
   // After the first half the node has drifted with v: by 2 half_dt (target - v) more with the
   // target.
@@ -623,8 +628,10 @@ void Solver::applyConstraints(double half_dt, bool second_half) {
     const double before = v - half_dt * f * inv_mass_[a];
     kick_work_ += nd.mass[a] * (target - v) * 0.5 * (before + target);
     const double shift = 0.5 * half_dt * (target - v); // mean velocity change x half_dt
-    provider_work_ += f_ext * shift;
-    friction_work_ += f_friction * shift;
+    if (provider_work && owns(nd.body[a])) {
+      provider_work_ += f_ext * shift;
+      friction_work_ += f_friction * shift;
+    }
     kick_work_ += nd.mass[a] * gravity * shift;
     if (second_half)
       addKinetic(a, 0.5 * nd.mass[a] *
@@ -644,6 +651,34 @@ void Solver::applyConstraints(double half_dt, bool second_half) {
         impose(a, nd.vy[a], nd.y[a], c.vy, nd.fy[a], nd.external[a].fy, nd.external[a].friction_y,
                s_.gravity_y);
     }
+}
+
+// The work of the providers' forces that the second half's constraints correct (see
+// applyConstraints), at the constrained nodes this process owns, after the second half-kick: per
+// imposed velocity, in the constraints' order, the providers' and the frictional part.
+std::vector<double> Solver::constraintProviderWork(double half_dt) const {
+  const Nodes &nd = m_.nodes;
+  std::vector<double> work;
+  std::unordered_map<std::uint64_t, double> imposed; // 2 node + axis: the velocity imposed
+  for (const auto &c : m_.constraints)
+    for (std::uint32_t a : c.nodes) {
+      if (m_.at_rest[nd.body[a]] || !owns(nd.body[a]))
+        continue;
+      const Nodes::External &e = nd.external[a];
+      for (int axis = 0; axis < 2; ++axis) {
+        if (!(axis ? c.constrain_y : c.constrain_x))
+          continue;
+        const std::uint64_t key = 2 * static_cast<std::uint64_t>(a) + axis;
+        const auto before = imposed.find(key);
+        const double v = before != imposed.end() ? before->second : axis ? nd.vy[a] : nd.vx[a];
+        const double target = axis ? c.vy : c.vx;
+        const double shift = 0.5 * half_dt * (target - v);
+        work.push_back((axis ? e.fy : e.fx) * shift);
+        work.push_back((axis ? e.friction_y : e.friction_x) * shift);
+        imposed[key] = target;
+      }
+    }
+  return work;
 }
 
 void Solver::internalForces(double dt) { forces(dt, false); }
@@ -709,8 +744,9 @@ void Solver::forces(double dt, bool kick) {
   }
   // The step's figures of every process in one exchange: its shortest element step, its first
   // inverted element, whether elements failed or asked for mass (erode and scaleMasses gather
-  // theirs only then), its elements' energies (summed in rank order, as sumInOrder) and its
-  // units' kick sums (in rank order and unit order).
+  // theirs only then), its elements' energies (summed in rank order, as sumInOrder), the work of
+  // the providers' forces at its nodes in the first half-kick and the constraints, its units' kick
+  // sums (in rank order and unit order) and the second half's constraint work at its nodes.
   const long n = static_cast<long>(chunks_.size());
   double dt_min = std::numeric_limits<double>::infinity();
   std::int64_t inverted = -1;
@@ -727,7 +763,8 @@ void Solver::forces(double dt, bool kick) {
     failing = failing || sums_[i].eroding;
     scaling = scaling || !sums_[i].scaled.empty();
   }
-  constexpr std::size_t header = 8; // the figures before the kick sums
+  const std::vector<double> late = kick ? constraintProviderWork(0.5 * dt) : std::vector<double>{};
+  constexpr std::size_t header = 11; // the figures before the kick sums
   std::vector<double> mine{dt_min,
                            static_cast<double>(inverted),
                            failing ? 1.0 : 0.0,
@@ -735,15 +772,21 @@ void Solver::forces(double dt, bool kick) {
                            internal,
                            plastic,
                            viscous,
-                           static_cast<double>(kick ? kick_sums_.size() : 0)};
+                           provider_work_,
+                           friction_work_,
+                           static_cast<double>(kick ? kick_sums_.size() : 0),
+                           static_cast<double>(late.size())};
   if (kick)
     for (const KickSums &k : kick_sums_)
       mine.insert(mine.end(), {k.gravity, k.kinetic, k.provider, k.friction});
+  mine.insert(mine.end(), late.begin(), late.end());
   const std::vector<double> all = comm_.allGather(std::move(mine));
   kick_sums_.clear();
   std::vector<std::int64_t> inverted_by;
+  std::vector<double> all_late;
   step_sums_ = {0.0, 0.0, 0.0};
   failing_ = scaling_ = false;
+  double provider = 0.0, friction = 0.0;
   for (std::size_t at = 0; at < all.size();) {
     const double *f = &all[at];
     dt_min = std::min(dt_min, f[0]);
@@ -752,15 +795,20 @@ void Solver::forces(double dt, bool kick) {
     scaling_ = scaling_ || f[3] != 0.0;
     for (int k = 0; k < 3; ++k)
       step_sums_[k] += f[4 + k];
-    const auto units = static_cast<std::size_t>(f[7]);
+    provider += f[7], friction += f[8];
+    const auto units = static_cast<std::size_t>(f[9]), n_late = static_cast<std::size_t>(f[10]);
     for (std::size_t u = 0; u < units; ++u)
       kick_sums_.push_back(
           {f[header + 4 * u], f[header + 4 * u + 1], f[header + 4 * u + 2], f[header + 4 * u + 3]});
-    at += header + 4 * units;
+    all_late.insert(all_late.end(), f + header + 4 * units, f + header + 4 * units + n_late);
+    at += header + 4 * units + n_late;
   }
   if (kick) {
+    provider_work_ = provider, friction_work_ = friction;
     energy_.kinetic = 0.0;
     addKickSums(kick_sums_, 0.5 * dt);
+    for (std::size_t k = 0; k < all_late.size(); k += 2)
+      provider_work_ += all_late[k], friction_work_ += all_late[k + 1];
   }
   // The first inverted element of any process, the lowest number whoever computed it (its area
   // from the process that did, gathered only then).
@@ -846,6 +894,36 @@ void Solver::shareNodes() {
   Nodes &nd = m_.nodes;
   shareOwned<4>(active_bodies_, &Body::node_begin, &Body::node_end,
                 {&nd.vx, &nd.vy, &nd.fx, &nd.fy});
+}
+
+// The external forces at the nodes of `bodies`, complete at their owners only (the providers'
+// forces of this step), copied from them to every process; a node they load is listed as loaded.
+void Solver::shareExternal(const std::vector<std::uint32_t> &bodies) {
+  Nodes &nd = m_.nodes;
+  std::size_t count = 0;
+  for (std::uint32_t b : bodies)
+    if (owns(b))
+      count += 4 * (m_.bodies[b].node_end - m_.bodies[b].node_begin);
+  auto pack = [&](double *mine) {
+    for (std::uint32_t b : bodies)
+      if (owns(b))
+        for (std::size_t a = m_.bodies[b].node_begin; a < m_.bodies[b].node_end; ++a) {
+          const Nodes::External &e = nd.external[a];
+          *mine++ = e.fx, *mine++ = e.fy, *mine++ = e.friction_x, *mine++ = e.friction_y;
+        }
+  };
+  auto unpack = [&](const double *all) {
+    for (int r = 0; r < comm_.size(); ++r)
+      for (std::uint32_t b : bodies)
+        if (owner(b) == r)
+          for (std::size_t a = m_.bodies[b].node_begin; a < m_.bodies[b].node_end; ++a, all += 4) {
+            nd.external[a] = {all[0], all[1], all[2], all[3]};
+            if (!nd.is_loaded[a] &&
+                (all[0] != 0.0 || all[1] != 0.0 || all[2] != 0.0 || all[3] != 0.0))
+              nd.is_loaded[a] = 1, nd.loaded.push_back(static_cast<std::uint32_t>(a));
+          }
+  };
+  comm_.share(count, pack, unpack);
 }
 
 // The element fields output reads, of every process's active bodies, from their owners.

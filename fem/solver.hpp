@@ -90,6 +90,14 @@ public:
   virtual double stepStiffness() const { return 0.0; }
   // The boundaries of `bodies` changed (elements eroded): what was built from them is taken anew.
   virtual void boundaryChanged(const Model &, const std::vector<std::uint32_t> & /*bodies*/) {}
+  // With several processes (Solver): `owner` (kept up to date by the solver) gives each body's
+  // process. A provider may then compute only for this process's bodies and send its forces on
+  // other processes' nodes to their owners (Nodes::external is complete at a node's owner only);
+  // before bodies change owner (bodiesMoving, every process, the owners not yet changed) what
+  // only their owner keeps goes with them.
+  virtual void shareWork(const parallel::Communicator & /*processes*/,
+                         const std::vector<int> & /*owner*/) {}
+  virtual void bodiesMoving(const Model &, const std::vector<std::uint32_t> & /*bodies*/) {}
   // Multiple time stepping: whether it honours Model::due and Model::window, and, from each
   // body's own level, the finest level of the bodies each body may meet through it (`cap`, lowered
   // only), so that bodies step together before they touch.
@@ -168,6 +176,8 @@ public:
   double addedMass(std::size_t body = all_bodies) const;
   // How the element work is shared now and was over the run (every process knows every owner).
   PartitionReport partition() const;
+  // The process that computes `body`'s elements and owns its nodes' external forces.
+  int owner(std::size_t body) const { return owner_[body]; }
 
   // Each active body's own stable step (safety and the providers' scaling applied, as dt()): the
   // smallest over its elements of the exact lumped-triangle bound (criticalStepGain), measured by
@@ -184,6 +194,9 @@ public:
   // With the element work shared: every process's elements' state (stress, pressure, energy,
   // plastic strain, area) of its active bodies copied to all, for output (every process calls it).
   void shareElementState() const;
+  // With the work shared: the external forces at the nodes of every process's active bodies,
+  // complete at their owners only, copied to all (for a checkpoint; every process calls it).
+  void shareExternalForces() { shareExternal(active_bodies_); }
 
   // What the steps to come depend on beyond the model's state and the settings (a run's
   // checkpoint, run/checkpoint.hpp).
@@ -259,7 +272,8 @@ private:
   void unitPass(const Unit &unit, double dt, UnitScratch &scratch);
   void storeReferenceShapes();
   void elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums);
-  void applyConstraints(double half_dt, bool second_half);
+  void applyConstraints(double half_dt, bool second_half, bool provider_work = true);
+  std::vector<double> constraintProviderWork(double half_dt) const;
   void erode();
   void scaleMasses(double half_dt);
   double stepToTake(bool &last) const;
@@ -267,12 +281,12 @@ private:
   std::string thinnestElement() const;
   std::string notFinite() const; // where a state that is not finite is (RunFailure's message)
   bool owns(std::size_t body) const { return owner_[body] == comm_.rank(); }
-  int owner(std::size_t body) const { return owner_[body]; }
   std::array<std::vector<double> *, 8> elementState() const;
   template <std::size_t N>
   void shareOwned(const std::vector<std::uint32_t> &bodies, std::size_t Body::*begin,
                   std::size_t Body::*end, const std::array<std::vector<double> *, N> &fields) const;
   void shareNodes();
+  void shareExternal(const std::vector<std::uint32_t> &bodies);
   void accountEnergy();
   void bodyStepsFromElements();
   // Multiple time stepping (fem/solver_levels.cpp).

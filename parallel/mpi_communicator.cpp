@@ -130,4 +130,47 @@ void MpiCommunicator::share(std::size_t count, const std::function<void(double *
   unpack(allGather(std::move(mine)).data());
 }
 
+std::vector<std::vector<std::int64_t>>
+MpiCommunicator::exchange(std::vector<std::vector<std::int64_t>> to) const {
+  if (to.size() != static_cast<std::size_t>(size_))
+    throw std::invalid_argument("exchange: " + std::to_string(to.size()) + " lists for " +
+                                std::to_string(size_) + " processes");
+  if (size_ == 1)
+    return to;
+  const auto ranks = static_cast<std::size_t>(size_);
+  std::vector<std::int64_t> send_sizes(ranks), receive_sizes(ranks);
+  for (std::size_t r = 0; r < ranks; ++r)
+    send_sizes[r] = static_cast<std::int64_t>(to[r].size());
+  MPI_Alltoall(send_sizes.data(), 1, MPI_INT64_T, receive_sizes.data(), 1, MPI_INT64_T, comm_);
+  detail::countReceived(static_cast<std::int64_t>(sizeof(std::int64_t)) * (size_ - 1));
+  std::int64_t sent = 0, received = 0;
+  for (std::size_t r = 0; r < ranks; ++r)
+    sent += send_sizes[r], received += receive_sizes[r];
+  const std::int64_t most = allReduce(std::max(sent, received), MPI_MAX, comm_);
+  if (most > INT_MAX)
+    throw std::length_error("an MPI exchange of " + std::to_string(most) +
+                            " items to or from one process: MPI_Alltoallv takes at most " +
+                            std::to_string(INT_MAX));
+  std::vector<int> send_counts(ranks), send_offsets(ranks), receive_counts(ranks),
+      receive_offsets(ranks);
+  std::vector<std::int64_t> send_all, receive_all(static_cast<std::size_t>(received));
+  for (std::size_t r = 0, at = 0, from = 0; r < ranks; ++r) {
+    send_counts[r] = static_cast<int>(send_sizes[r]), send_offsets[r] = static_cast<int>(at);
+    receive_counts[r] = static_cast<int>(receive_sizes[r]);
+    receive_offsets[r] = static_cast<int>(from);
+    send_all.insert(send_all.end(), to[r].begin(), to[r].end());
+    at += to[r].size(), from += static_cast<std::size_t>(receive_sizes[r]);
+  }
+  MPI_Alltoallv(send_all.data(), send_counts.data(), send_offsets.data(), MPI_INT64_T,
+                receive_all.data(), receive_counts.data(), receive_offsets.data(), MPI_INT64_T,
+                comm_);
+  detail::countReceived(static_cast<std::int64_t>(sizeof(std::int64_t)) *
+                        (received - receive_sizes[static_cast<std::size_t>(rank_)]));
+  std::vector<std::vector<std::int64_t>> from(ranks);
+  for (std::size_t r = 0; r < ranks; ++r)
+    from[r].assign(receive_all.begin() + receive_offsets[r],
+                   receive_all.begin() + receive_offsets[r] + receive_counts[r]);
+  return from;
+}
+
 } // namespace mesopen::parallel

@@ -26,6 +26,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 #include <type_traits>
 
 #include <fcntl.h>
@@ -471,7 +472,11 @@ void Checkpoints::write(const LoopResult &loop) {
   const auto began = Clock::now();
   const std::uint64_t n = number_ + 1;
   const fem::Solver &solver = *run_.solver;
-  solver.shareElementState(); // every rank's elements, for rank 0 to write
+  solver.shareElementState();                 // every rank's elements, for rank 0 to write
+  run_.solver->shareExternalForces();         // and its nodes' external forces
+  std::optional<fem::Contact::State> contact; // (from every rank: each node's from its owner)
+  if (run_.contact)
+    contact = run_.contact->state();
   std::vector<coupling::DiskForce> disk_forces;
   const std::string restart = run_.dem ? file("liggghts", n, ".restart") : std::string();
   if (run_.dem) {
@@ -501,8 +506,8 @@ void Checkpoints::write(const LoopResult &loop) {
       h5.attribute("/", "liggghts", restart);
       writeModel(h5, run_.model);
       writeSolver(h5, solver.state());
-      if (run_.contact)
-        writeContact(h5, run_.contact->state());
+      if (contact)
+        writeContact(h5, *contact);
       h5.createGroup("/series");
       h5.write("/series/time", series_.time_);
       h5.write("/series/dt", series_.dt_);

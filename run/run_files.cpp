@@ -201,6 +201,8 @@ RankFigures rankFigures(const RunAssembly &run, const LoopResult &loop) {
                                                &f.contact_pair_steps, &f.peak_memory_bytes};
   for (std::size_t k = 0; k < all.size(); ++k)
     fields[k % mine.size()]->push_back(all[k]);
+  if (run.contact)
+    f.contact = run.contact->statisticsOfAll();
   return f;
 }
 
@@ -308,7 +310,7 @@ nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Seri
         {"projectile_added_mass", solver.addedMass(0)}};
   }
   if (run.contact) {
-    const fem::ContactStatistics &c = run.contact->statistics();
+    const fem::ContactStatistics &c = rank_figures.contact;
     j["contact"] = {{"seconds", c.seconds},
                     {"share_of_steps", c.seconds / std::max(loop.solver_seconds, 1e-9)},
                     {"deepest_penetration_over_element_size", c.max_depth},

@@ -47,11 +47,13 @@ nlohmann::json demFigures(const RunAssembly &run, const parallel::World &world);
 // steps, the most within one step, the collective operations within them, the bytes it received
 // in the time loop outside the steps (LoopResult), the pairs of bodies its contact searched
 // (fem::ContactStatistics::pair_steps; 0 without contact), and its peak resident memory (VmHWM of
-// /proc/self/status; -1 where it cannot be read).
+// /proc/self/status; -1 where it cannot be read); and the contact's statistics of all ranks
+// together (fem::Contact::statisticsOfAll).
 struct RankFigures {
   std::size_t steps = 0;
   std::vector<std::int64_t> step_bytes, max_step_bytes, step_operations, other_bytes,
       contact_pair_steps, peak_memory_bytes;
+  fem::ContactStatistics contact;
 };
 // This process's figures gathered from every process (every process calls it).
 RankFigures rankFigures(const RunAssembly &run, const LoopResult &loop);

@@ -217,6 +217,12 @@ void Series::sample(const fem::Model &model, const fem::Solver &solver) {
     dot += nd.mass[a] * (x0_[i] * x + y0_[i] * y);
     lowest = std::min(lowest, nd.y[a]);
   }
+  // (with the work shared, the contact's forces on a node are complete at its body's owner only)
+  if (const parallel::Communicator &processes = solver.processes(); processes.size() > 1) {
+    const std::vector<double> all = processes.allGather(std::vector<double>{fx, fy});
+    const auto owner = 2 * static_cast<std::size_t>(solver.owner(0));
+    fx = all.at(owner), fy = all.at(owner + 1);
+  }
   time_.push_back(solver.time());
   step_.push_back(solver.steps());
   dt_.push_back(solver.dt());
