@@ -3,9 +3,11 @@
 
 Two designs of the FE decomposition (docs/solver.md, "A scaling model"):
 
-  today    every rank holds the whole model, moves every moving node and computes the whole FE-FE
-           contact; only the element updates are shared; after the element pass every rank
-           receives velocity and force (32 bytes) of every moving node it does not own;
+  today    every rank holds the whole model and moves every moving node; the element updates and
+           the FE-FE contact (the pairs of its own bodies) are shared; after the element pass every
+           rank receives velocity and force (32 bytes) of every moving node it does not own, and
+           the contact's reactions on its nodes in an all-to-all (their bytes left out: a few
+           percent of the gather's, docs/solver.md);
   spatial  a rank owns the bodies of its region (a near-square block of the moving region, as
            recursive coordinate bisection gives) and holds a halo, the other ranks' bodies within
            the contact margin: each step it receives the halo nodes' position and velocity
@@ -17,7 +19,8 @@ and c_p per pair of bodies searched (the contact); the defaults are run 6's
 (examples/baseline.toml to one length on one thread: 126.1 s, 2.18e9 element updates, the element
 pass 51 % of the time, the node loops 20 %, the contact 25.7 s over 5.4e7 pair-steps). A message
 costs `latency + bytes / bandwidth`; a reduction 2 log2(P) latencies; the all-gather of today's
-design P - 1 latencies (a ring) and its bytes. The scene scales as run 6: moving elements the share
+design P - 1 latencies (a ring) and its bytes, its all-to-all of the reactions 2 (P - 1) latencies
+(the sizes, then the lists) and a reduction. The scene scales as run 6: moving elements the share
 `active` of all, nodes and pairs per moving element as in run 6, the halo a band `band` wide around
 each block of the moving region at run 6's node density. Memory per rank: bytes per element (run
 6's peak over its elements) times the elements it holds.
@@ -60,10 +63,10 @@ def figures(p, compute, comm, received, halo, memory, serial):
 
 
 def today(a, s, p, serial):
-    """Elements shared; nodes and contact on every rank; the moving nodes all-gathered."""
+    """Elements and contact shared; nodes on every rank; the moving nodes all-gathered."""
     received = 32.0 * s["nodes"] * (p - 1) / p
-    comm = (p - 1) * a.latency + received / a.bandwidth + 2 * math.log2(p) * a.latency
-    compute = s["moving"] / p * a.c_e + s["nodes"] * a.c_n + s["pairs"] * a.c_p
+    comm = (3 * (p - 1) * a.latency + received / a.bandwidth + 4 * math.log2(p) * a.latency)
+    compute = s["moving"] / p * a.c_e + s["nodes"] * a.c_n + s["pairs"] / p * a.c_p
     return figures(p, compute, comm, received, s["nodes"] * (p - 1) / p,
                    s["bytes_per_element"] * a.elements, serial)
 
