@@ -147,9 +147,10 @@ Solver::Solver(Model &model, SolverSettings settings, const parallel::Communicat
   erode_below_ = s_.erode_step_ratio * shortest_step_;
   scale_below_ = s_.mass_scaling_step_ratio * shortest_step_;
   dt_ = std::min(next_dt_, s_.max_dt);
-  for (const Range &r : node_ranges_)
+  for (const Range &r : node_ranges_) // (this process's nodes; the processes' sums added)
     for (std::size_t a = r.begin; a < r.end; ++a)
       addKinetic(a, 0.5 * nd.mass[a] * (nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a]));
+  energy_.kinetic = comm_.sumInOrder({energy_.kinetic})[0];
   if (levels()) {
     bodySums(0, units_.size());
     std::fill(m_.window.begin(), m_.window.end(), dt_);
@@ -219,6 +220,7 @@ void Solver::step() {
     rebalance_due_ = true;
   kickAndDrift(dt); // v(n+1/2) = v(n) + dt/2 f(n) / m, the imposed velocities;
                     // x(n+1) = x(n) + dt v(n+1/2)
+  shareMotion();    // every process's moving nodes, from their owners
   m_.nodes.clearExternal();
   for (auto *provider : providers_) // external forces at x(n+1): contact, coupling
     provider->addForces(m_, time_ + dt, dt);
@@ -227,9 +229,8 @@ void Solver::step() {
     rank_element_steps_[r] += static_cast<double>(rank_elements_[r]);
     rank_node_steps_[r] += static_cast<double>(rank_nodes_[r]);
   }
-  forces(dt, true); // stresses at n+1, f(n+1), the next stable step, and unit by unit
-                    // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m
-  applyConstraints(0.5 * dt, true, false); // the imposed velocities at n+1
+  forces(dt, true);      // stresses at n+1, f(n+1), the next stable step, and unit by unit
+                         // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m, the imposed velocities at n+1
   scaleMasses(0.5 * dt); // mass for the elements whose step fell below scale_below_
   time_ = last ? end_at_ : time_ + dt;
   ++steps_;
@@ -319,13 +320,13 @@ void Solver::updateActivity() {
       if (level_[b] != l)
         continue;
       const Body &body = m_.bodies[b];
-      // Every process moves every active node; it computes the elements of the bodies it owns.
+      // A process moves the nodes and computes the elements of the bodies it owns.
+      if (!owns(b))
+        continue;
       // (with levels, in smaller blocks: the due levels' blocks are shared among the threads by
       // node count, and a level 0 of a few thousand nodes is then shared evenly)
       appendInPieces(node_ranges_, first_block, Range{body.node_begin, body.node_end},
                      by_body ? level_node_block : node_block, [](const Range &) { return true; });
-      if (!owns(b))
-        continue;
       const Material *material = m_.materials[body.material].get();
       const bool averaged = s_.anti_locking && material->plastic();
       // A work unit holds whole bodies (no node is shared between units, so each unit adds its
@@ -570,7 +571,7 @@ void Solver::halfKick(std::size_t a, double half_dt, double fx, double fy, bool 
   const Nodes &nd = m_.nodes;
   const double dvx = half_dt * fx * inv_mass_[a], dvy = half_dt * fy * inv_mass_[a];
   const double mean_vx = vx + 0.5 * dvx, mean_vy = vy + 0.5 * dvy;
-  if (nd.is_loaded[a] && owns(nd.body[a])) { // (a node's external forces are its owner's)
+  if (nd.is_loaded[a]) {
     const Nodes::External &e = nd.external[a];
     sums.provider += e.fx * mean_vx + e.fy * mean_vy;
     sums.friction += e.friction_x * mean_vx + e.friction_y * mean_vy;
@@ -592,8 +593,8 @@ void Solver::addKickSums(const std::vector<KickSums> &sums, double half_dt) {
   }
 }
 
-// The first half-kick and the drift of the active nodes in one pass; the imposed velocities, and
-// the positions of their nodes, corrected after.
+// The first half-kick and the drift of this process's active nodes in one pass; the imposed
+// velocities, and the positions of their nodes, corrected after.
 void Solver::kickAndDrift(double dt) {
   Nodes &nd = m_.nodes;
   const double half_dt = 0.5 * dt;
@@ -615,34 +616,40 @@ void Solver::kickAndDrift(double dt) {
   applyConstraints(half_dt, false);
 }
 
-// Imposed velocities; the reactions' work, impulse . mean velocity, is external work. The kick
-// took the work of the other external forces, and the kinetic energy, at the velocity before the
-// constraint: corrected (the providers' forces at the nodes this process owns; after the second
-// half-kick the element pass took that part already, see constraintProviderWork).
-void Solver::applyConstraints(double half_dt, bool second_half, bool provider_work) {
+// Imposed velocities at this process's nodes; the reactions' work, impulse . mean velocity, is
+// external work. The kick took the work of the other external forces, and the kinetic energy, at
+// the velocity before the constraint: corrected, into the sums, or with `late` into it (per
+// imposed velocity: the kick's work, the providers', the frictional part, gravity's, the kinetic
+// energy's change) for the step's gather to add (forces).
+void Solver::applyConstraints(double half_dt, bool second_half, std::vector<double> *late) {
   Nodes &nd = m_.nodes;
   // After the first half the node has drifted with v: by 2 half_dt (target - v) more with the
   // target.
   auto impose = [&](std::uint32_t a, double &v, double &position, double target, double f,
                     double f_ext, double f_friction, double gravity) {
     const double before = v - half_dt * f * inv_mass_[a];
-    kick_work_ += nd.mass[a] * (target - v) * 0.5 * (before + target);
     const double shift = 0.5 * half_dt * (target - v); // mean velocity change x half_dt
-    if (provider_work && owns(nd.body[a])) {
-      provider_work_ += f_ext * shift;
-      friction_work_ += f_friction * shift;
+    const double change[5] = {
+        nd.mass[a] * (target - v) * 0.5 * (before + target), f_ext * shift, f_friction * shift,
+        nd.mass[a] * gravity * shift,
+        second_half ? 0.5 * nd.mass[a] *
+                          (target * target - square(target - before) - v * v + square(v - before))
+                    : 0.0};
+    if (late)
+      late->insert(late->end(), std::begin(change), std::end(change));
+    else {
+      kick_work_ += change[0], provider_work_ += change[1], friction_work_ += change[2];
+      kick_work_ += change[3];
+      if (second_half)
+        addKinetic(a, change[4]);
     }
-    kick_work_ += nd.mass[a] * gravity * shift;
-    if (second_half)
-      addKinetic(a, 0.5 * nd.mass[a] *
-                        (target * target - square(target - before) - v * v + square(v - before)));
-    else
+    if (!second_half)
       position += 2.0 * half_dt * (target - v);
     v = target;
   };
   for (const auto &c : m_.constraints)
     for (std::uint32_t a : c.nodes) {
-      if (m_.at_rest[nd.body[a]])
+      if (m_.at_rest[nd.body[a]] || !owns(nd.body[a]))
         continue;
       if (c.constrain_x)
         impose(a, nd.vx[a], nd.x[a], c.vx, nd.fx[a], nd.external[a].fx, nd.external[a].friction_x,
@@ -651,34 +658,6 @@ void Solver::applyConstraints(double half_dt, bool second_half, bool provider_wo
         impose(a, nd.vy[a], nd.y[a], c.vy, nd.fy[a], nd.external[a].fy, nd.external[a].friction_y,
                s_.gravity_y);
     }
-}
-
-// The work of the providers' forces that the second half's constraints correct (see
-// applyConstraints), at the constrained nodes this process owns, after the second half-kick: per
-// imposed velocity, in the constraints' order, the providers' and the frictional part.
-std::vector<double> Solver::constraintProviderWork(double half_dt) const {
-  const Nodes &nd = m_.nodes;
-  std::vector<double> work;
-  std::unordered_map<std::uint64_t, double> imposed; // 2 node + axis: the velocity imposed
-  for (const auto &c : m_.constraints)
-    for (std::uint32_t a : c.nodes) {
-      if (m_.at_rest[nd.body[a]] || !owns(nd.body[a]))
-        continue;
-      const Nodes::External &e = nd.external[a];
-      for (int axis = 0; axis < 2; ++axis) {
-        if (!(axis ? c.constrain_y : c.constrain_x))
-          continue;
-        const std::uint64_t key = 2 * static_cast<std::uint64_t>(a) + axis;
-        const auto before = imposed.find(key);
-        const double v = before != imposed.end() ? before->second : axis ? nd.vy[a] : nd.vx[a];
-        const double target = axis ? c.vy : c.vx;
-        const double shift = 0.5 * half_dt * (target - v);
-        work.push_back((axis ? e.fy : e.fx) * shift);
-        work.push_back((axis ? e.friction_y : e.friction_x) * shift);
-        imposed[key] = target;
-      }
-    }
-  return work;
 }
 
 void Solver::internalForces(double dt) { forces(dt, false); }
@@ -744,9 +723,9 @@ void Solver::forces(double dt, bool kick) {
   }
   // The step's figures of every process in one exchange: its shortest element step, its first
   // inverted element, whether elements failed or asked for mass (erode and scaleMasses gather
-  // theirs only then), its elements' energies (summed in rank order, as sumInOrder), the work of
-  // the providers' forces at its nodes in the first half-kick and the constraints, its units' kick
-  // sums (in rank order and unit order) and the second half's constraint work at its nodes.
+  // theirs only then), its elements' energies (summed in rank order, as sumInOrder), the work at
+  // its nodes in the first half-kick and the constraints, its units' kick sums (in rank order and
+  // unit order) and the second half's constraints at its nodes (applyConstraints).
   const long n = static_cast<long>(chunks_.size());
   double dt_min = std::numeric_limits<double>::infinity();
   std::int64_t inverted = -1;
@@ -763,8 +742,10 @@ void Solver::forces(double dt, bool kick) {
     failing = failing || sums_[i].eroding;
     scaling = scaling || !sums_[i].scaled.empty();
   }
-  const std::vector<double> late = kick ? constraintProviderWork(0.5 * dt) : std::vector<double>{};
-  constexpr std::size_t header = 11; // the figures before the kick sums
+  std::vector<double> late;
+  if (kick)
+    applyConstraints(0.5 * dt, true, &late);
+  constexpr std::size_t header = 12; // the figures before the kick sums
   std::vector<double> mine{dt_min,
                            static_cast<double>(inverted),
                            failing ? 1.0 : 0.0,
@@ -772,6 +753,7 @@ void Solver::forces(double dt, bool kick) {
                            internal,
                            plastic,
                            viscous,
+                           kick_work_,
                            provider_work_,
                            friction_work_,
                            static_cast<double>(kick ? kick_sums_.size() : 0),
@@ -786,7 +768,7 @@ void Solver::forces(double dt, bool kick) {
   std::vector<double> all_late;
   step_sums_ = {0.0, 0.0, 0.0};
   failing_ = scaling_ = false;
-  double provider = 0.0, friction = 0.0;
+  double kick_work = 0.0, provider = 0.0, friction = 0.0;
   for (std::size_t at = 0; at < all.size();) {
     const double *f = &all[at];
     dt_min = std::min(dt_min, f[0]);
@@ -795,8 +777,8 @@ void Solver::forces(double dt, bool kick) {
     scaling_ = scaling_ || f[3] != 0.0;
     for (int k = 0; k < 3; ++k)
       step_sums_[k] += f[4 + k];
-    provider += f[7], friction += f[8];
-    const auto units = static_cast<std::size_t>(f[9]), n_late = static_cast<std::size_t>(f[10]);
+    kick_work += f[7], provider += f[8], friction += f[9];
+    const auto units = static_cast<std::size_t>(f[10]), n_late = static_cast<std::size_t>(f[11]);
     for (std::size_t u = 0; u < units; ++u)
       kick_sums_.push_back(
           {f[header + 4 * u], f[header + 4 * u + 1], f[header + 4 * u + 2], f[header + 4 * u + 3]});
@@ -804,11 +786,14 @@ void Solver::forces(double dt, bool kick) {
     at += header + 4 * units + n_late;
   }
   if (kick) {
-    provider_work_ = provider, friction_work_ = friction;
+    kick_work_ = kick_work, provider_work_ = provider, friction_work_ = friction;
     energy_.kinetic = 0.0;
     addKickSums(kick_sums_, 0.5 * dt);
-    for (std::size_t k = 0; k < all_late.size(); k += 2)
-      provider_work_ += all_late[k], friction_work_ += all_late[k + 1];
+    for (std::size_t k = 0; k < all_late.size(); k += 5) {
+      kick_work_ += all_late[k], provider_work_ += all_late[k + 1];
+      friction_work_ += all_late[k + 2], kick_work_ += all_late[k + 3];
+      energy_.kinetic += all_late[k + 4];
+    }
   }
   // The first inverted element of any process, the lowest number whoever computed it (its area
   // from the process that did, gathered only then).
@@ -831,7 +816,6 @@ void Solver::forces(double dt, bool kick) {
   }
   next_dt_ = s_.safety * step_scale_ * dt_min;
   shortest_step_ = dt_min;
-  shareNodes();
   if (measure_body_steps_)
     bodyStepsFromElements();
 }
@@ -861,12 +845,13 @@ std::array<std::vector<double> *, 8> Solver::elementState() const {
 }
 
 // `fields` over the range [begin, end) (nodes or elements) of each of `bodies` (in body order),
-// copied from the body's owner to every process: each sends its own bodies' values in body
-// order, and knows where the others' lie (every process knows every body's owner).
+// copied from the body's owner to every process (or `to_first` to the first only): each sends its
+// own bodies' values in body order, and knows where the others' lie (every process knows every
+// body's owner).
 template <std::size_t N>
 void Solver::shareOwned(const std::vector<std::uint32_t> &bodies, std::size_t Body::*begin,
-                        std::size_t Body::*end,
-                        const std::array<std::vector<double> *, N> &fields) const {
+                        std::size_t Body::*end, const std::array<std::vector<double> *, N> &fields,
+                        bool to_first) const {
   std::size_t count = 0;
   for (std::uint32_t b : bodies)
     if (owns(b))
@@ -886,19 +871,42 @@ void Solver::shareOwned(const std::vector<std::uint32_t> &bodies, std::size_t Bo
             for (auto *f : fields)
               (*f)[i] = *all++;
   };
-  comm_.share(count, pack, unpack);
+  if (to_first)
+    comm_.collect(count, pack, unpack);
+  else
+    comm_.share(count, pack, unpack);
 }
 
-// The velocities and forces of the nodes of every process's active bodies, from their owners.
-void Solver::shareNodes() {
+// The positions and velocities of the nodes of every process's active bodies after the drift,
+// x(n+1) and v(n+1/2), from their owners: what the force providers read.
+void Solver::shareMotion() {
   Nodes &nd = m_.nodes;
+  shareOwned<4>(active_bodies_, &Body::node_begin, &Body::node_end, {&nd.x, &nd.y, &nd.vx, &nd.vy});
+}
+
+void Solver::shareVelocities(const std::vector<std::uint32_t> &bodies) const {
+  Nodes &nd = m_.nodes;
+  shareOwned<2>(bodies, &Body::node_begin, &Body::node_end, {&nd.vx, &nd.vy});
+}
+
+void Solver::collectFrame() const {
+  Nodes &nd = m_.nodes;
+  shareOwned(active_bodies_, &Body::element_begin, &Body::element_end, elementState(), true);
+  shareOwned<2>(active_bodies_, &Body::node_begin, &Body::node_end, {&nd.vx, &nd.vy}, true);
+}
+
+void Solver::collectCheckpoint() {
+  Nodes &nd = m_.nodes;
+  shareOwned(active_bodies_, &Body::element_begin, &Body::element_end, elementState(), true);
   shareOwned<4>(active_bodies_, &Body::node_begin, &Body::node_end,
-                {&nd.vx, &nd.vy, &nd.fx, &nd.fy});
+                {&nd.vx, &nd.vy, &nd.fx, &nd.fy}, true);
+  shareExternal(active_bodies_, true);
 }
 
 // The external forces at the nodes of `bodies`, complete at their owners only (the providers'
-// forces of this step), copied from them to every process; a node they load is listed as loaded.
-void Solver::shareExternal(const std::vector<std::uint32_t> &bodies) {
+// forces of this step), copied from them to every process (or `to_first` to the first only); a
+// node they load is listed as loaded.
+void Solver::shareExternal(const std::vector<std::uint32_t> &bodies, bool to_first) {
   Nodes &nd = m_.nodes;
   std::size_t count = 0;
   for (std::uint32_t b : bodies)
@@ -923,12 +931,10 @@ void Solver::shareExternal(const std::vector<std::uint32_t> &bodies) {
               nd.is_loaded[a] = 1, nd.loaded.push_back(static_cast<std::uint32_t>(a));
           }
   };
-  comm_.share(count, pack, unpack);
-}
-
-// The element fields output reads, of every process's active bodies, from their owners.
-void Solver::shareElementState() const {
-  shareOwned(active_bodies_, &Body::element_begin, &Body::element_end, elementState());
+  if (to_first)
+    comm_.collect(count, pack, unpack);
+  else
+    comm_.share(count, pack, unpack);
 }
 
 // The active element with the shortest altitude, and what it has become: for the message of a
@@ -1355,23 +1361,36 @@ void Solver::scaleMasses(double half_dt) {
     const double dvx = h * nd.fx[a] / nd.mass[a], dvy = h * nd.fy[a] / nd.mass[a];
     return 0.5 * nd.mass[a] * (nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a] - dvx * dvx - dvy * dvy);
   };
-  for (auto [e, needed] : scaled) {
+  // The kinetic energy a node's change takes is measured by its owner (its velocity and force are
+  // current there) and added in the elements' order, whoever measured it.
+  std::vector<double> changes; // this process's: the node's place (3 i + k) and the change
+  for (std::size_t i = 0; i < scaled.size(); ++i) {
+    const auto [e, needed] = scaled[i];
     double &added = added_mass_[e];
     const double share = (needed - added) / 3.0;
     added = needed;
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = m_.elements.node[3 * e + k];
-      const double before = kinetic(a), ratio = nd.mass[a] / (nd.mass[a] + share);
+      const bool own = owns(nd.body[a]);
+      const double before = own ? kinetic(a) : 0.0, ratio = nd.mass[a] / (nd.mass[a] + share);
       nd.mass[a] += share;
       inv_mass_[a] = 1.0 / nd.mass[a];
       if (!(constrained_[a] & 1))
         nd.vx[a] *= ratio;
       if (!(constrained_[a] & 2))
         nd.vy[a] *= ratio;
-      const double change = kinetic(a) - before;
-      addKinetic(a, change);
-      energy_.mass_scaling -= change;
+      if (own)
+        changes.insert(changes.end(), {static_cast<double>(3 * i + k), kinetic(a) - before});
     }
+  }
+  std::vector<std::pair<std::size_t, double>> every;
+  const std::vector<double> all = comm_.allGather(std::move(changes));
+  for (std::size_t k = 0; k < all.size(); k += 2)
+    every.emplace_back(static_cast<std::size_t>(all[k]), all[k + 1]);
+  std::sort(every.begin(), every.end());
+  for (auto [place, change] : every) {
+    addKinetic(m_.elements.node[3 * scaled[place / 3].first + place % 3], change);
+    energy_.mass_scaling -= change;
   }
 }
 

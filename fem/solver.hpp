@@ -130,12 +130,12 @@ struct PartitionReport {
 
 class Solver {
 public:
-  // `processes` share the element work: each computes the elements of the bodies it owns; the
-  // model, the nodes' motion and the force providers (contact) are the same on every process.
+  // `processes` share the work: each computes the elements of the bodies it owns and moves their
+  // nodes; every process holds the whole model.
   // With more than one process `partitioner` says who owns which body, from the bodies' centroids
   // weighted by their active elements, at the start and whenever the load is out of balance
-  // (balanceLoad); every process holds every body, so a body that changes owner takes nothing with
-  // it. After each element pass the nodes of every process's active bodies (velocity and force)
+  // (balanceLoad); a body that changes owner brings its elements' state and its nodes' external
+  // forces. After each drift the nodes of every process's active bodies (position and velocity)
   // are gathered by all, and so are the failed elements' states; energies and the stable step are
   // combined in rank order. Both outlive the solver.
   Solver(Model &model, SolverSettings settings,
@@ -191,12 +191,17 @@ public:
   // The element pass alone, as the time loop calls it: stresses and forces at the current
   // positions with the current velocities over a step dt (for benchmarks).
   void internalForces(double dt);
-  // With the element work shared: every process's elements' state (stress, pressure, energy,
-  // plastic strain, area) of its active bodies copied to all, for output (every process calls it).
-  void shareElementState() const;
-  // With the work shared: the external forces at the nodes of every process's active bodies,
-  // complete at their owners only, copied to all (for a checkpoint; every process calls it).
-  void shareExternalForces() { shareExternal(active_bodies_); }
+  // With the work shared, each process computes the elements and moves the nodes of its own
+  // bodies; after the drift the positions and velocities of every process's are copied to all
+  // (the force providers read them), but the elements' state (stress, pressure, energy, plastic
+  // strain, area), the second half-kick's velocities, the forces and the external forces are
+  // current at their owners only. For output, from the owners (every process calls them): the
+  // velocities of `bodies` to every process (the series), and to the first process, which writes
+  // them, the active bodies' element state and velocities (a frame), and with their nodes' forces
+  // and external forces (a checkpoint).
+  void shareVelocities(const std::vector<std::uint32_t> &bodies) const;
+  void collectFrame() const;
+  void collectCheckpoint();
 
   // What the steps to come depend on beyond the model's state and the settings (a run's
   // checkpoint, run/checkpoint.hpp).
@@ -272,8 +277,7 @@ private:
   void unitPass(const Unit &unit, double dt, UnitScratch &scratch);
   void storeReferenceShapes();
   void elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums);
-  void applyConstraints(double half_dt, bool second_half, bool provider_work = true);
-  std::vector<double> constraintProviderWork(double half_dt) const;
+  void applyConstraints(double half_dt, bool second_half, std::vector<double> *late = nullptr);
   void erode();
   void scaleMasses(double half_dt);
   double stepToTake(bool &last) const;
@@ -284,9 +288,10 @@ private:
   std::array<std::vector<double> *, 8> elementState() const;
   template <std::size_t N>
   void shareOwned(const std::vector<std::uint32_t> &bodies, std::size_t Body::*begin,
-                  std::size_t Body::*end, const std::array<std::vector<double> *, N> &fields) const;
-  void shareNodes();
-  void shareExternal(const std::vector<std::uint32_t> &bodies);
+                  std::size_t Body::*end, const std::array<std::vector<double> *, N> &fields,
+                  bool to_first = false) const;
+  void shareMotion();
+  void shareExternal(const std::vector<std::uint32_t> &bodies, bool to_first = false);
   void accountEnergy();
   void bodyStepsFromElements();
   // Multiple time stepping (fem/solver_levels.cpp).

@@ -29,6 +29,9 @@ public:
   // them all already: neither is called.
   virtual void share(std::size_t count, const std::function<void(double *)> &pack,
                      const std::function<void(const double *)> &unpack) const = 0;
+  // The same to process 0 alone (what it writes): `unpack` is called there only.
+  virtual void collect(std::size_t count, const std::function<void(double *)> &pack,
+                       const std::function<void(const double *)> &unpack) const = 0;
   // Values for some processes only: `to[r]` goes to process r (one list per process, this one's
   // own included); returns the lists every process sent this one, by sender rank.
   virtual std::vector<std::vector<std::int64_t>>
@@ -48,6 +51,8 @@ public:
   double min(double value) const override { return value; }
   void share(std::size_t, const std::function<void(double *)> &,
              const std::function<void(const double *)> &) const override {}
+  void collect(std::size_t, const std::function<void(double *)> &,
+               const std::function<void(const double *)> &) const override {}
   std::vector<std::vector<std::int64_t>>
   exchange(std::vector<std::vector<std::int64_t>> to) const override {
     return to;

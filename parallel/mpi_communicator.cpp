@@ -125,9 +125,22 @@ double MpiCommunicator::min(double value) const { // exact in any order: one red
 
 void MpiCommunicator::share(std::size_t count, const std::function<void(double *)> &pack,
                             const std::function<void(const double *)> &unpack) const {
+  if (size_ == 1) // (this process holds every value)
+    return;
   std::vector<double> mine(count);
   pack(mine.data());
   unpack(allGather(std::move(mine)).data());
+}
+
+void MpiCommunicator::collect(std::size_t count, const std::function<void(double *)> &pack,
+                              const std::function<void(const double *)> &unpack) const {
+  if (size_ == 1)
+    return;
+  std::vector<double> mine(count);
+  pack(mine.data());
+  const std::vector<double> all = gatherItems(std::move(mine), 0, comm_);
+  if (rank_ == 0)
+    unpack(all.data());
 }
 
 std::vector<std::vector<std::int64_t>>

@@ -127,6 +127,8 @@ public:
   double min(double value) const override;
   void share(std::size_t count, const std::function<void(double *)> &pack,
              const std::function<void(const double *)> &unpack) const override;
+  void collect(std::size_t count, const std::function<void(double *)> &pack,
+               const std::function<void(const double *)> &unpack) const override;
   // The lists' sizes first (MPI_Alltoall, 64-bit), then the lists (MPI_Alltoallv, which takes int
   // counts and offsets: more than INT_MAX items sent or received by any process throws
   // std::length_error on every process, agreed in one reduction).

@@ -472,9 +472,10 @@ void Checkpoints::write(const LoopResult &loop) {
   const auto began = Clock::now();
   const std::uint64_t n = number_ + 1;
   const fem::Solver &solver = *run_.solver;
-  solver.shareElementState();                 // every rank's elements, for rank 0 to write
-  run_.solver->shareExternalForces();         // and its nodes' external forces
-  std::optional<fem::Contact::State> contact; // (from every rank: each node's from its owner)
+  // every rank's elements, its nodes' velocities, forces and external forces and its nodes'
+  // contact state, for rank 0 to write
+  run_.solver->collectCheckpoint();
+  std::optional<fem::Contact::State> contact;
   if (run_.contact)
     contact = run_.contact->state();
   std::vector<coupling::DiskForce> disk_forces;

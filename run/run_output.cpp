@@ -200,6 +200,7 @@ double Series::depth(const fem::Model &model) const {
 }
 
 void Series::sample(const fem::Model &model, const fem::Solver &solver) {
+  solver.shareVelocities({0}); // (every rank takes part: the projectile's, from its owner)
   const fem::Body &p = model.bodies[0];
   const fem::Nodes &nd = model.nodes;
   const fem::BodyMotion m = fem::bodyMotion(model, 0);
@@ -302,7 +303,7 @@ void Frames::take(const fem::Model &model, const fem::Solver &solver) {
   coupling::Particles disks;
   if (coupled_) // every rank takes part; rank 0 holds them all
     coupled_->dem().gatherParticles(coupled_->disks(), disks);
-  solver.shareElementState(); // every rank takes part
+  solver.collectFrame(); // every rank takes part
   if (!h5_) {
     times_.push_back(solver.time());
     return;

@@ -92,6 +92,22 @@ int main(int argc, char **argv) {
           [&](const double *all) { ok = shared == 0 || all[shared - 1] == size - 1; });
       return ok;
     });
+    // collect: the same values to rank 0 alone (the sizes to all).
+    expectTraffic("collect of 2 r values from rank r to rank 0",
+                  (rank == 0 ? 8 * shared : 0) + sizes, 2, [&] {
+                    bool ok = true, unpacked = false;
+                    comm.collect(
+                        static_cast<std::size_t>(2 * rank),
+                        [&](double *mine) {
+                          for (int i = 0; i < 2 * rank; ++i)
+                            mine[i] = rank;
+                        },
+                        [&](const double *all) {
+                          unpacked = true;
+                          ok = shared == 0 || all[shared - 1] == size - 1;
+                        });
+                    return ok && unpacked == (rank == 0);
+                  });
     // exchange: rank s sends rank q (q + 1) (s + 1) integers; the lists' sizes (one 64-bit
     // integer from each other rank), the agreed largest (a reduction), the lists from the others.
     std::int64_t from_others = 0;

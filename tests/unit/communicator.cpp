@@ -29,6 +29,13 @@ void expectUnchanged(const parallel::Communicator &one) {
   EXPECT_EQ(one.min(2.5), 2.5);
   const std::vector<std::vector<std::int64_t>> lists{indices};
   EXPECT_EQ(one.exchange(lists), lists);
+  // share and collect: one process holds every value already, neither callback is called
+  bool called = false;
+  one.share(
+      3, [&](double *) { called = true; }, [&](const double *) { called = true; });
+  one.collect(
+      3, [&](double *) { called = true; }, [&](const double *) { called = true; });
+  EXPECT_FALSE(called);
 }
 
 } // namespace

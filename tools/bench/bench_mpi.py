@@ -175,11 +175,12 @@ def main():
           "  KB/step: bytes received from the other ranks within a step (a reduction counted as a\n"
           "    gather; KB = 1000 bytes), the mean over the steps; max: the most in one step;\n"
           "    outside: in the time loop between steps (series, flags); calls: MPI collectives a step\n"
-          "  elements: active elements owned (bodies at rest are skipped); halo: nodes of moving\n"
-          "    bodies the rank does not own, whose velocity and force it receives every step;\n"
+          "  elements: active elements owned (bodies at rest are skipped); nodes: the nodes it moves\n"
+          "    (its moving bodies'); halo: nodes of moving bodies the rank does not own, whose\n"
+          "    position and velocity it receives every step;\n"
           "    pairs: pairs of bodies its contact searched; MiB: peak memory (VmHWM, set-up included)")
     print(f"  {'np':>3} {'rank':>4} {'KB/step':>9} {'max':>7} {'outside':>8} {'calls':>6} "
-          f"{'elements':>9} {'halo':>7} {'pairs':>6} {'MiB':>6}")
+          f"{'elements':>9} {'nodes':>7} {'halo':>7} {'pairs':>6} {'MiB':>6}")
     for r in results:
         for row in r["per_rank"]:
             mem = row["peak_memory_mib"]
@@ -188,6 +189,7 @@ def main():
                   f"{row['bytes_received_outside_steps_per_step'] / 1e3:>8.2f} "
                   f"{row['collectives_per_step']:>6.1f} "
                   f"{row['active_elements_owned_per_step']:>9.0f} "
+                  f"{row['active_nodes_owned_per_step']:>7.0f} "
                   f"{row['halo_nodes_per_step']:>7.0f} {row['contact_pairs_per_step']:>6.0f} "
                   f"{mem if mem is not None else float('nan'):>6.0f}")
         received = [row["bytes_received_per_step"] for row in r["per_rank"]]

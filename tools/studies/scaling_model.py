@@ -3,11 +3,11 @@
 
 Two designs of the FE decomposition (docs/solver.md, "A scaling model"):
 
-  today    every rank holds the whole model and moves every moving node; the element updates and
-           the FE-FE contact (the pairs of its own bodies) are shared; after the element pass every
-           rank receives velocity and force (32 bytes) of every moving node it does not own, and
-           the contact's reactions on its nodes in an all-to-all (their bytes left out: a few
-           percent of the gather's, docs/solver.md);
+  today    every rank holds the whole model; the element updates, the node loops (each rank moves
+           the nodes of its bodies) and the FE-FE contact (the pairs of its own bodies) are
+           shared; after the drift every rank receives position and velocity (32 bytes) of every
+           moving node it does not own, and the contact's reactions on its nodes in an all-to-all
+           (their bytes left out: a few percent of the gather's, docs/solver.md);
   spatial  a rank owns the bodies of its region (a near-square block of the moving region, as
            recursive coordinate bisection gives) and holds a halo, the other ranks' bodies within
            the contact margin: each step it receives the halo nodes' position and velocity
@@ -63,10 +63,10 @@ def figures(p, compute, comm, received, halo, memory, serial):
 
 
 def today(a, s, p, serial):
-    """Elements and contact shared; nodes on every rank; the moving nodes all-gathered."""
+    """Elements, nodes and contact shared; the moving nodes all-gathered."""
     received = 32.0 * s["nodes"] * (p - 1) / p
     comm = (3 * (p - 1) * a.latency + received / a.bandwidth + 4 * math.log2(p) * a.latency)
-    compute = s["moving"] / p * a.c_e + s["nodes"] * a.c_n + s["pairs"] / p * a.c_p
+    compute = s["moving"] / p * a.c_e + s["nodes"] / p * a.c_n + s["pairs"] / p * a.c_p
     return figures(p, compute, comm, received, s["nodes"] * (p - 1) / p,
                    s["bytes_per_element"] * a.elements, serial)
 
