@@ -884,11 +884,6 @@ void Solver::shareMotion() {
   shareOwned<4>(active_bodies_, &Body::node_begin, &Body::node_end, {&nd.x, &nd.y, &nd.vx, &nd.vy});
 }
 
-void Solver::shareVelocities(const std::vector<std::uint32_t> &bodies) const {
-  Nodes &nd = m_.nodes;
-  shareOwned<2>(bodies, &Body::node_begin, &Body::node_end, {&nd.vx, &nd.vy});
-}
-
 void Solver::collectFrame() const {
   Nodes &nd = m_.nodes;
   shareOwned(active_bodies_, &Body::element_begin, &Body::element_end, elementState(), true);

@@ -195,11 +195,9 @@ public:
   // bodies; after the drift the positions and velocities of every process's are copied to all
   // (the force providers read them), but the elements' state (stress, pressure, energy, plastic
   // strain, area), the second half-kick's velocities, the forces and the external forces are
-  // current at their owners only. For output, from the owners (every process calls them): the
-  // velocities of `bodies` to every process (the series), and to the first process, which writes
-  // them, the active bodies' element state and velocities (a frame), and with their nodes' forces
-  // and external forces (a checkpoint).
-  void shareVelocities(const std::vector<std::uint32_t> &bodies) const;
+  // current at their owners only. For output, from the owners to the first process, which writes
+  // them (every process calls them): the active bodies' element state and velocities (a frame),
+  // and with their nodes' forces and external forces (a checkpoint).
   void collectFrame() const;
   void collectCheckpoint();
 

@@ -200,7 +200,6 @@ double Series::depth(const fem::Model &model) const {
 }
 
 void Series::sample(const fem::Model &model, const fem::Solver &solver) {
-  solver.shareVelocities({0}); // (every rank takes part: the projectile's, from its owner)
   const fem::Body &p = model.bodies[0];
   const fem::Nodes &nd = model.nodes;
   const fem::BodyMotion m = fem::bodyMotion(model, 0);
@@ -218,35 +217,24 @@ void Series::sample(const fem::Model &model, const fem::Solver &solver) {
     dot += nd.mass[a] * (x0_[i] * x + y0_[i] * y);
     lowest = std::min(lowest, nd.y[a]);
   }
-  // (with the work shared, the contact's forces on a node are complete at its body's owner only)
+  std::vector<double> motion{
+      m.com_x, m.com_y, m.px / m.mass,          m.py / m.mass,    m.angular_momentum,
+      fx,      fy,      std::atan2(cross, dot), lowest0_ - lowest};
+  // (with the work shared, the projectile's velocities and external forces are current at its
+  // owner only: every rank takes its figures)
   if (const parallel::Communicator &processes = solver.processes(); processes.size() > 1) {
-    const std::vector<double> all = processes.allGather(std::vector<double>{fx, fy});
-    const auto owner = 2 * static_cast<std::size_t>(solver.owner(0));
-    fx = all.at(owner), fy = all.at(owner + 1);
+    const std::vector<double> all = processes.allGather(motion);
+    const auto owner = motion.size() * static_cast<std::size_t>(solver.owner(0));
+    std::copy(all.begin() + owner, all.begin() + owner + motion.size(), motion.begin());
   }
   time_.push_back(solver.time());
   step_.push_back(solver.steps());
   dt_.push_back(solver.dt());
   const fem::Energy &e = solver.energy();
-  const double values[] = {m.com_x,
-                           m.com_y,
-                           m.px / m.mass,
-                           m.py / m.mass,
-                           m.angular_momentum,
-                           fx,
-                           fy,
-                           std::atan2(cross, dot),
-                           lowest0_ - lowest,
-                           e.kinetic,
-                           e.internal,
-                           e.plastic,
-                           e.viscous,
-                           e.friction,
-                           e.contact,
-                           e.external,
-                           e.eroded,
-                           e.mass_scaling,
-                           e.balance_error};
+  const double values[] = {motion[0],  motion[1], motion[2],      motion[3],      motion[4],
+                           motion[5],  motion[6], motion[7],      motion[8],      e.kinetic,
+                           e.internal, e.plastic, e.viscous,      e.friction,     e.contact,
+                           e.external, e.eroded,  e.mass_scaling, e.balance_error};
   static_assert(std::size(values) == std::size(series_columns));
   for (std::size_t c = 0; c < columns_.size(); ++c)
     columns_[c].values.push_back(values[c]);
