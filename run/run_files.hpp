@@ -60,7 +60,7 @@ RankFigures rankFigures(const RunAssembly &run, const LoopResult &loop);
 
 // How the element work was shared by the ranks (fem::PartitionReport) and what each rank's part
 // cost it (`ranks`), for summary.json: per rank, per step, the active elements and nodes it owned,
-// its halo nodes (the nodes of the moving bodies it does not own, whose velocities and forces it
+// its halo nodes (the nodes of the moving bodies it does not own, whose positions and velocities it
 // receives from their owners every step: with every body held by every rank, all of them), the
 // pairs of bodies its contact searched, the bytes it received; its peak memory.
 nlohmann::json partitionSummary(const fem::PartitionReport &partition, const RankFigures &ranks);

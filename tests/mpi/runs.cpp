@@ -193,7 +193,7 @@ TEST(Mpi, TwoRanksShareTheElementWork) {
 // the run, every body's owner as RCB gives it for the loads of that step): the same run but for
 // the energies' sum order, and each rank's figures add up to the run's (bodies, active elements,
 // element-steps). Each rank's own and halo nodes add up to every moving node; every step it
-// receives at least the velocities and forces of its halo nodes (4 doubles each) from their
+// receives at least the positions and velocities of its halo nodes (4 doubles each) from their
 // owners; each rank searches only the pairs of bodies of its own (fewer than one rank searches),
 // and the ranks together at least every pair one rank searches and at most twice as many (a pair
 // of two ranks' bodies is searched by both, each pushing its own nodes); a step makes at most 7.5
