@@ -112,8 +112,15 @@ void Contact::addForces(Model &model, double time, double dt) {
   if (!model.due.empty() && pushed_time_.empty())
     pushed_time_.assign(pushed_.size(), -HUGE_VAL);
   allowances_.release();
-  if (pairs_.update(model, boundaries_))
+  // (with the work shared, each process measures its own bodies, and the pairs' other bodies come
+  // from their owners: shareBoxes, exchangeHalo)
+  pairs_.measure(model, boundaries_, [&](std::size_t b) { return mine(b); });
+  if (shared())
+    shareBoxes();
+  if (pairs_.search(model, boundaries_))
     ++stats_.searches;
+  if (shared())
+    exchangeHalo(model);
   narrowPhase(model, dt);
   walls(model, dt, run_hits_.back());
   addHits(model);
@@ -366,6 +373,70 @@ void Contact::sendLoads(Model &model) {
               [](const Load &a, const Load &b) { return a.order < b.order; });
 }
 
+// With the work shared: every moving body's box and travel from its owner, who measured it, so
+// that every process finds the same pairs in the same order.
+void Contact::shareBoxes() {
+  ContactBoundaries &bd = boundaries_;
+  std::vector<double> mine_boxes;
+  for (std::uint32_t b : pairs_.moving())
+    if (mine(b))
+      mine_boxes.insert(mine_boxes.end(), {static_cast<double>(b), bd.boxes[b].x0, bd.boxes[b].y0,
+                                           bd.boxes[b].x1, bd.boxes[b].y1, bd.travel[b]});
+  const std::vector<double> all = processes_->allGather(std::move(mine_boxes));
+  for (std::size_t k = 0; k + 6 <= all.size(); k += 6) {
+    const auto b = static_cast<std::size_t>(all[k]);
+    bd.boxes[b] = {all[k + 1], all[k + 2], all[k + 3], all[k + 4]};
+    bd.travel[b] = all[k + 5];
+  }
+}
+
+// With the work shared: the pairs whose boxes overlap and whose bodies two processes own are
+// computed by both (each its own body's side); each sends the other its body's boundary nodes,
+// position and velocity (Model::nodes and the boundary's points).
+void Contact::exchangeHalo(Model &model) {
+  ContactBoundaries &bd = boundaries_;
+  Nodes &nd = model.nodes;
+  const int me = processes_->rank();
+  std::vector<std::pair<int, std::uint32_t>> sends; // to whom, which body
+  for (const Pair &pair : pairs_.pairs()) {
+    const int owner_a = (*owner_)[pair.a], owner_b = (*owner_)[pair.b];
+    if (owner_a == owner_b || !bd.boxes[pair.a].overlaps(bd.boxes[pair.b]))
+      continue;
+    if (owner_a == me)
+      sends.emplace_back(owner_b, pair.a);
+    else if (owner_b == me)
+      sends.emplace_back(owner_a, pair.b);
+  }
+  std::sort(sends.begin(), sends.end());
+  sends.erase(std::unique(sends.begin(), sends.end()), sends.end());
+  std::vector<std::vector<std::int64_t>> to(static_cast<std::size_t>(processes_->size()));
+  for (auto [r, b] : sends) {
+    std::vector<std::int64_t> &message = to[static_cast<std::size_t>(r)];
+    message.push_back(b);
+    for (std::size_t k = bd.node_begin[b]; k < bd.node_begin[b + 1]; ++k) {
+      const std::uint32_t p = bd.nodes[k];
+      message.insert(message.end(),
+                     {std::bit_cast<std::int64_t>(nd.x[p]), std::bit_cast<std::int64_t>(nd.y[p]),
+                      std::bit_cast<std::int64_t>(nd.vx[p]),
+                      std::bit_cast<std::int64_t>(nd.vy[p])});
+    }
+  }
+  const std::vector<std::vector<std::int64_t>> from = processes_->exchange(std::move(to));
+  for (const std::vector<std::int64_t> &message : from)
+    for (std::size_t i = 0; i < message.size();) {
+      const auto b = static_cast<std::size_t>(message[i++]);
+      stats_.halo_nodes += bd.node_begin[b + 1] - bd.node_begin[b];
+      for (std::size_t k = bd.node_begin[b]; k < bd.node_begin[b + 1]; ++k, i += 4) {
+        const std::uint32_t p = bd.nodes[k];
+        nd.x[p] = std::bit_cast<double>(message[i]),
+        nd.y[p] = std::bit_cast<double>(message[i + 1]);
+        nd.vx[p] = std::bit_cast<double>(message[i + 2]);
+        nd.vy[p] = std::bit_cast<double>(message[i + 3]);
+      }
+      bd.place(model, b);
+    }
+}
+
 void Contact::shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) {
   processes_ = &processes, owner_ = &owner;
   block_received_.assign(owner_blocks, {});
@@ -407,6 +478,8 @@ void Contact::bodiesMoving(const Model &model, const std::vector<std::uint32_t> 
           }
   };
   processes_->share(count, pack, unpack);
+  for (std::uint32_t b : bodies) // (their nodes came from their owner: Solver::repartition)
+    boundaries_.place(model, b);
   for (std::size_t r = 0; r < pairs_.runs(); ++r)
     for (Pair &pair : pairs_.run(r))
       pair.until[0] = pair.until[1] = 0.0, pair.hot[0] = pair.hot[1] = 0;
@@ -805,6 +878,19 @@ Contact::State Contact::state() const {
     st.boxes.insert(st.boxes.end(), {b.x0, b.y0, b.x1, b.y1});
   for (const Point &p : boundaries_.points)
     st.points.insert(st.points.end(), {p.x, p.y});
+  if (shared()) { // (the moving bodies' points from their owners, who measured them)
+    std::vector<double> measured;
+    for (std::uint32_t b : pairs_.moving())
+      if (mine(b))
+        for (std::size_t k = boundaries_.node_begin[b]; k < boundaries_.node_begin[b + 1]; ++k)
+          measured.insert(measured.end(), {static_cast<double>(k), boundaries_.points[k].x,
+                                           boundaries_.points[k].y});
+    const std::vector<double> all = processes_->allGather(std::move(measured));
+    for (std::size_t i = 0; i + 3 <= all.size(); i += 3) {
+      const auto k = static_cast<std::size_t>(all[i]);
+      st.points[2 * k] = all[i + 1], st.points[2 * k + 1] = all[i + 2];
+    }
+  }
   // (with the work shared, each node's from its owner: every process's, in rank order)
   const std::vector<std::uint32_t> &body = node_body_;
   std::vector<std::int64_t> allowed, pushed;

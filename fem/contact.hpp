@@ -90,7 +90,8 @@ struct ContactStatistics {
   std::size_t sides = 0, skipped = 0;  // over the run: sides of overlapping pairs, skipped as clear
   std::size_t partial = 0;             // over the run: sides whose hot nodes alone were looked at
   std::size_t sudden = 0;              // over the run: contacts found deeper than a step's approach
-  double seconds = 0.0;                // wall time spent in contact, over the run
+  std::size_t halo_nodes = 0; // over the run: other processes' boundary nodes received (halo)
+  double seconds = 0.0;       // wall time spent in contact, over the run
 };
 
 class Contact final : public ForceProvider {
@@ -115,6 +116,8 @@ public:
   // processes' nodes to their owners, with the bodies it woke to all.
   void shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) override;
   void bodiesMoving(const Model &model, const std::vector<std::uint32_t> &bodies) override;
+  // It reads the nodes of other processes' bodies that its pairs need, which it exchanges itself.
+  bool readsEveryNode() const override { return false; }
   // The last step's contacts between bodies (the walls' left out; with the work shared, this
   // process's), in pair order: a boundary node
   // of `node_body` pushed out of `segment_body` through the segment between two of its nodes
@@ -177,6 +180,8 @@ private:
   void addHits(Model &model);
   void addBlock(Model &model, std::size_t k);
   void sendLoads(Model &model);
+  void shareBoxes();
+  void exchangeHalo(Model &model);
   bool shared() const { return processes_ != nullptr && processes_->size() > 1; }
   bool mine(std::size_t body) const { return !shared() || (*owner_)[body] == processes_->rank(); }
 

@@ -30,6 +30,12 @@ struct ContactBoundaries {
   // Body b's boundary node positions and box now; its travel grows by the largest move of its
   // nodes since the last measure.
   void measure(const Model &model, std::size_t b);
+  // Body b's boundary node positions now, its box and travel left as they are (set by the process
+  // that measured it).
+  void place(const Model &model, std::size_t b) {
+    for (std::size_t k = node_begin[b]; k < node_begin[b + 1]; ++k)
+      points[k] = {model.nodes.x[nodes[k]], model.nodes.y[nodes[k]]};
+  }
 
   // Whether body b has a boundary (erosion can leave a body without elements).
   bool hasNodes(std::size_t b) const { return node_begin[b] < node_begin[b + 1]; }

@@ -45,19 +45,10 @@ BodyPairs::BodyPairs(const Model &model, const ContactBoundaries &boundaries, st
   arenas_.resize(runs);
 }
 
-bool BodyPairs::update(const Model &model, ContactBoundaries &boundaries) {
-  moving_.clear();
-  for (std::size_t b = 0; b < model.bodies.size(); ++b)
-    if (!model.at_rest[b] && boundaries.hasNodes(b))
-      moving_.push_back(static_cast<std::uint32_t>(b));
-  const long n_moving = static_cast<long>(moving_.size());
+bool BodyPairs::search(const Model &model, const ContactBoundaries &boundaries) {
   double farthest = 0.0; // the largest travel since the last search for pairs
-#pragma omp parallel for schedule(static) reduction(max : farthest) if (n_moving > 64)
-  for (long i = 0; i < n_moving; ++i) {
-    if (model.due.empty() || model.due[moving_[i]]) // with levels, the others stood still
-      boundaries.measure(model, moving_[i]);
-    farthest = std::max(farthest, boundaries.travel[moving_[i]] - travel_searched_[moving_[i]]);
-  }
+  for (std::uint32_t b : moving_)
+    farthest = std::max(farthest, boundaries.travel[b] - travel_searched_[b]);
   if (run_pairs_.empty() || 2.0 * farthest > search_margin_) {
     findPairs(boundaries);
     return true;

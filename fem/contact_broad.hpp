@@ -51,7 +51,25 @@ public:
   // pairs: all anew when a body may have closed half the margin since the last search (or none was
   // made since forget), else those of the bodies that woke since the last step added. Returns
   // whether it searched anew.
-  bool update(const Model &model, ContactBoundaries &boundaries);
+  bool update(const Model &model, ContactBoundaries &boundaries) {
+    measure(model, boundaries, [](std::size_t) { return true; });
+    return search(model, boundaries);
+  }
+  // The same in two parts: the moving bodies listed and those `measured` accepts measured (the
+  // others' boxes and travel set before the search, by whoever measured them), then the pairs.
+  template <class Measured>
+  void measure(const Model &model, ContactBoundaries &boundaries, Measured measured) {
+    moving_.clear();
+    for (std::size_t b = 0; b < model.bodies.size(); ++b)
+      if (!model.at_rest[b] && boundaries.hasNodes(b))
+        moving_.push_back(static_cast<std::uint32_t>(b));
+    const long n_moving = static_cast<long>(moving_.size());
+#pragma omp parallel for schedule(static) if (n_moving > 64)
+    for (long i = 0; i < n_moving; ++i) // (with levels, the bodies not due stood still)
+      if ((model.due.empty() || model.due[moving_[i]]) && measured(moving_[i]))
+        boundaries.measure(model, moving_[i]);
+  }
+  bool search(const Model &model, const ContactBoundaries &boundaries);
   // The boundaries changed: the lists hold indices into them, so all pairs are found anew, with
   // new lists, at the next update.
   void forget() { run_pairs_.clear(); }

@@ -186,6 +186,7 @@ void Solver::addForceProvider(ForceProvider *provider) {
                                 "coupling): allowed with FE-FE contact alone");
   providers_.push_back(provider);
   provider->shareWork(comm_, owner_);
+  share_motion_ = share_motion_ || provider->readsEveryNode();
   const double scale = std::sqrt(std::max(0.0, 1.0 - 0.25 * provider->stepStiffness()));
   if (scale < step_scale_) { // the step already taken from the elements, scaled
     next_dt_ *= scale / step_scale_;
@@ -220,7 +221,8 @@ void Solver::step() {
     rebalance_due_ = true;
   kickAndDrift(dt); // v(n+1/2) = v(n) + dt/2 f(n) / m, the imposed velocities;
                     // x(n+1) = x(n) + dt v(n+1/2)
-  shareMotion();    // every process's moving nodes, from their owners
+  if (share_motion_)
+    shareMotion(); // every process's moving nodes, from their owners
   m_.nodes.clearExternal();
   for (auto *provider : providers_) // external forces at x(n+1): contact, coupling
     provider->addForces(m_, time_ + dt, dt);
@@ -491,6 +493,10 @@ void Solver::repartition(const std::vector<std::size_t> &load) {
     if (owner[b] != owner_[b])
       moving.push_back(static_cast<std::uint32_t>(b));
   shareOwned(moving, &Body::element_begin, &Body::element_end, elementState());
+  {
+    Nodes &nd = m_.nodes; // x(n+1) and v(n+1/2): the new owner's element pass and half-kick
+    shareOwned<4>(moving, &Body::node_begin, &Body::node_end, {&nd.x, &nd.y, &nd.vx, &nd.vy});
+  }
   shareExternal(moving);
   for (ForceProvider *provider : providers_)
     provider->bodiesMoving(m_, moving);
@@ -882,19 +888,23 @@ void Solver::shareOwned(const std::vector<std::uint32_t> &bodies, std::size_t Bo
 void Solver::shareMotion() {
   Nodes &nd = m_.nodes;
   shareOwned<4>(active_bodies_, &Body::node_begin, &Body::node_end, {&nd.x, &nd.y, &nd.vx, &nd.vy});
+  for (std::uint32_t b : active_bodies_)
+    if (!owns(b))
+      received_node_steps_ += static_cast<double>(m_.bodies[b].node_end - m_.bodies[b].node_begin);
 }
 
 void Solver::collectFrame() const {
   Nodes &nd = m_.nodes;
   shareOwned(active_bodies_, &Body::element_begin, &Body::element_end, elementState(), true);
-  shareOwned<2>(active_bodies_, &Body::node_begin, &Body::node_end, {&nd.vx, &nd.vy}, true);
+  shareOwned<4>(active_bodies_, &Body::node_begin, &Body::node_end, {&nd.x, &nd.y, &nd.vx, &nd.vy},
+                true);
 }
 
 void Solver::collectCheckpoint() {
   Nodes &nd = m_.nodes;
   shareOwned(active_bodies_, &Body::element_begin, &Body::element_end, elementState(), true);
-  shareOwned<4>(active_bodies_, &Body::node_begin, &Body::node_end,
-                {&nd.vx, &nd.vy, &nd.fx, &nd.fy}, true);
+  shareOwned<6>(active_bodies_, &Body::node_begin, &Body::node_end,
+                {&nd.x, &nd.y, &nd.vx, &nd.vy, &nd.fx, &nd.fy}, true);
   shareExternal(active_bodies_, true);
 }
 
@@ -1315,6 +1325,9 @@ void Solver::erode() {
     bodies.push_back(el.body[e]);
   std::sort(bodies.begin(), bodies.end());
   bodies.erase(std::unique(bodies.begin(), bodies.end()), bodies.end());
+  // (the providers measure the new boundaries against their neighbours: the positions of every
+  // node of those bodies, which may now lie on a boundary, from their owners)
+  shareOwned<2>(bodies, &Body::node_begin, &Body::node_end, {&nd.x, &nd.y});
   for (auto *provider : providers_)
     provider->boundaryChanged(m_, bodies);
 }

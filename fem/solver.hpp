@@ -98,6 +98,9 @@ public:
   virtual void shareWork(const parallel::Communicator & /*processes*/,
                          const std::vector<int> & /*owner*/) {}
   virtual void bodiesMoving(const Model &, const std::vector<std::uint32_t> & /*bodies*/) {}
+  // Whether it reads the nodes of every process's moving bodies (their positions and velocities
+  // after the drift, copied to every process for it), or exchanges what it needs itself.
+  virtual bool readsEveryNode() const { return true; }
   // Multiple time stepping: whether it honours Model::due and Model::window, and, from each
   // body's own level, the finest level of the bodies each body may meet through it (`cap`, lowered
   // only), so that bodies step together before they touch.
@@ -176,6 +179,9 @@ public:
   double addedMass(std::size_t body = all_bodies) const;
   // How the element work is shared now and was over the run (every process knows every owner).
   PartitionReport partition() const;
+  // Over this process's steps: the other processes' nodes it received after the drift (every
+  // moving node it does not own, when a provider reads every node).
+  double receivedNodeSteps() const { return received_node_steps_; }
   // The process that computes `body`'s elements and owns its nodes' external forces.
   int owner(std::size_t body) const { return owner_[body]; }
 
@@ -319,6 +325,8 @@ private:
   std::vector<double> rank_element_steps_, rank_node_steps_; // over the run
   PartitionReport partition_; // the counts and the last rebalance's imbalances
   std::vector<ForceProvider *> providers_;
+  bool share_motion_ = false; // some provider reads every moving node (shareMotion)
+  double received_node_steps_ = 0.0;
   std::vector<Chunk> chunks_;
   std::vector<Unit> units_;
   std::vector<Range> unit_nodes_;  // node ranges of the units

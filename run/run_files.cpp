@@ -191,14 +191,22 @@ nlohmann::json levelFigures(const fem::LevelCensus &census, const LoopResult &lo
 RankFigures rankFigures(const RunAssembly &run, const LoopResult &loop) {
   const std::int64_t pair_steps =
       run.contact ? static_cast<std::int64_t>(run.contact->statistics().pair_steps) : 0;
-  const std::vector<std::int64_t> mine{loop.step_bytes,  loop.max_step_bytes, loop.step_operations,
-                                       loop.other_bytes, pair_steps,          peakMemoryBytes()};
+  const std::int64_t halo =
+      std::llround(run.solver->receivedNodeSteps()) +
+      (run.contact ? static_cast<std::int64_t>(run.contact->statistics().halo_nodes) : 0);
+  const std::vector<std::int64_t> mine{loop.step_bytes,
+                                       loop.max_step_bytes,
+                                       loop.step_operations,
+                                       loop.other_bytes,
+                                       pair_steps,
+                                       peakMemoryBytes(),
+                                       halo};
   const std::vector<std::int64_t> all = run.solver->processes().allGather(mine);
   RankFigures f;
   f.steps = loop.counted_steps;
-  std::vector<std::int64_t> *const fields[] = {&f.step_bytes,         &f.max_step_bytes,
-                                               &f.step_operations,    &f.other_bytes,
-                                               &f.contact_pair_steps, &f.peak_memory_bytes};
+  std::vector<std::int64_t> *const fields[] = {
+      &f.step_bytes,         &f.max_step_bytes,    &f.step_operations, &f.other_bytes,
+      &f.contact_pair_steps, &f.peak_memory_bytes, &f.halo_node_steps};
   for (std::size_t k = 0; k < all.size(); ++k)
     fields[k % mine.size()]->push_back(all[k]);
   if (run.contact)
@@ -207,12 +215,6 @@ RankFigures rankFigures(const RunAssembly &run, const LoopResult &loop) {
 }
 
 nlohmann::json partitionSummary(const fem::PartitionReport &p, const RankFigures &f) {
-  double node_steps = 0.0;
-  for (double n : p.node_steps)
-    node_steps += n;
-  std::vector<double> halo;
-  for (double n : p.node_steps)
-    halo.push_back(node_steps - n);
   nlohmann::json memory = nlohmann::json::array();
   for (std::int64_t m : f.peak_memory_bytes)
     memory.push_back(m >= 0 ? nlohmann::json(m) : nlohmann::json());
@@ -230,7 +232,7 @@ nlohmann::json partitionSummary(const fem::PartitionReport &p, const RankFigures
           {"steps_measured", f.steps},
           {"active_elements_per_step", perStep(p.element_steps, f.steps)},
           {"active_nodes_per_step", perStep(p.node_steps, f.steps)},
-          {"halo_nodes_per_step", perStep(halo, f.steps)},
+          {"halo_nodes_per_step", perStep(asDoubles(f.halo_node_steps), f.steps)},
           {"contact_pairs_per_step", perStep(asDoubles(f.contact_pair_steps), f.steps)},
           {"bytes_received_per_step", perStep(asDoubles(f.step_bytes), f.steps)},
           {"max_bytes_received_in_a_step", f.max_step_bytes},

@@ -52,7 +52,7 @@ nlohmann::json demFigures(const RunAssembly &run, const parallel::World &world);
 struct RankFigures {
   std::size_t steps = 0;
   std::vector<std::int64_t> step_bytes, max_step_bytes, step_operations, other_bytes,
-      contact_pair_steps, peak_memory_bytes;
+      contact_pair_steps, peak_memory_bytes, halo_node_steps;
   fem::ContactStatistics contact;
 };
 // This process's figures gathered from every process (every process calls it).
@@ -60,8 +60,9 @@ RankFigures rankFigures(const RunAssembly &run, const LoopResult &loop);
 
 // How the element work was shared by the ranks (fem::PartitionReport) and what each rank's part
 // cost it (`ranks`), for summary.json: per rank, per step, the active elements and nodes it owned,
-// its halo nodes (the nodes of the moving bodies it does not own, whose positions and velocities it
-// receives from their owners every step: with every body held by every rank, all of them), the
+// its halo nodes (the other ranks' nodes whose positions and velocities it receives from their
+// owners: the boundary nodes its contact pairs need, or every moving node it does not own when a
+// force provider reads every node, the FE-DEM coupling), the
 // pairs of bodies its contact searched, the bytes it received; its peak memory.
 nlohmann::json partitionSummary(const fem::PartitionReport &partition, const RankFigures &ranks);
 

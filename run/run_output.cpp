@@ -191,11 +191,15 @@ double Series::last(const std::string &name) const {
   return NAN;
 }
 
-double Series::depth(const fem::Model &model) const {
+double Series::depth(const fem::Model &model, const fem::Solver &solver) const {
   double lowest = HUGE_VAL;
   for (std::size_t a = model.bodies[0].node_begin; a < model.bodies[0].node_end; ++a)
     if (!model.nodes.detached[a]) // eroded material has left the projectile
       lowest = std::min(lowest, model.nodes.y[a]);
+  // (with the work shared, the projectile's nodes are current at its owner only)
+  if (const parallel::Communicator &processes = solver.processes(); processes.size() > 1)
+    lowest = processes.allGather(std::vector<double>{lowest})
+                 .at(static_cast<std::size_t>(solver.owner(0)));
   return lowest0_ - lowest;
 }
 

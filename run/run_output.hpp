@@ -46,7 +46,8 @@ public:
   // The last sample of "projectile/NAME" or "energy/NAME"; NaN before the first.
   double last(const std::string &name) const;
   // The projectile's depth now: its initial lowest point minus its current lowest point [m].
-  double depth(const fem::Model &model) const;
+  // (every process calls it)
+  double depth(const fem::Model &model, const fem::Solver &solver) const;
 
   struct Column {
     std::string name, unit, meaning;

@@ -157,7 +157,7 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
     if (solver.time() >= run.end_time)
       result.end = "end_time";
     else if (end_depth > 0.0 &&
-             (sampled ? series.last("projectile/depth") : series.depth(model)) >= end_depth)
+             (sampled ? series.last("projectile/depth") : series.depth(model, solver)) >= end_depth)
       result.end = "end_depth";
     else if (solver.steps() >= max_steps)
       result.end = "max_steps";
@@ -251,7 +251,7 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
           checkpoints.afterStep(result);
       });
       if (progress.due())
-        progress.update(solver, series.depth(model), -series.last("projectile/vy"),
+        progress.update(solver, series.last("projectile/depth"), -series.last("projectile/vy"),
                         frames.size() - frames_before, frames.seconds() - output_before);
     }
   } catch (const std::exception &e) {

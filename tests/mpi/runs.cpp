@@ -192,14 +192,14 @@ TEST(Mpi, TwoRanksShareTheElementWork) {
 // at 0.4 of the first step (5 elements eroded) and a new partition forced every 100 steps (5 in
 // the run, every body's owner as RCB gives it for the loads of that step): the same run but for
 // the energies' sum order, and each rank's figures add up to the run's (bodies, active elements,
-// element-steps). Each rank's own and halo nodes add up to every moving node; every step it
-// receives at least the positions and velocities of its halo nodes (4 doubles each) from their
-// owners; each rank searches only the pairs of bodies of its own (fewer than one rank searches),
-// and the ranks together at least every pair one rank searches and at most twice as many (a pair
-// of two ranks' bodies is searched by both, each pushing its own nodes); a step makes at most 7.5
-// collective calls on average (the step's figures and the nodes' states, two each; the contact's
-// loads, three; the failed elements' states and a repartition only at their steps); one rank
-// receives nothing. On one rank
+// element-steps). Each rank's halo (the other ranks' boundary nodes its pairs need) is fewer than
+// half the moving nodes it does not own, and every step it receives at least their positions and
+// velocities (4 doubles each); each rank searches only the pairs of bodies of its own (fewer than
+// one rank searches), and the ranks together at least every pair one rank searches and at most
+// twice as many (a pair of two ranks' bodies is searched by both, each pushing its own nodes); a
+// step makes at most 10.5 collective calls on average (the step's figures and the moving bodies'
+// boxes, two each; the contact's halo and its loads, three each; the failed elements' states and
+// a repartition only at their steps); one rank receives nothing. On one rank
 // the keys change nothing: run.h5 is the same bytes as without them.
 TEST(Mpi, OneTwoAndFourRanksAgreeWhileRebalancing) {
   ScratchDir dir("mpi-fe-rebalancing");
@@ -250,15 +250,15 @@ TEST(Mpi, OneTwoAndFourRanksAgreeWhileRebalancing) {
     double pairs = 0.0;
     for (int rank = 0; rank < ranks; ++rank) {
       const double halo = p["halo_nodes_per_step"][rank].get<double>();
-      EXPECT_NEAR(p["active_nodes_per_step"][rank].get<double>() + halo, moving_nodes,
-                  1e-9 * moving_nodes);
+      EXPECT_LT(halo, 0.5 * (moving_nodes - p["active_nodes_per_step"][rank].get<double>()))
+          << rank;
       EXPECT_GT(halo, 0.0);
       EXPECT_GE(p["bytes_received_per_step"][rank].get<double>(), 32.0 * halo) << rank;
       EXPECT_GE(p["max_bytes_received_in_a_step"][rank].get<double>(),
                 p["bytes_received_per_step"][rank].get<double>());
       pairs += p["contact_pairs_per_step"][rank].get<double>();
       EXPECT_LT(p["contact_pairs_per_step"][rank].get<double>(), pairs_alone) << rank;
-      EXPECT_LE(p["collectives_per_step"][rank].get<double>(), 7.5) << rank;
+      EXPECT_LE(p["collectives_per_step"][rank].get<double>(), 10.5) << rank;
       EXPECT_GT(p["peak_memory_bytes"][rank].get<double>(), 0.0);
     }
     EXPECT_GE(pairs, pairs_alone);
