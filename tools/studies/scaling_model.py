@@ -5,9 +5,10 @@ Two designs of the FE decomposition (docs/solver.md, "A scaling model"):
 
   today    every rank holds the whole model; the element updates, the node loops (each rank moves
            the nodes of its bodies) and the FE-FE contact (the pairs of its own bodies) are
-           shared; after the drift every rank receives position and velocity (32 bytes) of every
-           moving node it does not own, and the contact's reactions on its nodes in an all-to-all
-           (their bytes left out: a few percent of the gather's, docs/solver.md);
+           shared; every rank receives the box and travel of every moving body (48 bytes, an
+           all-gather), the halo nodes' position and velocity (32 bytes) from the ranks it shares
+           pairs with and the reactions on its nodes (16 bytes), in two all-to-alls (2 (P - 1)
+           messages and a reduction each);
   spatial  a rank owns the bodies of its region (a near-square block of the moving region, as
            recursive coordinate bisection gives) and holds a halo, the other ranks' bodies within
            the contact margin: each step it receives the halo nodes' position and velocity
@@ -18,9 +19,10 @@ A step on one rank costs c_e per element update, c_n per node-step (kick, drift,
 and c_p per pair of bodies searched (the contact); the defaults are run 6's
 (examples/baseline.toml to one length on one thread: 126.1 s, 2.18e9 element updates, the element
 pass 51 % of the time, the node loops 20 %, the contact 25.7 s over 5.4e7 pair-steps). A message
-costs `latency + bytes / bandwidth`; a reduction 2 log2(P) latencies; the all-gather of today's
-design P - 1 latencies (a ring) and its bytes, its all-to-all of the reactions 2 (P - 1) latencies
-(the sizes, then the lists) and a reduction. The scene scales as run 6: moving elements the share
+costs `latency + bytes / bandwidth`; a reduction 2 log2(P) latencies; today's design's two
+all-gathers (the boxes, the step's figures) P - 1 latencies each (a ring), its two all-to-alls
+(the halo, the reactions) 2 (P - 1) latencies each (the sizes, then the lists) and a reduction
+each, and the reduction that ends a step. The scene scales as run 6: moving elements the share
 `active` of all, nodes and pairs per moving element as in run 6, the halo a band `band` wide around
 each block of the moving region at run 6's node density. Memory per rank: bytes per element (run
 6's peak over its elements) times the elements it holds.
@@ -39,7 +41,7 @@ import sys
 RUN6 = {  # examples/baseline.toml, one projectile length, one thread (docs/solver.md)
     "elements": 446558, "nodes": 303205, "area_mm2": 7.076 * 3.538,
     "active_elements": 124306, "active_nodes": 82395, "pairs": 3089,
-    "peak_bytes": 224710656,
+    "peak_bytes": 224710656, "bodies": 6199,
 }
 
 
@@ -62,18 +64,24 @@ def figures(p, compute, comm, received, halo, memory, serial):
             "speedup": serial / step, "efficiency": serial / step / p}
 
 
+def halo_nodes(s, p, band):
+    """The nodes in a band `band` wide around a near-square block of the moving region."""
+    return 4.0 * math.sqrt(s["area_mm2"] / p) * band * s["node_density"] if p > 1 else 0.0
+
+
 def today(a, s, p, serial):
-    """Elements, nodes and contact shared; the moving nodes all-gathered."""
-    received = 32.0 * s["nodes"] * (p - 1) / p
-    comm = (3 * (p - 1) * a.latency + received / a.bandwidth + 4 * math.log2(p) * a.latency)
+    """Elements, nodes and contact shared; a halo by pair; the moving bodies' boxes all-gathered."""
+    halo = halo_nodes(s, p, a.band)
+    bodies = s["nodes"] * RUN6["bodies"] / RUN6["nodes"]
+    received = 48.0 * halo + 48.0 * bodies * (p - 1) / p
+    comm = (6 * (p - 1) * a.latency + received / a.bandwidth + 6 * math.log2(p) * a.latency)
     compute = s["moving"] / p * a.c_e + s["nodes"] / p * a.c_n + s["pairs"] / p * a.c_p
-    return figures(p, compute, comm, received, s["nodes"] * (p - 1) / p,
-                   s["bytes_per_element"] * a.elements, serial)
+    return figures(p, compute, comm, received, halo, s["bytes_per_element"] * a.elements, serial)
 
 
 def spatial(a, s, p, serial):
     """A block of the moving region per rank, its halo a band around it; one reduction."""
-    halo = 4.0 * math.sqrt(s["area_mm2"] / p) * a.band * s["node_density"] if p > 1 else 0.0
+    halo = halo_nodes(s, p, a.band)
     received = 48.0 * halo
     comm = (min(8, p - 1) * a.latency + received / a.bandwidth + 2 * math.log2(p) * a.latency)
     compute = s["moving"] / p * a.c_e + (s["nodes"] / p + halo) * a.c_n + s["pairs"] / p * a.c_p
