@@ -53,7 +53,6 @@ Contact::Contact(const Model &model, ContactSettings settings)
   block_loaded_.resize(owner_blocks);
   block_pushed_.resize(owner_blocks);
   pushed_.assign(model.nodes.size(), 0.0);
-  node_body_ = model.nodes.body;
 }
 
 // Erosion changed the boundaries of `bodies`: the lists, which hold indices into the boundaries,
@@ -119,7 +118,7 @@ void Contact::addForces(Model &model, double time, double dt) {
     shareBoxes();
   if (pairs_.search(model, boundaries_))
     ++stats_.searches;
-  if (shared())
+  if (shared() && !*every_node_shared_) // (else the solver copied every moving node already)
     exchangeHalo(model);
   narrowPhase(model, dt);
   walls(model, dt, run_hits_.back());
@@ -428,7 +427,7 @@ void Contact::exchangeHalo(Model &model) {
       stats_.halo_nodes += bd.node_begin[b + 1] - bd.node_begin[b];
       for (std::size_t k = bd.node_begin[b]; k < bd.node_begin[b + 1]; ++k, i += 4) {
         const std::uint32_t p = bd.nodes[k];
-        nd.x[p] = std::bit_cast<double>(message[i]),
+        nd.x[p] = std::bit_cast<double>(message[i]);
         nd.y[p] = std::bit_cast<double>(message[i + 1]);
         nd.vx[p] = std::bit_cast<double>(message[i + 2]);
         nd.vy[p] = std::bit_cast<double>(message[i + 3]);
@@ -437,8 +436,9 @@ void Contact::exchangeHalo(Model &model) {
     }
 }
 
-void Contact::shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) {
-  processes_ = &processes, owner_ = &owner;
+void Contact::shareWork(const parallel::Communicator &processes, const std::vector<int> &owner,
+                        const bool &every_node_shared) {
+  processes_ = &processes, owner_ = &owner, every_node_shared_ = &every_node_shared;
   block_received_.assign(owner_blocks, {});
 }
 
@@ -867,7 +867,7 @@ void Contact::capLevels(const std::vector<std::uint8_t> &own,
   }
 }
 
-Contact::State Contact::state() const {
+Contact::State Contact::state(const Model &model) const {
   State st;
   for (const BodyPairs::Pair &p : pairs_.pairs())
     st.pairs.insert(st.pairs.end(), {p.a, p.b});
@@ -892,7 +892,7 @@ Contact::State Contact::state() const {
     }
   }
   // (with the work shared, each node's from its owner: every process's, in rank order)
-  const std::vector<std::uint32_t> &body = node_body_;
+  const std::vector<std::uint32_t> &body = model.nodes.body;
   std::vector<std::int64_t> allowed, pushed;
   std::vector<double> allowance, pushed_depth;
   for (const ContactAllowances::Allowed &a : allowances_.allowed())

@@ -114,7 +114,8 @@ public:
   // The work shared by several processes: each computes the sides of the pairs (a body's nodes
   // against the other's segments) of the bodies it owns, and sends the reactions on other
   // processes' nodes to their owners, with the bodies it woke to all.
-  void shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) override;
+  void shareWork(const parallel::Communicator &processes, const std::vector<int> &owner,
+                 const bool &every_node_shared) override;
   void bodiesMoving(const Model &model, const std::vector<std::uint32_t> &bodies) override;
   // It reads the nodes of other processes' bodies that its pairs need, which it exchanges itself.
   bool readsEveryNode() const override { return false; }
@@ -220,8 +221,8 @@ private:
   // bodies the loads other processes sent this step, in order.
   const parallel::Communicator *processes_ = nullptr;
   const std::vector<int> *owner_ = nullptr;
+  const bool *every_node_shared_ = nullptr; // the solver copies every moving node to all
   std::vector<std::vector<Load>> block_received_;
-  std::vector<std::uint32_t> node_body_; // per model node: its body
   // The depth each model node was pushed at in the last step (the deepest of its contacts; 0 if
   // none; the nodes where it is not 0 are in block_pushed_).
   std::vector<double> pushed_;
@@ -248,7 +249,7 @@ public:
   };
   // (With the work shared every process calls it: the nodes' pushed depths and allowances come
   // from their owners.)
-  State state() const;
+  State state(const Model &model) const;
   // Continues from `state` once the model's state (its boundaries among it) was restored.
   // Throws std::invalid_argument when `state` is not of this model.
   void restore(const Model &model, const State &state);

@@ -47,16 +47,8 @@ public:
   // The cell and the search margin from the bodies' sizes, the grid of the bodies at rest now, and
   // `runs` runs of pairs (none yet).
   BodyPairs(const Model &model, const ContactBoundaries &boundaries, std::size_t runs);
-  // This step's moving bodies measured (their boundaries' positions, boxes and travel), and the
-  // pairs: all anew when a body may have closed half the margin since the last search (or none was
-  // made since forget), else those of the bodies that woke since the last step added. Returns
-  // whether it searched anew.
-  bool update(const Model &model, ContactBoundaries &boundaries) {
-    measure(model, boundaries, [](std::size_t) { return true; });
-    return search(model, boundaries);
-  }
-  // The same in two parts: the moving bodies listed and those `measured` accepts measured (the
-  // others' boxes and travel set before the search, by whoever measured them), then the pairs.
+  // This step's moving bodies listed, and those `measured` accepts measured (their boundaries'
+  // positions, boxes and travel; the others' are set before the search by whoever measured them).
   template <class Measured>
   void measure(const Model &model, ContactBoundaries &boundaries, Measured measured) {
     moving_.clear();
@@ -69,6 +61,9 @@ public:
       if ((model.due.empty() || model.due[moving_[i]]) && measured(moving_[i]))
         boundaries.measure(model, moving_[i]);
   }
+  // The pairs: all anew when a body may have closed half the margin since the last search (or none
+  // was made since forget), else those of the bodies that woke since the last step added. Returns
+  // whether it searched anew.
   bool search(const Model &model, const ContactBoundaries &boundaries);
   // The boundaries changed: the lists hold indices into them, so all pairs are found anew, with
   // new lists, at the next update.

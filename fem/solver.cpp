@@ -185,8 +185,8 @@ void Solver::addForceProvider(ForceProvider *provider) {
                                 ") with a force provider that steps every body every step (DEM "
                                 "coupling): allowed with FE-FE contact alone");
   providers_.push_back(provider);
-  provider->shareWork(comm_, owner_);
   share_motion_ = share_motion_ || provider->readsEveryNode();
+  provider->shareWork(comm_, owner_, share_motion_);
   const double scale = std::sqrt(std::max(0.0, 1.0 - 0.25 * provider->stepStiffness()));
   if (scale < step_scale_) { // the step already taken from the elements, scaled
     next_dt_ *= scale / step_scale_;
@@ -902,9 +902,8 @@ void Solver::collectFrame() const {
 
 void Solver::collectCheckpoint() {
   Nodes &nd = m_.nodes;
-  shareOwned(active_bodies_, &Body::element_begin, &Body::element_end, elementState(), true);
-  shareOwned<6>(active_bodies_, &Body::node_begin, &Body::node_end,
-                {&nd.x, &nd.y, &nd.vx, &nd.vy, &nd.fx, &nd.fy}, true);
+  collectFrame();
+  shareOwned<2>(active_bodies_, &Body::node_begin, &Body::node_end, {&nd.fx, &nd.fy}, true);
   shareExternal(active_bodies_, true);
 }
 

@@ -91,12 +91,14 @@ public:
   // The boundaries of `bodies` changed (elements eroded): what was built from them is taken anew.
   virtual void boundaryChanged(const Model &, const std::vector<std::uint32_t> & /*bodies*/) {}
   // With several processes (Solver): `owner` (kept up to date by the solver) gives each body's
-  // process. A provider may then compute only for this process's bodies and send its forces on
-  // other processes' nodes to their owners (Nodes::external is complete at a node's owner only);
-  // before bodies change owner (bodiesMoving, every process, the owners not yet changed) what
-  // only their owner keeps goes with them.
+  // process, and `every_node_shared` whether the solver copies every moving node to every process
+  // after the drift (for a provider that reads every node). A provider may then compute only for
+  // this process's bodies and send its forces on other processes' nodes to their owners
+  // (Nodes::external is complete at a node's owner only); before bodies change owner
+  // (bodiesMoving, every process, the owners not yet changed) what only their owner keeps goes
+  // with them.
   virtual void shareWork(const parallel::Communicator & /*processes*/,
-                         const std::vector<int> & /*owner*/) {}
+                         const std::vector<int> & /*owner*/, const bool & /*every_node_shared*/) {}
   virtual void bodiesMoving(const Model &, const std::vector<std::uint32_t> & /*bodies*/) {}
   // Whether it reads the nodes of every process's moving bodies (their positions and velocities
   // after the drift, copied to every process for it), or exchanges what it needs itself.

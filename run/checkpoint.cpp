@@ -477,7 +477,7 @@ void Checkpoints::write(const LoopResult &loop) {
   run_.solver->collectCheckpoint();
   std::optional<fem::Contact::State> contact;
   if (run_.contact)
-    contact = run_.contact->state();
+    contact = run_.contact->state(run_.model);
   std::vector<coupling::DiskForce> disk_forces;
   const std::string restart = run_.dem ? file("liggghts", n, ".restart") : std::string();
   if (run_.dem) {
