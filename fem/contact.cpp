@@ -118,8 +118,12 @@ void Contact::addForces(Model &model, double time, double dt) {
     shareBoxes();
   if (pairs_.search(model, boundaries_))
     ++stats_.searches;
-  if (shared() && !*every_node_shared_) // (else the solver copied every moving node already)
+  if (shared() && !*every_node_shared_)
     exchangeHalo(model);
+  else if (shared()) // the solver copied every moving node: the others' boundaries placed here
+    for (std::uint32_t b : pairs_.moving())
+      if (!mine(b))
+        boundaries_.place(model, b);
   narrowPhase(model, dt);
   walls(model, dt, run_hits_.back());
   addHits(model);
