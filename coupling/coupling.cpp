@@ -1,6 +1,7 @@
 #include "coupling.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -78,7 +79,8 @@ void FeDemCoupling::startWindow(double dt) {
 void FeDemCoupling::choose(const fem::Model &model, const DiskContact::Region &now, double dt) {
   const Particles &p = dem_.particles();
   const double left = std::max(length_ - elapsed_, 0.0) + 2.0 * dt;
-  const double margin = 2.0 * contact_.fastest(model) * left + 0.5 * r_max_;
+  const double fastest = shared() ? fastest_of_all_ : contact_.fastest(model);
+  const double margin = 2.0 * fastest * left + 0.5 * r_max_;
   allowed_ = {now.x0 - margin, now.y0 - margin, now.x1 + margin, now.y1 + margin};
   const std::size_t n = p.size();
   meets_.resize(n);
@@ -124,7 +126,19 @@ void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
     m.dx[i] += dt * m.dvx[i], m.dy[i] += dt * m.dvy[i];
   }
   elapsed_ += dt;
-  const DiskContact::Region now = contact_.measure(model, r_max_);
+  if (shared()) { // this process's bodies are current, the others' come with exchangeBoundaries
+    const int me = processes_->rank();
+    current_.resize(model.bodies.size());
+    for (std::size_t b = 0; b < current_.size(); ++b)
+      current_[b] = (*owner_)[b] == me;
+  }
+  DiskContact::Region now = contact_.measure(model, r_max_);
+  if (shared()) { // the region and the fastest node over every process's bodies: one reduction
+    const std::vector<double> most =
+        processes_->max({-now.x0, -now.y0, now.x1, now.y1, contact_.fastest(model)});
+    contact_.useRegion(now = {-most[0], -most[1], most[2], most[3]});
+    fastest_of_all_ = most[4];
+  }
   if (first || now.x0 < allowed_.x0 || now.y0 < allowed_.y0 || now.x1 > allowed_.x1 ||
       now.y1 > allowed_.y1)
     choose(model, now, dt);
@@ -142,13 +156,14 @@ void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
     now_.omega[c] = spin + m.domega[i];
     now_.radius[c] = p.radius[i], now_.mass[c] = p.mass[i], now_.id[c] = p.id[i];
   }
+  if (shared())
+    exchangeBoundaries(model);
   fast_.reset(nc);
   reactions_.clear();
   contact_.addForces(model, now_, fast_, reactions_, dt);
   for (std::size_t c = 0; c < nc; ++c)
     kick(c, 0.5 * dt);
-  dem_.gatherReactions(reactions_);
-  DiskContact::apply(model, reactions_);
+  applyReactions(model);
   exchanges_.record(Datum::reaction_force, window_ + 1);
   ++window_steps_;
   if (elapsed_ + 0.5 * dt >= length_) // the FE step nearest to the planned end
@@ -170,6 +185,146 @@ void FeDemCoupling::endWindow() {
   dem_.gatherDiskForces(carried_);
   ++window_;
   open_ = false;
+}
+
+void FeDemCoupling::boundaryChanged(const fem::Model &model, const std::vector<std::uint32_t> &) {
+  contact_.boundaryChanged(model);
+  if (!shared())
+    return;
+  // The moving bodies' element sizes from their owners (the others' nodes here may be stale).
+  const int me = processes_->rank();
+  const std::vector<std::uint32_t> &bodies = contact_.bodies();
+  std::size_t count = 0;
+  for (const std::uint32_t b : bodies)
+    count += !model.at_rest[b] && (*owner_)[b] == me;
+  processes_->share(
+      count,
+      [&](double *out) {
+        for (const std::uint32_t b : bodies)
+          if (!model.at_rest[b] && (*owner_)[b] == me)
+            *out++ = contact_.elementSize(b);
+      },
+      [&](const double *all) {
+        for (int r = 0; r < processes_->size(); ++r)
+          for (const std::uint32_t b : bodies)
+            if (!model.at_rest[b] && (*owner_)[b] == r)
+              contact_.elementSize(b) = *all++;
+      });
+}
+
+void FeDemCoupling::shareWork(const parallel::Communicator &processes,
+                              const std::vector<int> &owner) {
+  processes_ = &processes, owner_ = &owner;
+  contact_.lookAt(shared() ? &current_ : nullptr);
+}
+
+// The FE bodies that may touch this process's near disks: each process gathers the box of every
+// process's near disks (widened by the largest radius), and the owner of a moving body whose box
+// meets another's sends it the body's boundary nodes, positions and velocities.
+void FeDemCoupling::exchangeBoundaries(fem::Model &model) {
+  fem::Nodes &nd = model.nodes;
+  DiskContact::Region mine{INFINITY, INFINITY, -INFINITY, -INFINITY};
+  for (std::size_t c = 0; c < now_.size(); ++c)
+    mine = {std::min(mine.x0, now_.x[c] - r_max_), std::min(mine.y0, now_.y[c] - r_max_),
+            std::max(mine.x1, now_.x[c] + r_max_), std::max(mine.y1, now_.y[c] + r_max_)};
+  const std::vector<double> disks =
+      processes_->allGather(std::vector<double>{mine.x0, mine.y0, mine.x1, mine.y1});
+  const int me = processes_->rank();
+  std::vector<std::vector<std::int64_t>> to(static_cast<std::size_t>(processes_->size()));
+  const std::vector<std::uint32_t> &bodies = contact_.bodies();
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    const std::uint32_t b = bodies[k];
+    if (model.at_rest[b] || (*owner_)[b] != me)
+      continue;
+    const DiskContact::Region box = contact_.box(k);
+    const auto &edges = model.bodies[b].boundary;
+    for (std::size_t r = 0; r < to.size(); ++r) {
+      const double *d = &disks[4 * r];
+      if (static_cast<int>(r) == me || box.x1 < d[0] || box.x0 > d[2] || box.y1 < d[1] ||
+          box.y0 > d[3])
+        continue;
+      std::vector<std::int64_t> &message = to[r];
+      message.push_back(b);
+      for (std::size_t e = 0; e < edges.size(); e += 2) { // (their first nodes are its nodes)
+        const std::uint32_t a = edges[e];
+        message.insert(message.end(),
+                       {std::bit_cast<std::int64_t>(nd.x[a]), std::bit_cast<std::int64_t>(nd.y[a]),
+                        std::bit_cast<std::int64_t>(nd.vx[a]),
+                        std::bit_cast<std::int64_t>(nd.vy[a])});
+      }
+    }
+  }
+  received_.clear();
+  for (const std::vector<std::int64_t> &message : processes_->exchange(std::move(to)))
+    for (std::size_t i = 0; i < message.size();) {
+      const auto b = static_cast<std::uint32_t>(message[i++]);
+      const auto &edges = model.bodies[b].boundary;
+      for (std::size_t e = 0; e < edges.size(); e += 2, i += 4) {
+        const std::uint32_t a = edges[e];
+        nd.x[a] = std::bit_cast<double>(message[i]),
+        nd.y[a] = std::bit_cast<double>(message[i + 1]);
+        nd.vx[a] = std::bit_cast<double>(message[i + 2]);
+        nd.vy[a] = std::bit_cast<double>(message[i + 3]);
+      }
+      current_[b] = 1;
+      received_.push_back(b);
+      halo_nodes_ += edges.size() / 2;
+    }
+  contact_.measureBodies(model, received_);
+}
+
+// The reactions into the FE nodes. With the FE bodies shared, each goes to its node's owner, who
+// adds every process's in rank order (as if every process's reactions were gathered), and the
+// bodies at rest they load are woken on every process.
+void FeDemCoupling::applyReactions(fem::Model &model) {
+  if (!shared()) {
+    DiskContact::apply(model, reactions_);
+    return;
+  }
+  const int me = processes_->rank();
+  const auto ranks = static_cast<std::size_t>(processes_->size());
+  std::vector<std::int64_t> woken;
+  for (const Reaction &r : reactions_)
+    if (model.at_rest[r.body] && (woken.empty() || woken.back() != r.body))
+      woken.push_back(r.body);
+  std::sort(woken.begin(), woken.end());
+  woken.erase(std::unique(woken.begin(), woken.end()), woken.end());
+  std::vector<std::vector<std::int64_t>> to(ranks);
+  for (std::size_t r = 0; r < ranks; ++r)
+    if (static_cast<int>(r) != me) {
+      to[r].push_back(static_cast<std::int64_t>(woken.size()));
+      to[r].insert(to[r].end(), woken.begin(), woken.end());
+    }
+  std::vector<Reaction> own;
+  for (const Reaction &r : reactions_)
+    if (const int owner = (*owner_)[r.body]; owner == me)
+      own.push_back(r);
+    else
+      to[static_cast<std::size_t>(owner)].insert(
+          to[static_cast<std::size_t>(owner)].end(),
+          {r.node, r.body, std::bit_cast<std::int64_t>(r.fx), std::bit_cast<std::int64_t>(r.fy),
+           std::bit_cast<std::int64_t>(r.friction_x), std::bit_cast<std::int64_t>(r.friction_y)});
+  const std::vector<std::vector<std::int64_t>> from = processes_->exchange(std::move(to));
+  for (const std::int64_t b : woken)
+    model.wake(static_cast<std::size_t>(b));
+  std::vector<Reaction> received;
+  for (std::size_t r = 0; r < ranks; ++r) {
+    if (static_cast<int>(r) == me) {
+      DiskContact::apply(model, own);
+      continue;
+    }
+    const std::vector<std::int64_t> &message = from[r];
+    const auto n_woken = static_cast<std::size_t>(message.at(0));
+    for (std::size_t i = 1; i <= n_woken; ++i)
+      model.wake(static_cast<std::size_t>(message[i]));
+    received.clear();
+    for (std::size_t i = 1 + n_woken; i + 6 <= message.size(); i += 6)
+      received.push_back(
+          {static_cast<std::uint32_t>(message[i]), static_cast<std::uint32_t>(message[i + 1]),
+           std::bit_cast<double>(message[i + 2]), std::bit_cast<double>(message[i + 3]),
+           std::bit_cast<double>(message[i + 4]), std::bit_cast<double>(message[i + 5])});
+    DiskContact::apply(model, received);
+  }
 }
 
 Particles FeDemCoupling::disks() const {

@@ -42,9 +42,14 @@ public:
   // One FE step within the window; ends the window if due.
   void addForces(fem::Model &model, double time, double dt) override;
   double stepStiffness() const override { return contact_.stepStiffness(); }
-  void boundaryChanged(const fem::Model &model, const std::vector<std::uint32_t> &) override {
-    contact_.boundaryChanged(model);
-  }
+  void boundaryChanged(const fem::Model &model, const std::vector<std::uint32_t> &) override;
+  // With the FE bodies shared among processes, each computes the FE-DEM contact of its own disks
+  // (LIGGGHTS's decomposition) with the FE bodies that reach them: their owners send their
+  // boundary nodes to the processes whose near disks their boxes meet, and the reactions go back
+  // to the nodes' owners.
+  void shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) override;
+  // Other processes' FE boundary nodes received, over the run.
+  std::size_t haloNodes() const { return halo_nodes_; }
   const DiskContact &contact() const { return contact_; }
   const DemParticipant &dem() const { return dem_; }
   // The disks now, within the window: positions, velocities and spins at the FE step's end.
@@ -81,6 +86,9 @@ private:
   void startWindow(double dt);
   void choose(const fem::Model &model, const DiskContact::Region &now, double dt);
   void endWindow();
+  bool shared() const { return processes_ != nullptr && processes_->size() > 1; }
+  void exchangeBoundaries(fem::Model &model);
+  void applyReactions(fem::Model &model);
 
   DemParticipant &dem_;
   DiskContact contact_;
@@ -106,6 +114,14 @@ private:
   ExchangeLedger exchanges_;       // every datum's exchanges, checked at each window's end
   std::uint64_t window_steps_ = 0; // FE steps in the window under way
   std::vector<Reaction> reactions_;
+  // With the FE bodies shared among processes (shareWork): per model body, its owner, and whether
+  // its nodes are current here this step (DiskContact::lookAt).
+  const parallel::Communicator *processes_ = nullptr;
+  const std::vector<int> *owner_ = nullptr;
+  std::vector<char> current_;
+  double fastest_of_all_ = 0.0; // the fastest boundary node over every process's bodies [m/s]
+  std::vector<std::uint32_t> received_;
+  std::size_t halo_nodes_ = 0;
 };
 
 } // namespace mesopen::coupling

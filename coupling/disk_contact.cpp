@@ -145,31 +145,17 @@ void DiskContact::apply(fem::Model &model, const std::vector<Reaction> &reaction
 
 // A closed boundary's edges start at each of its nodes once: their first nodes are its nodes.
 DiskContact::Region DiskContact::measure(const fem::Model &model, double reach) {
-  const fem::Nodes &nd = model.nodes;
   // (a body at rest keeps its box: its nodes have not moved)
   const bool all = boxes_.size() != fe_bodies_.size();
   boxes_.resize(fe_bodies_.size());
   grids_.resize(fe_bodies_.size());
   Region r{INFINITY, INFINITY, -INFINITY, -INFINITY};
   for (std::size_t k = 0; k < fe_bodies_.size(); ++k) {
-    Box &box = boxes_[k];
-    if (all || !model.at_rest[fe_bodies_[k]]) {
-      const auto &edges = model.bodies[fe_bodies_[k]].boundary;
-      box = {INFINITY, INFINITY, -INFINITY, -INFINITY};
-      for (std::size_t e = 0; e < edges.size(); e += 2) {
-        const std::uint32_t a = edges[e];
-        box = {std::min(box.x0, nd.x[a]), std::min(box.y0, nd.y[a]), std::max(box.x1, nd.x[a]),
-               std::max(box.y1, nd.y[a])};
-      }
-      EdgeGrid &grid = grids_[k];
-      if (grid.valid) { // does it still hold?
-        double moved2 = 0.0;
-        for (std::size_t e = 0; e < edges.size(); e += 2)
-          moved2 = std::max(moved2, sq(nd.x[edges[e]] - grid.built_x[e / 2]) +
-                                        sq(nd.y[edges[e]] - grid.built_y[e / 2]));
-        grid.valid = moved2 < grid.slack * grid.slack;
-      }
-    }
+    if (!looks(model, fe_bodies_[k]))
+      continue;
+    if (all || !model.at_rest[fe_bodies_[k]])
+      measureBody(model, k);
+    const Box &box = boxes_[k];
     r = {std::min(r.x0, box.x0 - reach), std::min(r.y0, box.y0 - reach),
          std::max(r.x1, box.x1 + reach), std::max(r.y1, box.y1 + reach)};
   }
@@ -178,11 +164,41 @@ DiskContact::Region DiskContact::measure(const fem::Model &model, double reach) 
   return r;
 }
 
+void DiskContact::measureBodies(const fem::Model &model, const std::vector<std::uint32_t> &bodies) {
+  for (const std::uint32_t b : bodies) {
+    const auto k = static_cast<std::size_t>(
+        std::lower_bound(fe_bodies_.begin(), fe_bodies_.end(), b) - fe_bodies_.begin());
+    if (k < fe_bodies_.size() && fe_bodies_[k] == b)
+      measureBody(model, k);
+  }
+}
+
+// Body k's box from its nodes now, and whether its grid still holds.
+void DiskContact::measureBody(const fem::Model &model, std::size_t k) {
+  const fem::Nodes &nd = model.nodes;
+  const auto &edges = model.bodies[fe_bodies_[k]].boundary;
+  Box &box = boxes_[k];
+  box = {INFINITY, INFINITY, -INFINITY, -INFINITY};
+  for (std::size_t e = 0; e < edges.size(); e += 2) {
+    const std::uint32_t a = edges[e];
+    box = {std::min(box.x0, nd.x[a]), std::min(box.y0, nd.y[a]), std::max(box.x1, nd.x[a]),
+           std::max(box.y1, nd.y[a])};
+  }
+  EdgeGrid &grid = grids_[k];
+  if (grid.valid) { // does it still hold?
+    double moved2 = 0.0;
+    for (std::size_t e = 0; e < edges.size(); e += 2)
+      moved2 = std::max(moved2, sq(nd.x[edges[e]] - grid.built_x[e / 2]) +
+                                    sq(nd.y[edges[e]] - grid.built_y[e / 2]));
+    grid.valid = moved2 < grid.slack * grid.slack;
+  }
+}
+
 double DiskContact::fastest(const fem::Model &model) const {
   const fem::Nodes &nd = model.nodes;
   double fastest2 = 0.0;
   for (const std::uint32_t b : fe_bodies_)
-    if (!model.at_rest[b]) {
+    if (!model.at_rest[b] && looks(model, b)) {
       const auto &edges = model.bodies[b].boundary;
       for (std::size_t e = 0; e < edges.size(); e += 2)
         fastest2 = std::max(fastest2,
@@ -232,6 +248,8 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks, Par
   const double kappa = 2.0 * s_.stiffness, c_damping = fem::dampingCoefficient(s_.damping, kappa);
   for (std::size_t kb = 0; kb < fe_bodies_.size(); ++kb) {
     const std::uint32_t b = fe_bodies_[kb];
+    if (!looks(model, b))
+      continue;
     const Box &box = boxes_[kb];
     const std::size_t n_edges = model.bodies[b].boundary.size() / 2;
     bool binned = false; // its segments, binned when a disk first comes near (many) or listed (few)

@@ -58,6 +58,22 @@ public:
   Region measure(const fem::Model &model, double reach);
   // The speed of the fastest boundary node of the moving bodies [m/s].
   double fastest(const fem::Model &model) const;
+  // With the FE bodies shared among processes: per model body, whether its nodes are current on
+  // this process (its own bodies, and those received this step); the bodies at rest are current
+  // everywhere (their nodes never moved). measure, fastest and addForces then look at those
+  // bodies only. Null (the default): every body is.
+  void lookAt(const std::vector<char> *current) { current_ = current; }
+  // The region of measure taken over every process (the same disks in the same cells whatever the
+  // number of processes), and the boxes and grids of `bodies` measured (received after it).
+  void useRegion(const Region &region) { region_ = region; }
+  void measureBodies(const fem::Model &model, const std::vector<std::uint32_t> &bodies);
+  // The bodies with a boundary (model body numbers), and the box of the k-th of them as measured.
+  const std::vector<std::uint32_t> &bodies() const { return fe_bodies_; }
+  Region box(std::size_t k) const {
+    return {boxes_[k].x0, boxes_[k].y0, boxes_[k].x1, boxes_[k].y1};
+  }
+  // A body's element size (its longest boundary edge where its boundary last changed) [m].
+  double &elementSize(std::size_t body) { return size_[body]; }
   // The reactions into the FE nodes (Nodes::addExternal, with their frictional part), their
   // bodies woken.
   static void apply(fem::Model &model, const std::vector<Reaction> &reactions);
@@ -100,7 +116,12 @@ private:
   std::vector<Box> boxes_;               // theirs, this step
   Region region_{};                      // the last measure, with its reach
   double reach_ = 0.0;
-  bool measured_ = false;                // the boxes measured for the next addForces
+  bool measured_ = false;                      // the boxes measured for the next addForces
+  const std::vector<char> *current_ = nullptr; // lookAt
+  bool looks(const fem::Model &model, std::uint32_t body) const {
+    return current_ == nullptr || model.at_rest[body] || (*current_)[body];
+  }
+  void measureBody(const fem::Model &model, std::size_t k);
   std::vector<std::uint32_t> in_region_; // the disks that may touch a body
   CellGrid<> disk_grid_;                 // those, in cells of the largest disk's size
   DiskContactStatistics stats_;

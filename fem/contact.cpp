@@ -118,12 +118,8 @@ void Contact::addForces(Model &model, double time, double dt) {
     shareBoxes();
   if (pairs_.search(model, boundaries_))
     ++stats_.searches;
-  if (shared() && !*every_node_shared_)
+  if (shared())
     exchangeHalo(model);
-  else if (shared()) // the solver copied every moving node: the others' boundaries placed here
-    for (std::uint32_t b : pairs_.moving())
-      if (!mine(b))
-        boundaries_.place(model, b);
   narrowPhase(model, dt);
   walls(model, dt, run_hits_.back());
   addHits(model);
@@ -440,9 +436,8 @@ void Contact::exchangeHalo(Model &model) {
     }
 }
 
-void Contact::shareWork(const parallel::Communicator &processes, const std::vector<int> &owner,
-                        const bool &every_node_shared) {
-  processes_ = &processes, owner_ = &owner, every_node_shared_ = &every_node_shared;
+void Contact::shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) {
+  processes_ = &processes, owner_ = &owner;
   block_received_.assign(owner_blocks, {});
 }
 

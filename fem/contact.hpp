@@ -114,11 +114,8 @@ public:
   // The work shared by several processes: each computes the sides of the pairs (a body's nodes
   // against the other's segments) of the bodies it owns, and sends the reactions on other
   // processes' nodes to their owners, with the bodies it woke to all.
-  void shareWork(const parallel::Communicator &processes, const std::vector<int> &owner,
-                 const bool &every_node_shared) override;
+  void shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) override;
   void bodiesMoving(const Model &model, const std::vector<std::uint32_t> &bodies) override;
-  // It reads the nodes of other processes' bodies that its pairs need, which it exchanges itself.
-  bool readsEveryNode() const override { return false; }
   // The last step's contacts between bodies (the walls' left out; with the work shared, this
   // process's), in pair order: a boundary node
   // of `node_body` pushed out of `segment_body` through the segment between two of its nodes
@@ -221,7 +218,6 @@ private:
   // bodies the loads other processes sent this step, in order.
   const parallel::Communicator *processes_ = nullptr;
   const std::vector<int> *owner_ = nullptr;
-  const bool *every_node_shared_ = nullptr; // the solver copies every moving node to all
   std::vector<std::vector<Load>> block_received_;
   // The depth each model node was pushed at in the last step (the deepest of its contacts; 0 if
   // none; the nodes where it is not 0 are in block_pushed_).

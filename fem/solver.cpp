@@ -185,8 +185,7 @@ void Solver::addForceProvider(ForceProvider *provider) {
                                 ") with a force provider that steps every body every step (DEM "
                                 "coupling): allowed with FE-FE contact alone");
   providers_.push_back(provider);
-  share_motion_ = share_motion_ || provider->readsEveryNode();
-  provider->shareWork(comm_, owner_, share_motion_);
+  provider->shareWork(comm_, owner_);
   const double scale = std::sqrt(std::max(0.0, 1.0 - 0.25 * provider->stepStiffness()));
   if (scale < step_scale_) { // the step already taken from the elements, scaled
     next_dt_ *= scale / step_scale_;
@@ -221,8 +220,6 @@ void Solver::step() {
     rebalance_due_ = true;
   kickAndDrift(dt); // v(n+1/2) = v(n) + dt/2 f(n) / m, the imposed velocities;
                     // x(n+1) = x(n) + dt v(n+1/2)
-  if (share_motion_)
-    shareMotion(); // every process's moving nodes, from their owners
   m_.nodes.clearExternal();
   for (auto *provider : providers_) // external forces at x(n+1): contact, coupling
     provider->addForces(m_, time_ + dt, dt);
@@ -881,16 +878,6 @@ void Solver::shareOwned(const std::vector<std::uint32_t> &bodies, std::size_t Bo
     comm_.collect(count, pack, unpack);
   else
     comm_.share(count, pack, unpack);
-}
-
-// The positions and velocities of the nodes of every process's active bodies after the drift,
-// x(n+1) and v(n+1/2), from their owners: what the force providers read.
-void Solver::shareMotion() {
-  Nodes &nd = m_.nodes;
-  shareOwned<4>(active_bodies_, &Body::node_begin, &Body::node_end, {&nd.x, &nd.y, &nd.vx, &nd.vy});
-  for (std::uint32_t b : active_bodies_)
-    if (!owns(b))
-      received_node_steps_ += static_cast<double>(m_.bodies[b].node_end - m_.bodies[b].node_begin);
 }
 
 void Solver::collectFrame() const {

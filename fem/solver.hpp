@@ -91,18 +91,14 @@ public:
   // The boundaries of `bodies` changed (elements eroded): what was built from them is taken anew.
   virtual void boundaryChanged(const Model &, const std::vector<std::uint32_t> & /*bodies*/) {}
   // With several processes (Solver): `owner` (kept up to date by the solver) gives each body's
-  // process, and `every_node_shared` whether the solver copies every moving node to every process
-  // after the drift (for a provider that reads every node). A provider may then compute only for
-  // this process's bodies and send its forces on other processes' nodes to their owners
-  // (Nodes::external is complete at a node's owner only); before bodies change owner
-  // (bodiesMoving, every process, the owners not yet changed) what only their owner keeps goes
-  // with them.
+  // process. A moving body's nodes are current at its owner only: a provider computes for this
+  // process's bodies, exchanges the other processes' nodes it needs itself, and sends its forces
+  // on their nodes to their owners (Nodes::external is complete at a node's owner only); before
+  // bodies change owner (bodiesMoving, every process, the owners not yet changed) what only their
+  // owner keeps goes with them.
   virtual void shareWork(const parallel::Communicator & /*processes*/,
-                         const std::vector<int> & /*owner*/, const bool & /*every_node_shared*/) {}
+                         const std::vector<int> & /*owner*/) {}
   virtual void bodiesMoving(const Model &, const std::vector<std::uint32_t> & /*bodies*/) {}
-  // Whether it reads the nodes of every process's moving bodies (their positions and velocities
-  // after the drift, copied to every process for it), or exchanges what it needs itself.
-  virtual bool readsEveryNode() const { return true; }
   // Multiple time stepping: whether it honours Model::due and Model::window, and, from each
   // body's own level, the finest level of the bodies each body may meet through it (`cap`, lowered
   // only), so that bodies step together before they touch.
@@ -181,9 +177,6 @@ public:
   double addedMass(std::size_t body = all_bodies) const;
   // How the element work is shared now and was over the run (every process knows every owner).
   PartitionReport partition() const;
-  // Over this process's steps: the other processes' nodes it received after the drift (every
-  // moving node it does not own, when a provider reads every node).
-  double receivedNodeSteps() const { return received_node_steps_; }
   // The process that computes `body`'s elements and owns its nodes' external forces.
   int owner(std::size_t body) const { return owner_[body]; }
 
@@ -296,7 +289,6 @@ private:
   void shareOwned(const std::vector<std::uint32_t> &bodies, std::size_t Body::*begin,
                   std::size_t Body::*end, const std::array<std::vector<double> *, N> &fields,
                   bool to_first = false) const;
-  void shareMotion();
   void shareExternal(const std::vector<std::uint32_t> &bodies, bool to_first = false);
   void accountEnergy();
   void bodyStepsFromElements();
@@ -327,8 +319,6 @@ private:
   std::vector<double> rank_element_steps_, rank_node_steps_; // over the run
   PartitionReport partition_; // the counts and the last rebalance's imbalances
   std::vector<ForceProvider *> providers_;
-  bool share_motion_ = false; // some provider reads every moving node (shareMotion)
-  double received_node_steps_ = 0.0;
   std::vector<Chunk> chunks_;
   std::vector<Unit> units_;
   std::vector<Range> unit_nodes_;  // node ranges of the units

@@ -24,6 +24,8 @@ public:
   virtual std::vector<double> sumInOrder(std::vector<double> mine) const = 0;
   // The smallest of every process's `value` (std::min taken in rank order).
   virtual double min(double value) const = 0;
+  // The largest of every process's `values`, element by element (exact in any order).
+  virtual std::vector<double> max(std::vector<double> values) const = 0;
   // Values each process holds part of, copied to every process: `pack` writes this process's
   // `count` values, `unpack` reads every process's, concatenated in rank order. One process holds
   // them all already: neither is called.
@@ -49,6 +51,7 @@ public:
   }
   std::vector<double> sumInOrder(std::vector<double> mine) const override { return mine; }
   double min(double value) const override { return value; }
+  std::vector<double> max(std::vector<double> values) const override { return values; }
   void share(std::size_t, const std::function<void(double *)> &,
              const std::function<void(const double *)> &) const override {}
   void collect(std::size_t, const std::function<void(double *)> &,

@@ -123,6 +123,15 @@ double MpiCommunicator::min(double value) const { // exact in any order: one red
   return allReduce(value, MPI_MIN, comm_);
 }
 
+std::vector<double> MpiCommunicator::max(std::vector<double> values) const { // one reduction
+  if (size_ == 1 || values.empty())
+    return values;
+  MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), MPI_DOUBLE, MPI_MAX,
+                comm_);
+  detail::countReceived(static_cast<std::int64_t>(sizeof(double) * values.size()) * (size_ - 1));
+  return values;
+}
+
 void MpiCommunicator::share(std::size_t count, const std::function<void(double *)> &pack,
                             const std::function<void(const double *)> &unpack) const {
   if (size_ == 1) // (this process holds every value)

@@ -125,6 +125,7 @@ public:
   std::vector<std::int64_t> allGather(std::vector<std::int64_t> mine) const override;
   std::vector<double> sumInOrder(std::vector<double> mine) const override;
   double min(double value) const override;
+  std::vector<double> max(std::vector<double> values) const override;
   void share(std::size_t count, const std::function<void(double *)> &pack,
              const std::function<void(const double *)> &unpack) const override;
   void collect(std::size_t count, const std::function<void(double *)> &pack,

@@ -192,8 +192,8 @@ RankFigures rankFigures(const RunAssembly &run, const LoopResult &loop) {
   const std::int64_t pair_steps =
       run.contact ? static_cast<std::int64_t>(run.contact->statistics().pair_steps) : 0;
   const std::int64_t halo =
-      std::llround(run.solver->receivedNodeSteps()) +
-      (run.contact ? static_cast<std::int64_t>(run.contact->statistics().halo_nodes) : 0);
+      (run.contact ? static_cast<std::int64_t>(run.contact->statistics().halo_nodes) : 0) +
+      (run.coupled ? static_cast<std::int64_t>(run.coupled->haloNodes()) : 0);
   const std::vector<std::int64_t> mine{loop.step_bytes,
                                        loop.max_step_bytes,
                                        loop.step_operations,

@@ -296,9 +296,10 @@ TEST(Mpi, DrivenProjectilesContactWorkIsSummedOverTheRanks) {
 // steps, on one, two and four ranks to 0.6 us (about 3,600 steps): the FE bodies' contact, the
 // FE-DEM contact and LIGGGHTS's disks on ranks of their own. The projectile's series, every
 // frame's element, node and disk fields agree bit for bit, the energies within 1e-9 of their
-// largest value (summed over the ranks in another order). Each rank places the boundaries of the
-// bodies it does not own, whichever way their nodes came: without that, the contact read stale
-// positions and the two-rank run failed at step 3,094 with an inverted grain element.
+// largest value (summed over the ranks in another order). No rank receives every moving node: its
+// halo (the FE-FE pairs' and its disks' FE boundary nodes) stays below half the moving nodes it
+// does not own, and the bytes it receives a step below 16 bytes a node of those (an all-gather of
+// their positions and velocities is 32).
 TEST(Mpi, HybridRunsAgreeOnOneTwoAndFourRanks) {
   ScratchDir dir("mpi-hybrid");
   const std::string scene =
@@ -309,6 +310,7 @@ TEST(Mpi, HybridRunsAgreeOnOneTwoAndFourRanks) {
   EXPECT_GT(one["eroded_elements"].get<int>(), 0);
   EXPECT_GT(one["dem"]["disks"].get<int>(), 0);
   EXPECT_GT(one["dem"]["fe_dem_contacts_last_step"].get<int>(), 0);
+  const double moving_nodes = one["partition"]["active_nodes_per_step"][0].get<double>();
   for (int ranks : {2, 4}) {
     const std::string out = dir / ("ranks-" + std::to_string(ranks));
     const test::Result r = run(ranks, scene, out);
@@ -317,7 +319,17 @@ TEST(Mpi, HybridRunsAgreeOnOneTwoAndFourRanks) {
     const nlohmann::json many = summaryOf(out);
     EXPECT_EQ(many["steps"], one["steps"]) << label;
     EXPECT_EQ(many["eroded_elements"], one["eroded_elements"]) << label;
-    EXPECT_GT(many["partition"]["forced_rebalances"].get<int>(), 0) << label;
+    const nlohmann::json &p = many["partition"];
+    EXPECT_GT(p["forced_rebalances"].get<int>(), 0) << label;
+    std::printf("%s: partition %s\n", label.c_str(), p.dump().c_str());
+    for (int rank = 0; rank < ranks; ++rank) {
+      const double others = moving_nodes - p["active_nodes_per_step"][rank].get<double>();
+      const double halo = p["halo_nodes_per_step"][rank].get<double>();
+      EXPECT_GT(halo, 0.0) << label << ", rank " << rank;
+      EXPECT_LT(halo, 0.5 * others) << label << ", rank " << rank;
+      EXPECT_LT(p["bytes_received_per_step"][rank].get<double>(), 16.0 * others)
+          << label << ", rank " << rank;
+    }
     expectSameFeRun(dir / "one", out, label);
     const H5File a = H5File::open(dir / "one/run.h5"), b = H5File::open(out + "/run.h5");
     int frames = 0;

@@ -77,6 +77,10 @@ int main(int argc, char **argv) {
     });
     expectTraffic("least of one double", 8 * others, 1,
                   [&] { return comm.min(10.0 - rank) == 10.0 - (size - 1); });
+    expectTraffic("largest of 5 doubles, element by element", 8 * 5 * others, 1, [&] {
+      const std::vector<double> most = comm.max({-1.0 * rank, 1.0 * rank, 0.0, 2.0, -3.0});
+      return most == std::vector<double>{0.0, size - 1.0, 0.0, 2.0, -3.0};
+    });
     // share: rank r holds 2 r values (rank 0 none).
     std::int64_t shared = 0;
     for (int r = 0; r < size; ++r)

@@ -27,6 +27,7 @@ void expectUnchanged(const parallel::Communicator &one) {
   ASSERT_EQ(sums.size(), values.size());
   EXPECT_TRUE(std::signbit(sums[1])); // not 0.0 + -0.0
   EXPECT_EQ(one.min(2.5), 2.5);
+  EXPECT_EQ(one.max(values), values);
   const std::vector<std::vector<std::int64_t>> lists{indices};
   EXPECT_EQ(one.exchange(lists), lists);
   // share and collect: one process holds every value already, neither callback is called
