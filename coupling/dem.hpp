@@ -99,10 +99,8 @@ public:
   // (LIGGGHTS sorts and exchanges atoms when it rebuilds its neighbour lists); what is kept per
   // place (the disks' places by id) is taken anew then.
   virtual std::uint64_t layout() const { return 0; }
-  // Over MPI ranks each holding part of the disks, the reactions of every rank's disks, in rank
-  // order, so that every rank loads its copy of the FE nodes alike (one rank: as they are).
-  virtual void gatherReactions(std::vector<Reaction> &) const {}
-  // The same for forces on disks named by their ids (every rank's, in rank order).
+  // Over MPI ranks each holding part of the disks, the forces on disks named by their ids, every
+  // rank's in rank order (one rank: as they are).
   virtual void gatherDiskForces(std::vector<DiskForce> &) const {}
   // Every rank's disks on rank 0 (every rank calls it), in the order of their ids; elsewhere empty.
   // `local`: this rank's disks as they are to be gathered (its particles, or their state within a

@@ -258,9 +258,6 @@ void LiggghtsDem::endWindow(double length, double planned, const WindowMotion &m
   step(nullptr);
 }
 
-void LiggghtsDem::gatherReactions(std::vector<Reaction> &reactions) const {
-  reactions = parallel::allGatherItems(std::move(reactions), comm_);
-}
 void LiggghtsDem::gatherDiskForces(std::vector<DiskForce> &forces) const {
   forces = parallel::allGatherItems(std::move(forces), comm_);
 }

@@ -36,7 +36,6 @@ public:
   void advance(double dt, const Exchange &exchange) override;
   void endWindow(double length, double planned, const WindowMotion &motion) override;
   std::uint64_t layout() const override { return layout_; }
-  void gatherReactions(std::vector<Reaction> &reactions) const override;
   void gatherDiskForces(std::vector<DiskForce> &forces) const override;
   using DemParticipant::gatherParticles;
   void gatherParticles(const Particles &local, Particles &all) const override;

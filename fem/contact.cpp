@@ -396,18 +396,26 @@ void Contact::exchangeHalo(Model &model) {
   ContactBoundaries &bd = boundaries_;
   Nodes &nd = model.nodes;
   const int me = processes_->rank();
-  std::vector<std::pair<int, std::uint32_t>> sends; // to whom, which body
+  // to whom, which body; from whom, which body (every process knows the pairs, boxes and owners:
+  // what each receives is known without asking)
+  std::vector<std::pair<int, std::uint32_t>> sends, receives;
   for (const Pair &pair : pairs_.pairs()) {
     const int owner_a = (*owner_)[pair.a], owner_b = (*owner_)[pair.b];
     if (owner_a == owner_b || !bd.boxes[pair.a].overlaps(bd.boxes[pair.b]))
       continue;
     if (owner_a == me)
-      sends.emplace_back(owner_b, pair.a);
+      sends.emplace_back(owner_b, pair.a), receives.emplace_back(owner_b, pair.b);
     else if (owner_b == me)
-      sends.emplace_back(owner_a, pair.b);
+      sends.emplace_back(owner_a, pair.b), receives.emplace_back(owner_a, pair.a);
   }
-  std::sort(sends.begin(), sends.end());
-  sends.erase(std::unique(sends.begin(), sends.end()), sends.end());
+  for (auto *list : {&sends, &receives}) {
+    std::sort(list->begin(), list->end());
+    list->erase(std::unique(list->begin(), list->end()), list->end());
+  }
+  std::vector<std::int64_t> sizes(static_cast<std::size_t>(processes_->size()), 0);
+  for (auto [r, b] : receives)
+    sizes[static_cast<std::size_t>(r)] +=
+        1 + 4 * static_cast<std::int64_t>(bd.node_begin[b + 1] - bd.node_begin[b]);
   std::vector<std::vector<std::int64_t>> to(static_cast<std::size_t>(processes_->size()));
   for (auto [r, b] : sends) {
     std::vector<std::int64_t> &message = to[static_cast<std::size_t>(r)];
@@ -420,7 +428,7 @@ void Contact::exchangeHalo(Model &model) {
                       std::bit_cast<std::int64_t>(nd.vy[p])});
     }
   }
-  const std::vector<std::vector<std::int64_t>> from = processes_->exchange(std::move(to));
+  const std::vector<std::vector<std::int64_t>> from = processes_->exchange(std::move(to), sizes);
   for (const std::vector<std::int64_t> &message : from)
     for (std::size_t i = 0; i < message.size();) {
       const auto b = static_cast<std::size_t>(message[i++]);

@@ -38,6 +38,11 @@ public:
   // own included); returns the lists every process sent this one, by sender rank.
   virtual std::vector<std::vector<std::int64_t>>
   exchange(std::vector<std::vector<std::int64_t>> to) const = 0;
+  // The same when this process knows how many values each will send it (`sizes[r]` from process
+  // r, its own list's included): no sizes are exchanged first.
+  virtual std::vector<std::vector<std::int64_t>>
+  exchange(std::vector<std::vector<std::int64_t>> to,
+           const std::vector<std::int64_t> &sizes) const = 0;
 };
 
 // One process: gathers and reductions give back their input.
@@ -58,6 +63,11 @@ public:
                const std::function<void(const double *)> &) const override {}
   std::vector<std::vector<std::int64_t>>
   exchange(std::vector<std::vector<std::int64_t>> to) const override {
+    return to;
+  }
+  std::vector<std::vector<std::int64_t>>
+  exchange(std::vector<std::vector<std::int64_t>> to,
+           const std::vector<std::int64_t> &) const override {
     return to;
   }
 };

@@ -23,6 +23,9 @@ void countReceived(std::int64_t bytes) {
   received_bytes.fetch_add(bytes, std::memory_order_relaxed);
   received_operations.fetch_add(1, std::memory_order_relaxed);
 }
+void countMessages(std::int64_t bytes) {
+  received_bytes.fetch_add(bytes, std::memory_order_relaxed);
+}
 } // namespace detail
 
 void ensureMpi() {
@@ -96,9 +99,17 @@ GatherLayout gatherLayout(std::int64_t mine, MPI_Comm comm) {
 
 } // namespace detail
 
-MpiCommunicator::MpiCommunicator(MPI_Comm comm) : comm_(comm) {
+MpiCommunicator::MpiCommunicator(MPI_Comm comm) {
+  MPI_Comm_dup(comm, &comm_);
   MPI_Comm_rank(comm_, &rank_);
   MPI_Comm_size(comm_, &size_);
+}
+
+MpiCommunicator::~MpiCommunicator() {
+  int finalised = 0;
+  MPI_Finalized(&finalised);
+  if (!finalised)
+    MPI_Comm_free(&comm_);
 }
 
 std::vector<double> MpiCommunicator::allGather(std::vector<double> mine) const {
@@ -165,33 +176,65 @@ MpiCommunicator::exchange(std::vector<std::vector<std::int64_t>> to) const {
     send_sizes[r] = static_cast<std::int64_t>(to[r].size());
   MPI_Alltoall(send_sizes.data(), 1, MPI_INT64_T, receive_sizes.data(), 1, MPI_INT64_T, comm_);
   detail::countReceived(static_cast<std::int64_t>(sizeof(std::int64_t)) * (size_ - 1));
-  std::int64_t sent = 0, received = 0;
-  for (std::size_t r = 0; r < ranks; ++r)
-    sent += send_sizes[r], received += receive_sizes[r];
-  const std::int64_t most = allReduce(std::max(sent, received), MPI_MAX, comm_);
-  if (most > INT_MAX)
-    throw std::length_error("an MPI exchange of " + std::to_string(most) +
-                            " items to or from one process: MPI_Alltoallv takes at most " +
-                            std::to_string(INT_MAX));
-  std::vector<int> send_counts(ranks), send_offsets(ranks), receive_counts(ranks),
-      receive_offsets(ranks);
-  std::vector<std::int64_t> send_all, receive_all(static_cast<std::size_t>(received));
-  for (std::size_t r = 0, at = 0, from = 0; r < ranks; ++r) {
-    send_counts[r] = static_cast<int>(send_sizes[r]), send_offsets[r] = static_cast<int>(at);
-    receive_counts[r] = static_cast<int>(receive_sizes[r]);
-    receive_offsets[r] = static_cast<int>(from);
-    send_all.insert(send_all.end(), to[r].begin(), to[r].end());
-    at += to[r].size(), from += static_cast<std::size_t>(receive_sizes[r]);
-  }
-  MPI_Alltoallv(send_all.data(), send_counts.data(), send_offsets.data(), MPI_INT64_T,
-                receive_all.data(), receive_counts.data(), receive_offsets.data(), MPI_INT64_T,
-                comm_);
-  detail::countReceived(static_cast<std::int64_t>(sizeof(std::int64_t)) *
-                        (received - receive_sizes[static_cast<std::size_t>(rank_)]));
+  return exchange(std::move(to), receive_sizes);
+}
+
+std::vector<std::vector<std::int64_t>>
+MpiCommunicator::exchange(std::vector<std::vector<std::int64_t>> to,
+                          const std::vector<std::int64_t> &sizes) const {
+  const auto ranks = static_cast<std::size_t>(size_);
+  if (to.size() != ranks || sizes.size() != ranks)
+    throw std::invalid_argument("exchange: " + std::to_string(to.size()) + " lists and " +
+                                std::to_string(sizes.size()) + " sizes for " +
+                                std::to_string(size_) + " processes");
+  const auto me = static_cast<std::size_t>(rank_);
   std::vector<std::vector<std::int64_t>> from(ranks);
-  for (std::size_t r = 0; r < ranks; ++r)
-    from[r].assign(receive_all.begin() + receive_offsets[r],
-                   receive_all.begin() + receive_offsets[r] + receive_counts[r]);
+  from[me] = std::move(to[me]);
+  if (size_ == 1)
+    return from;
+  constexpr std::int64_t piece = std::int64_t{1} << 30;
+  constexpr int tag = 1;
+  std::vector<MPI_Request> requests;
+  std::int64_t received = 0;
+  for (std::size_t r = 0; r < ranks; ++r) {
+    if (r == me || sizes[r] == 0)
+      continue;
+    from[r].resize(static_cast<std::size_t>(sizes[r]));
+    for (std::int64_t at = 0; at < sizes[r]; at += piece) {
+      requests.emplace_back();
+      MPI_Irecv(from[r].data() + at, static_cast<int>(std::min(piece, sizes[r] - at)), MPI_INT64_T,
+                static_cast<int>(r), tag, comm_, &requests.back());
+    }
+    received += sizes[r];
+  }
+  for (std::size_t r = 0; r < ranks; ++r) {
+    const auto n = static_cast<std::int64_t>(to[r].size());
+    if (r == me || n == 0)
+      continue;
+    for (std::int64_t at = 0; at < n; at += piece) {
+      requests.emplace_back();
+      MPI_Isend(to[r].data() + at, static_cast<int>(std::min(piece, n - at)), MPI_INT64_T,
+                static_cast<int>(r), tag, comm_, &requests.back());
+    }
+  }
+  std::vector<MPI_Status> statuses(requests.size());
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), statuses.data());
+  detail::countMessages(static_cast<std::int64_t>(sizeof(std::int64_t)) * received);
+  // (a message longer than its receive is an MPI error already; a shorter one is caught here)
+  std::size_t k = 0;
+  for (std::size_t r = 0; r < ranks; ++r) {
+    if (r == me || sizes[r] == 0)
+      continue;
+    std::int64_t got = 0;
+    for (std::int64_t at = 0; at < sizes[r]; at += piece, ++k) {
+      int count = 0;
+      MPI_Get_count(&statuses[k], MPI_INT64_T, &count);
+      got += count;
+    }
+    if (got != sizes[r])
+      throw std::logic_error("exchange: " + std::to_string(got) + " values from process " +
+                             std::to_string(r) + ", " + std::to_string(sizes[r]) + " expected");
+  }
   return from;
 }
 

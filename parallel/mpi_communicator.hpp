@@ -32,7 +32,8 @@ World world(bool needed);
 // all-gather counts the other processes' parts, a reduction of n bytes (P - 1) n, a gather to a
 // root the others' parts at the root and nothing elsewhere, and the byte counts a gather of
 // unequal parts exchanges first (8 bytes from each other process) as well; a barrier counts
-// nothing. `operations` is the collective calls made with more than one process. Not counted:
+// nothing; point-to-point messages count their payload. `operations` is the collective calls made
+// with more than one process (messages are not among them). Not counted:
 // MPI's own traffic (parts forwarded along a ring or tree, headers), and what Zoltan and LIGGGHTS
 // send on their own (a partition's cuts, the disks' decomposition).
 struct Traffic {
@@ -43,6 +44,8 @@ Traffic traffic();
 namespace detail {
 // One collective operation that delivered `bytes` from other processes (added to traffic()).
 void countReceived(std::int64_t bytes);
+// Point-to-point messages that delivered `bytes` (added to traffic(), no operation).
+void countMessages(std::int64_t bytes);
 // The MPI type of T, for the reductions.
 template <class T> MPI_Datatype mpiType() {
   if constexpr (std::is_same_v<T, double>)
@@ -115,10 +118,14 @@ template <class T> T allReduce(T value, MPI_Op op, MPI_Comm comm) {
   return result;
 }
 
-// The processes of an MPI communicator (MPI initialised).
+// The processes of an MPI communicator (MPI initialised), through a duplicate of it: its messages
+// never meet those of a library that shares the processes (LIGGGHTS).
 class MpiCommunicator final : public Communicator {
 public:
   explicit MpiCommunicator(MPI_Comm comm = MPI_COMM_WORLD);
+  ~MpiCommunicator() override;
+  MpiCommunicator(const MpiCommunicator &) = delete;
+  MpiCommunicator &operator=(const MpiCommunicator &) = delete;
   int rank() const override { return rank_; }
   int size() const override { return size_; }
   std::vector<double> allGather(std::vector<double> mine) const override;
@@ -130,11 +137,15 @@ public:
              const std::function<void(const double *)> &unpack) const override;
   void collect(std::size_t count, const std::function<void(double *)> &pack,
                const std::function<void(const double *)> &unpack) const override;
-  // The lists' sizes first (MPI_Alltoall, 64-bit), then the lists (MPI_Alltoallv, which takes int
-  // counts and offsets: more than INT_MAX items sent or received by any process throws
-  // std::length_error on every process, agreed in one reduction).
+  // The lists' sizes first (MPI_Alltoall, 64-bit), then each list that is not empty as a message
+  // of its own to its process only (in pieces of at most 2^30 values: MPI counts are int).
   std::vector<std::vector<std::int64_t>>
   exchange(std::vector<std::vector<std::int64_t>> to) const override;
+  // The messages alone. A message of another size than `sizes` says is a bug of the caller: a
+  // shorter one throws std::logic_error, a longer one is an MPI error.
+  std::vector<std::vector<std::int64_t>>
+  exchange(std::vector<std::vector<std::int64_t>> to,
+           const std::vector<std::int64_t> &sizes) const override;
 
 private:
   MPI_Comm comm_;

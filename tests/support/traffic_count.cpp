@@ -112,26 +112,37 @@ int main(int argc, char **argv) {
                         });
                     return ok && unpacked == (rank == 0);
                   });
-    // exchange: rank s sends rank q (q + 1) (s + 1) integers; the lists' sizes (one 64-bit
-    // integer from each other rank), the agreed largest (a reduction), the lists from the others.
+    // exchange: rank s sends rank q (q + 1) (s + 1) integers, none to the next rank up; the lists'
+    // sizes (one 64-bit integer from each other rank, one collective call), then the lists from
+    // the others as messages (no collective); with the sizes known, the messages alone.
+    auto sent = [&](int s, int q) {
+      return q == (s + 1) % size && size > 2 ? 0 : (q + 1) * (s + 1);
+    };
     std::int64_t from_others = 0;
-    for (int s = 0; s < size; ++s)
+    std::vector<std::int64_t> sizes(static_cast<std::size_t>(size));
+    for (int s = 0; s < size; ++s) {
+      sizes[static_cast<std::size_t>(s)] = sent(s, rank);
       if (s != rank)
-        from_others += (rank + 1) * (s + 1);
-    expectTraffic("exchange of (q + 1) (s + 1) integers from s to q",
-                  8 * others + 8 * others + 8 * from_others, 3, [&] {
-                    std::vector<std::vector<std::int64_t>> to(static_cast<std::size_t>(size));
-                    for (int q = 0; q < size; ++q)
-                      to[static_cast<std::size_t>(q)].assign((q + 1) * (rank + 1), 1000 * rank + q);
-                    const auto from = comm.exchange(std::move(to));
-                    bool ok = static_cast<int>(from.size()) == size;
-                    for (int s = 0; ok && s < size; ++s) {
-                      const auto &list = from[static_cast<std::size_t>(s)];
-                      ok = static_cast<int>(list.size()) == (rank + 1) * (s + 1) &&
-                           list.front() == 1000 * s + rank && list.back() == 1000 * s + rank;
-                    }
-                    return ok;
-                  });
+        from_others += sent(s, rank);
+    }
+    for (const bool known : {false, true})
+      expectTraffic(std::string("exchange of (q + 1) (s + 1) integers from s to q") +
+                        (known ? ", the sizes known" : ""),
+                    (known ? 0 : 8 * others) + 8 * from_others, known ? 0 : 1, [&] {
+                      std::vector<std::vector<std::int64_t>> to(static_cast<std::size_t>(size));
+                      for (int q = 0; q < size; ++q)
+                        to[static_cast<std::size_t>(q)].assign(sent(rank, q), 1000 * rank + q);
+                      const auto from = known ? comm.exchange(std::move(to), sizes)
+                                              : comm.exchange(std::move(to));
+                      bool ok = static_cast<int>(from.size()) == size;
+                      for (int s = 0; ok && s < size; ++s) {
+                        const auto &list = from[static_cast<std::size_t>(s)];
+                        ok = static_cast<int>(list.size()) == sent(s, rank) &&
+                             (list.empty() ||
+                              (list.front() == 1000 * s + rank && list.back() == 1000 * s + rank));
+                      }
+                      return ok;
+                    });
   }
   // The coupling's and the partitioner's operations.
   expectTraffic("all-gather of 5 items of 24 bytes", 24 * 5 * others + sizes, 2, [&] {

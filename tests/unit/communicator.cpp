@@ -30,6 +30,7 @@ void expectUnchanged(const parallel::Communicator &one) {
   EXPECT_EQ(one.max(values), values);
   const std::vector<std::vector<std::int64_t>> lists{indices};
   EXPECT_EQ(one.exchange(lists), lists);
+  EXPECT_EQ(one.exchange(lists, {3}), lists);
   // share and collect: one process holds every value already, neither callback is called
   bool called = false;
   one.share(
