@@ -137,6 +137,7 @@ void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
     const std::vector<double> most =
         processes_->max({-now.x0, -now.y0, now.x1, now.y1, contact_.fastest(model)});
     contact_.useRegion(now = {-most[0], -most[1], most[2], most[3]});
+    region_of_all_ = now;
     fastest_of_all_ = most[4];
   }
   if (first || now.x0 < allowed_.x0 || now.y0 < allowed_.y0 || now.x1 > allowed_.x1 ||
@@ -218,17 +219,58 @@ void FeDemCoupling::shareWork(const parallel::Communicator &processes,
   contact_.lookAt(shared() ? &current_ : nullptr);
 }
 
-// The FE bodies that may touch this process's near disks: each process gathers the box of every
-// process's near disks (widened by the largest radius), and the owner of a moving body whose box
-// meets another's sends it the body's boundary nodes, positions and velocities.
+// The FE bodies that may touch this process's near disks: the region every FE body covers is cut
+// into at most 4,096 cells, each process marks the cells its near disks reach (centre and largest
+// radius) and all-gathers the marks (512 bytes), and the owner of a moving body whose box meets a
+// cell another process marked sends that process the body's boundary nodes, positions and
+// velocities. (A disk that touches a body has a point of the body's box within its reach: that
+// point's cell is marked and in the box's cells.)
 void FeDemCoupling::exchangeBoundaries(fem::Model &model) {
   fem::Nodes &nd = model.nodes;
-  DiskContact::Region mine{INFINITY, INFINITY, -INFINITY, -INFINITY};
-  for (std::size_t c = 0; c < now_.size(); ++c)
-    mine = {std::min(mine.x0, now_.x[c] - r_max_), std::min(mine.y0, now_.y[c] - r_max_),
-            std::max(mine.x1, now_.x[c] + r_max_), std::max(mine.y1, now_.y[c] + r_max_)};
-  const std::vector<double> disks =
-      processes_->allGather(std::vector<double>{mine.x0, mine.y0, mine.x1, mine.y1});
+  const DiskContact::Region &r = region_of_all_;
+  constexpr int cells = 4096, words = cells / 64;
+  const double width = r.x1 - r.x0, height = r.y1 - r.y0;
+  // (no FE body: nothing marked, nothing sent; the same on every process)
+  const bool bodies_there =
+      std::isfinite(width) && std::isfinite(height) && width > 0.0 && height > 0.0;
+  const int nx = bodies_there
+                     ? static_cast<int>(std::clamp(std::round(std::sqrt(cells * width / height)),
+                                                   1.0, 1.0 * cells))
+                     : 1;
+  const int ny = cells / nx;
+  const double cw = bodies_there ? width / nx : 1.0, ch = bodies_there ? height / ny : 1.0;
+  auto column = [&](double x) {
+    return static_cast<int>(std::clamp(std::floor((x - r.x0) / cw), 0.0, nx - 1.0));
+  };
+  auto row = [&](double y) {
+    return static_cast<int>(std::clamp(std::floor((y - r.y0) / ch), 0.0, ny - 1.0));
+  };
+  std::vector<std::int64_t> marks(words, 0);
+  auto mark = [&](std::vector<std::int64_t> &m, int i, int j) {
+    const int c = j * nx + i;
+    m[static_cast<std::size_t>(c / 64)] |= std::int64_t{1} << (c % 64);
+  };
+  for (std::size_t c = 0; bodies_there && c < now_.size(); ++c) {
+    const double x = now_.x[c], y = now_.y[c];
+    if (x + r_max_ < r.x0 || x - r_max_ > r.x1 || y + r_max_ < r.y0 || y - r_max_ > r.y1)
+      continue; // (no FE body within its reach)
+    for (int j = row(y - r_max_); j <= row(y + r_max_); ++j)
+      for (int i = column(x - r_max_); i <= column(x + r_max_); ++i)
+        mark(marks, i, j);
+  }
+  const std::vector<std::int64_t> all = processes_->allGather(std::move(marks));
+  auto marked = [&](std::size_t rank, const DiskContact::Region &box) {
+    if (!bodies_there)
+      return false;
+    const std::int64_t *m = &all[rank * words];
+    for (int j = row(box.y0); j <= row(box.y1); ++j)
+      for (int i = column(box.x0); i <= column(box.x1); ++i) {
+        const int c = j * nx + i;
+        if ((m[c / 64] >> (c % 64)) & 1)
+          return true;
+      }
+    return false;
+  };
   const int me = processes_->rank();
   std::vector<std::vector<std::int64_t>> to(static_cast<std::size_t>(processes_->size()));
   const std::vector<std::uint32_t> &bodies = contact_.bodies();
@@ -238,12 +280,10 @@ void FeDemCoupling::exchangeBoundaries(fem::Model &model) {
       continue;
     const DiskContact::Region box = contact_.box(k);
     const auto &edges = model.bodies[b].boundary;
-    for (std::size_t r = 0; r < to.size(); ++r) {
-      const double *d = &disks[4 * r];
-      if (static_cast<int>(r) == me || box.x1 < d[0] || box.x0 > d[2] || box.y1 < d[1] ||
-          box.y0 > d[3])
+    for (std::size_t q = 0; q < to.size(); ++q) {
+      if (static_cast<int>(q) == me || !marked(q, box))
         continue;
-      std::vector<std::int64_t> &message = to[r];
+      std::vector<std::int64_t> &message = to[q];
       message.push_back(b);
       for (std::size_t e = 0; e < edges.size(); e += 2) { // (their first nodes are its nodes)
         const std::uint32_t a = edges[e];

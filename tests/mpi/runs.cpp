@@ -298,11 +298,12 @@ TEST(Mpi, DrivenProjectilesContactWorkIsSummedOverTheRanks) {
 // FE-DEM contact and LIGGGHTS's disks on ranks of their own. The projectile's series, every
 // frame's element, node and disk fields agree bit for bit, the energies within 1e-9 of their
 // largest value (summed over the ranks in another order). No rank receives every moving node: its
-// halo (the FE-FE pairs' and its disks' FE boundary nodes) stays below half the moving nodes it
-// does not own, and the bytes it receives a step below 16 bytes a node of those (an all-gather of
-// their positions and velocities is 32); a step makes at most 10.5 collective calls on average
-// (the FE-FE contact's 5; the FE-DEM contact's region, one; its disks' boxes, two; the sizes of
-// its halo and of its reactions, one each; LIGGGHTS's own not counted).
+// halo (the FE-FE pairs' and its disks' FE boundary nodes) stays below a quarter of the moving
+// nodes it does not own (6-12 % here; with the FE bodies sent to every rank whose near disks' box
+// they met, 10-35 %), and the bytes it receives a step below 8 bytes a node of those (an
+// all-gather of their positions and velocities is 32); a step makes at most 10.5 collective calls
+// on average (the FE-FE contact's 5; the FE-DEM contact's region, one; the cells its disks reach,
+// two; the sizes of its halo and of its reactions, one each; LIGGGHTS's own not counted).
 TEST(Mpi, HybridRunsAgreeOnOneTwoAndFourRanks) {
   ScratchDir dir("mpi-hybrid");
   const std::string scene =
@@ -329,8 +330,8 @@ TEST(Mpi, HybridRunsAgreeOnOneTwoAndFourRanks) {
       const double others = moving_nodes - p["active_nodes_per_step"][rank].get<double>();
       const double halo = p["halo_nodes_per_step"][rank].get<double>();
       EXPECT_GT(halo, 0.0) << label << ", rank " << rank;
-      EXPECT_LT(halo, 0.5 * others) << label << ", rank " << rank;
-      EXPECT_LT(p["bytes_received_per_step"][rank].get<double>(), 16.0 * others)
+      EXPECT_LT(halo, 0.25 * others) << label << ", rank " << rank;
+      EXPECT_LT(p["bytes_received_per_step"][rank].get<double>(), 8.0 * others)
           << label << ", rank " << rank;
       EXPECT_LE(p["collectives_per_step"][rank].get<double>(), 10.5) << label << ", rank " << rank;
     }
