@@ -53,6 +53,14 @@ void FeDemCoupling::startWindow(double dt) {
       place_[p.id[i]] = static_cast<std::int64_t>(i);
     layout_ = dem_.layout(), listed_ = true;
   }
+  if (shared()) { // the FE-DEM contact's depths held for disks LIGGGHTS moved to another rank
+    auto here = [&](std::int64_t id) {
+      const std::int64_t at =
+          id >= 0 && id < static_cast<std::int64_t>(place_.size()) ? place_[id] : -1;
+      return at >= 0 && static_cast<std::size_t>(at) < n && p.id[at] == id;
+    };
+    contact_.putHeld(processes_->allGather(contact_.takeHeld(here)), here);
+  }
   if (!carried_.empty()) {
     const auto top = static_cast<std::int64_t>(place_.size()) - 1;
     for (const DiskForce &f : carried_) {

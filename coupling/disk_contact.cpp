@@ -3,6 +3,7 @@
 #include "contact_law.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <iterator>
 #include <limits>
@@ -313,6 +314,32 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks, Par
           ++stats_.contacts;
         });
   }
+}
+
+std::vector<std::int64_t> DiskContact::takeHeld(const std::function<bool(std::int64_t)> &here) {
+  std::vector<std::int64_t> ids;
+  for (const auto &[id, h] : held_)
+    if (!here(id))
+      ids.push_back(id);
+  std::sort(ids.begin(), ids.end()); // (the map's order depends on its history)
+  std::vector<std::int64_t> values;
+  for (const std::int64_t id : ids) {
+    const Held &h = held_.at(id);
+    values.insert(values.end(),
+                  {id, std::bit_cast<std::int64_t>(h.last), std::bit_cast<std::int64_t>(h.now),
+                   std::bit_cast<std::int64_t>(h.allowance), std::bit_cast<std::int64_t>(h.rate)});
+    held_.erase(id);
+  }
+  return values;
+}
+
+void DiskContact::putHeld(const std::vector<std::int64_t> &values,
+                          const std::function<bool(std::int64_t)> &here) {
+  for (std::size_t k = 0; k + 5 <= values.size(); k += 5)
+    if (here(values[k]))
+      held_[values[k]] = {
+          std::bit_cast<double>(values[k + 1]), std::bit_cast<double>(values[k + 2]),
+          std::bit_cast<double>(values[k + 3]), std::bit_cast<double>(values[k + 4])};
 }
 
 DiskContact::State DiskContact::state() const {

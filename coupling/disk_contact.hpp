@@ -23,6 +23,7 @@
 #include "model.hpp"
 
 #include <cstdint>
+#include <functional>
 #include <unordered_map>
 #include <vector>
 
@@ -74,6 +75,12 @@ public:
   }
   // A body's element size (its longest boundary edge where its boundary last changed) [m].
   double &elementSize(std::size_t body) { return size_[body]; }
+  // The depths and allowances held for the disks `here` rejects (another process holds them now),
+  // taken out as id and the bits of last, now, allowance and rate, five values each; and such
+  // values taken in for the disks `here` accepts.
+  std::vector<std::int64_t> takeHeld(const std::function<bool(std::int64_t)> &here);
+  void putHeld(const std::vector<std::int64_t> &values,
+               const std::function<bool(std::int64_t)> &here);
   // The reactions into the FE nodes (Nodes::addExternal, with their frictional part), their
   // bodies woken.
   static void apply(fem::Model &model, const std::vector<Reaction> &reactions);

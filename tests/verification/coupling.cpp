@@ -234,3 +234,40 @@ TEST(Coupling, SuddenDeepDiskOpensGently) {
   EXPECT_EQ(coupling.contact().statistics().contacts, 0u);
   EXPECT_LT(worst, 1e-12 * mass * one_step);
 }
+
+// A disk pressed into the block a little deeper each step (within what approach can make) moves to
+// another process, as LIGGGHTS moves disks between ranks: the depth it was pushed at goes with it
+// (takeHeld, putHeld), and the other process's contact gives the force the first would have given,
+// to the bit. Without it the other process would find the disk deeper than a step's approach can
+// make it, allow for the depth as sudden and push far less.
+TEST(Coupling, DiskMovedToAnotherProcessKeepsItsContactHistory) {
+  const fem::Model model = block();
+  auto pressed = [](int step) { // 0.04 um deeper a step, at rest
+    coupling::Particles p = disks({{50e-6, 60e-6 - 0.04e-6 * step, 0.0, 0.0, 0.0, 10e-6}});
+    p.id = {7};
+    return p;
+  };
+  auto push = [&](coupling::DiskContact &contact, int step) {
+    coupling::ParticleForces f;
+    f.reset(1);
+    std::vector<coupling::Reaction> reactions;
+    contact.addForces(model, pressed(step), f, reactions, 1e-9);
+    return f.fy[0];
+  };
+  coupling::DiskContact first(model, {.friction = {0.3}}), going(model, {.friction = {0.3}});
+  for (int step = 1; step <= 10; ++step)
+    EXPECT_EQ(push(first, step), push(going, step));
+  coupling::DiskContact other(model, {.friction = {0.3}}), fresh(model, {.friction = {0.3}});
+  const std::vector<std::int64_t> moved = going.takeHeld([](std::int64_t) { return false; });
+  EXPECT_EQ(moved.size(), 5u);
+  EXPECT_TRUE(going.takeHeld([](std::int64_t) { return false; }).empty());
+  other.putHeld(moved, [](std::int64_t id) { return id == 7; });
+  const double staying = push(first, 11), carried = push(other, 11), lost = push(fresh, 11);
+  std::printf("force after the move: %.6e N/m staying, %.6e carried, %.6e without the history\n",
+              staying, carried, lost);
+  EXPECT_GT(staying, 0.0);
+  EXPECT_EQ(carried, staying);
+  EXPECT_EQ(other.statistics().sudden, 0u);
+  EXPECT_GT(fresh.statistics().sudden, 0u);
+  EXPECT_LT(lost, 0.5 * staying);
+}
