@@ -309,7 +309,7 @@ void FeDemCoupling::exchangeBoundaries(fem::Model &model) {
       const auto &edges = model.bodies[b].boundary;
       for (std::size_t e = 0; e < edges.size(); e += 2, i += 4) {
         const std::uint32_t a = edges[e];
-        nd.x[a] = std::bit_cast<double>(message[i]),
+        nd.x[a] = std::bit_cast<double>(message[i]);
         nd.y[a] = std::bit_cast<double>(message[i + 1]);
         nd.vx[a] = std::bit_cast<double>(message[i + 2]);
         nd.vy[a] = std::bit_cast<double>(message[i + 3]);
