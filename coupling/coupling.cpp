@@ -266,7 +266,9 @@ void FeDemCoupling::exchangeBoundaries(fem::Model &model) {
       for (int i = column(x - r_max_); i <= column(x + r_max_); ++i)
         mark(marks, i, j);
   }
-  const std::vector<std::int64_t> all = processes_->allGather(std::move(marks));
+  const std::vector<std::int64_t> all = processes_->allGather(
+      std::move(marks),
+      std::vector<std::int64_t>(static_cast<std::size_t>(processes_->size()), words));
   auto marked = [&](std::size_t rank, const DiskContact::Region &box) {
     if (!bodies_there)
       return false;

@@ -381,7 +381,11 @@ void Contact::shareBoxes() {
     if (mine(b))
       mine_boxes.insert(mine_boxes.end(), {static_cast<double>(b), bd.boxes[b].x0, bd.boxes[b].y0,
                                            bd.boxes[b].x1, bd.boxes[b].y1, bd.travel[b]});
-  const std::vector<double> all = processes_->allGather(std::move(mine_boxes));
+  // (every process knows every moving body's owner: how many boxes each gives)
+  std::vector<std::int64_t> sizes(static_cast<std::size_t>(processes_->size()), 0);
+  for (std::uint32_t b : pairs_.moving())
+    sizes[static_cast<std::size_t>((*owner_)[b])] += 6;
+  const std::vector<double> all = processes_->allGather(std::move(mine_boxes), sizes);
   for (std::size_t k = 0; k + 6 <= all.size(); k += 6) {
     const auto b = static_cast<std::size_t>(all[k]);
     bd.boxes[b] = {all[k + 1], all[k + 2], all[k + 3], all[k + 4]};

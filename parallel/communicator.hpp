@@ -19,6 +19,12 @@ public:
   // Every process's `mine`, concatenated in rank order.
   virtual std::vector<double> allGather(std::vector<double> mine) const = 0;
   virtual std::vector<std::int64_t> allGather(std::vector<std::int64_t> mine) const = 0;
+  // The same when every process knows how many values each gives (`sizes[r]` from process r): no
+  // sizes are gathered first.
+  virtual std::vector<double> allGather(std::vector<double> mine,
+                                        const std::vector<std::int64_t> &sizes) const = 0;
+  virtual std::vector<std::int64_t> allGather(std::vector<std::int64_t> mine,
+                                              const std::vector<std::int64_t> &sizes) const = 0;
   // Every process's `mine` summed element by element, the processes' values added in rank order
   // (the same sums on every process, whatever the message order); one process: `mine` as it is.
   virtual std::vector<double> sumInOrder(std::vector<double> mine) const = 0;
@@ -52,6 +58,14 @@ public:
   int size() const override { return 1; }
   std::vector<double> allGather(std::vector<double> mine) const override { return mine; }
   std::vector<std::int64_t> allGather(std::vector<std::int64_t> mine) const override {
+    return mine;
+  }
+  std::vector<double> allGather(std::vector<double> mine,
+                                const std::vector<std::int64_t> &) const override {
+    return mine;
+  }
+  std::vector<std::int64_t> allGather(std::vector<std::int64_t> mine,
+                                      const std::vector<std::int64_t> &) const override {
     return mine;
   }
   std::vector<double> sumInOrder(std::vector<double> mine) const override { return mine; }

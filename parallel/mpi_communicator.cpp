@@ -84,6 +84,10 @@ GatherLayout gatherLayout(std::int64_t mine, MPI_Comm comm) {
   MPI_Allgather(&mine, 1, MPI_INT64_T, sizes.data(), 1, MPI_INT64_T, comm);
   if (ranks > 1)
     countReceived(static_cast<std::int64_t>(sizeof(std::int64_t)) * (ranks - 1));
+  return layoutOf(sizes);
+}
+
+GatherLayout layoutOf(const std::vector<std::int64_t> &sizes) {
   GatherLayout layout;
   for (std::int64_t size : sizes) {
     if (layout.total + size > INT_MAX) // every rank sees the same sizes: all throw
@@ -118,6 +122,16 @@ std::vector<double> MpiCommunicator::allGather(std::vector<double> mine) const {
 
 std::vector<std::int64_t> MpiCommunicator::allGather(std::vector<std::int64_t> mine) const {
   return allGatherItems(std::move(mine), comm_);
+}
+
+std::vector<double> MpiCommunicator::allGather(std::vector<double> mine,
+                                               const std::vector<std::int64_t> &sizes) const {
+  return allGatherItems(std::move(mine), sizes, comm_);
+}
+
+std::vector<std::int64_t> MpiCommunicator::allGather(std::vector<std::int64_t> mine,
+                                                     const std::vector<std::int64_t> &sizes) const {
+  return allGatherItems(std::move(mine), sizes, comm_);
 }
 
 std::vector<double> MpiCommunicator::sumInOrder(std::vector<double> mine) const {

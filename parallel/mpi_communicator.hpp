@@ -8,6 +8,8 @@
 #include <mpi.h>
 
 #include <cstdint>
+#include <stdexcept>
+#include <string>
 #include <type_traits>
 #include <vector>
 
@@ -68,6 +70,8 @@ struct GatherLayout {
   std::int64_t total = 0;
 };
 GatherLayout gatherLayout(std::int64_t mine, MPI_Comm comm);
+// The same from byte counts every rank knows already (no message).
+GatherLayout layoutOf(const std::vector<std::int64_t> &sizes);
 } // namespace detail
 
 // Every rank's items (plain data, sent as bytes), concatenated in rank order on every rank.
@@ -80,6 +84,32 @@ template <class T> std::vector<T> allGatherItems(std::vector<T> mine, MPI_Comm c
   MPI_Comm_rank(comm, &rank);
   const detail::GatherLayout layout =
       detail::gatherLayout(static_cast<std::int64_t>(mine.size() * sizeof(T)), comm);
+  std::vector<T> all(static_cast<std::size_t>(layout.total) / sizeof(T));
+  MPI_Allgatherv(mine.data(), layout.counts[rank], MPI_BYTE, all.data(), layout.counts.data(),
+                 layout.offsets.data(), MPI_BYTE, comm);
+  detail::countReceived(layout.total - layout.counts[rank]);
+  return all;
+}
+
+// The same when every rank knows how many items each sends (`sizes[r]` from rank r): one call.
+// A part of another size than `sizes` says is a bug of the caller: std::logic_error.
+template <class T>
+std::vector<T> allGatherItems(std::vector<T> mine, const std::vector<std::int64_t> &sizes,
+                              MPI_Comm comm) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  int ranks = 1, rank = 0;
+  MPI_Comm_size(comm, &ranks);
+  MPI_Comm_rank(comm, &rank);
+  if (sizes.size() != static_cast<std::size_t>(ranks) ||
+      sizes[static_cast<std::size_t>(rank)] != static_cast<std::int64_t>(mine.size()))
+    throw std::logic_error("an all-gather of " + std::to_string(mine.size()) +
+                           " items where its sizes say otherwise");
+  if (ranks == 1)
+    return mine;
+  std::vector<std::int64_t> bytes(sizes);
+  for (std::int64_t &b : bytes)
+    b *= static_cast<std::int64_t>(sizeof(T));
+  const detail::GatherLayout layout = detail::layoutOf(bytes);
   std::vector<T> all(static_cast<std::size_t>(layout.total) / sizeof(T));
   MPI_Allgatherv(mine.data(), layout.counts[rank], MPI_BYTE, all.data(), layout.counts.data(),
                  layout.offsets.data(), MPI_BYTE, comm);
@@ -130,6 +160,10 @@ public:
   int size() const override { return size_; }
   std::vector<double> allGather(std::vector<double> mine) const override;
   std::vector<std::int64_t> allGather(std::vector<std::int64_t> mine) const override;
+  std::vector<double> allGather(std::vector<double> mine,
+                                const std::vector<std::int64_t> &sizes) const override;
+  std::vector<std::int64_t> allGather(std::vector<std::int64_t> mine,
+                                      const std::vector<std::int64_t> &sizes) const override;
   std::vector<double> sumInOrder(std::vector<double> mine) const override;
   double min(double value) const override;
   std::vector<double> max(std::vector<double> values) const override;

@@ -70,6 +70,21 @@ int main(int argc, char **argv) {
                         comm.allGather(std::vector<std::int64_t>(3 * rank + 1, rank));
                     return static_cast<std::int64_t>(all.size()) == total && all.back() == size - 1;
                   });
+    // the same with the sizes known: one call, no sizes
+    std::vector<std::int64_t> known(static_cast<std::size_t>(size));
+    for (int r = 0; r < size; ++r)
+      known[static_cast<std::size_t>(r)] = 3 * r + 1;
+    expectTraffic("all-gather of unequal 64-bit parts, the sizes known",
+                  8 * (total - (3 * rank + 1)), 1, [&] {
+                    const std::vector<std::int64_t> all =
+                        comm.allGather(std::vector<std::int64_t>(3 * rank + 1, rank), known);
+                    return static_cast<std::int64_t>(all.size()) == total && all.back() == size - 1;
+                  });
+    expectTraffic("all-gather of 2 doubles from every rank, the sizes known", 16 * others, 1, [&] {
+      const std::vector<double> all =
+          comm.allGather(std::vector<double>{1.0 * rank, 2.0}, std::vector<std::int64_t>(size, 2));
+      return static_cast<int>(all.size()) == 2 * size && all[2 * (size - 1)] == size - 1.0;
+    });
     // sums in order: an all-gather of the values; the least value: one reduction.
     expectTraffic("sums of 7 doubles in rank order", 8 * 7 * others + sizes, 2, [&] {
       const std::vector<double> sums = comm.sumInOrder(std::vector<double>(7, 1.0));

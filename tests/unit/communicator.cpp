@@ -23,6 +23,8 @@ void expectUnchanged(const parallel::Communicator &one) {
   EXPECT_EQ(one.allGather(values), values);
   const std::vector<std::int64_t> indices{0, 7, std::int64_t{1} << 40};
   EXPECT_EQ(one.allGather(indices), indices);
+  EXPECT_EQ(one.allGather(values, {3}), values);
+  EXPECT_EQ(one.allGather(indices, {3}), indices);
   const std::vector<double> sums = one.sumInOrder(values);
   ASSERT_EQ(sums.size(), values.size());
   EXPECT_TRUE(std::signbit(sums[1])); // not 0.0 + -0.0
