@@ -454,43 +454,43 @@ void Contact::shareWork(const parallel::Communicator &processes, const std::vect
 }
 
 // Bodies about to change owner: the depths their nodes were pushed at and their allowances, kept
-// by their owner only, copied from it to every process; every side of every pair is looked at
-// whole at the next step (its clear nodes were measured by the process that computed it).
-void Contact::bodiesMoving(const Model &model, const std::vector<std::uint32_t> &bodies) {
+// by their owner only, go to their new owner, who places their boundaries where their old owner
+// measured them this step (their nodes came with them: Solver::repartition); every side of every
+// pair is looked at whole at the next step (its clear nodes were measured by the process that
+// computed it).
+void Contact::bodiesMoving(const Model &model, const std::vector<std::uint32_t> &bodies,
+                           const std::vector<int> &new_owner) {
   if (!shared())
     return;
-  const std::size_t values = 3; // per node: pushed depth, allowance, release per step
-  std::size_t count = 0;
-  for (std::uint32_t b : bodies)
-    if (mine(b))
-      count += values * (model.bodies[b].node_end - model.bodies[b].node_begin);
-  auto pack = [&](double *out) {
-    for (std::uint32_t b : bodies)
-      if (mine(b))
-        for (std::size_t a = model.bodies[b].node_begin; a < model.bodies[b].node_end; ++a) {
+  constexpr std::size_t values = 3; // per node: pushed depth, allowance, release per step
+  parallel::moveValues(
+      *processes_, bodies.size(), [&](std::size_t k) { return (*owner_)[bodies[k]]; },
+      [&](std::size_t k) { return new_owner[bodies[k]]; },
+      [&](std::size_t k) {
+        return values * (model.bodies[bodies[k]].node_end - model.bodies[bodies[k]].node_begin);
+      },
+      [&](std::size_t k, double *out) {
+        const Body &body = model.bodies[bodies[k]];
+        for (std::size_t a = body.node_begin; a < body.node_end; ++a) {
           const auto p = static_cast<std::uint32_t>(a);
           const double allowance = allowances_.of(p);
           *out++ = pushed_[a], *out++ = allowance;
           *out++ = allowance > 0.0 ? allowances_.rate(p) : 0.0;
         }
-  };
-  auto unpack = [&](const double *all) {
-    for (int r = 0; r < processes_->size(); ++r)
-      for (std::uint32_t b : bodies)
-        if ((*owner_)[b] == r)
-          for (std::size_t a = model.bodies[b].node_begin; a < model.bodies[b].node_end;
-               ++a, all += values) {
-            const auto p = static_cast<std::uint32_t>(a);
-            if (all[0] != 0.0 && pushed_[a] == 0.0)
-              block_pushed_[block_[b]].push_back(p);
-            pushed_[a] = all[0];
-            if (all[1] > 0.0 || allowances_.of(p) > 0.0)
-              allowances_.set(p, all[1], all[2]);
-          }
-  };
-  processes_->share(count, pack, unpack);
-  for (std::uint32_t b : bodies) // (their nodes came from their owner: Solver::repartition)
-    boundaries_.place(model, b);
+      },
+      [&](std::size_t k, const double *in) {
+        const std::uint32_t b = bodies[k];
+        for (std::size_t a = model.bodies[b].node_begin; a < model.bodies[b].node_end;
+             ++a, in += values) {
+          const auto p = static_cast<std::uint32_t>(a);
+          if (in[0] != 0.0 && pushed_[a] == 0.0)
+            block_pushed_[block_[b]].push_back(p);
+          pushed_[a] = in[0];
+          if (in[1] > 0.0 || allowances_.of(p) > 0.0)
+            allowances_.set(p, in[1], in[2]);
+        }
+        boundaries_.place(model, b);
+      });
   for (std::size_t r = 0; r < pairs_.runs(); ++r)
     for (Pair &pair : pairs_.run(r))
       pair.until[0] = pair.until[1] = 0.0, pair.hot[0] = pair.hot[1] = 0;

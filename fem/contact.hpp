@@ -115,7 +115,8 @@ public:
   // against the other's segments) of the bodies it owns, and sends the reactions on other
   // processes' nodes to their owners, with the bodies it woke to all.
   void shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) override;
-  void bodiesMoving(const Model &model, const std::vector<std::uint32_t> &bodies) override;
+  void bodiesMoving(const Model &model, const std::vector<std::uint32_t> &bodies,
+                    const std::vector<int> &new_owner) override;
   // The last step's contacts between bodies (the walls' left out; with the work shared, this
   // process's), in pair order: a boundary node
   // of `node_body` pushed out of `segment_body` through the segment between two of its nodes

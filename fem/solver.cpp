@@ -450,7 +450,7 @@ void Solver::balanceLoad(bool forced) {
 // elements' state (stress, energy, plastic strain...) current: the bodies that change owner take
 // theirs with them, copied from the old owner to every process.
 void Solver::repartition(const std::vector<std::size_t> &load) {
-  const Nodes &nd = m_.nodes;
+  Nodes &nd = m_.nodes;
   parallel::PartitionItems mine;
   for (std::size_t b = 0; b < m_.bodies.size(); ++b) {
     if (!owns(b))
@@ -485,19 +485,51 @@ void Solver::repartition(const std::vector<std::size_t> &load) {
                              " of " + std::to_string(comm_.size()));
     owner[b] = rank;
   }
+  // The bodies that change owner and move carry their state to their new owner alone (a body at
+  // rest is the same on every process): its elements' state, its nodes' x(n+1), v(n+1/2) and this
+  // step's external forces (the new owner's element pass and half-kick).
   std::vector<std::uint32_t> moving;
   for (std::size_t b = 0; b < owner.size(); ++b)
-    if (owner[b] != owner_[b])
-      moving.push_back(static_cast<std::uint32_t>(b));
-  shareOwned(moving, &Body::element_begin, &Body::element_end, elementState());
-  {
-    Nodes &nd = m_.nodes; // x(n+1) and v(n+1/2): the new owner's element pass and half-kick
-    shareOwned<4>(moving, &Body::node_begin, &Body::node_end, {&nd.x, &nd.y, &nd.vx, &nd.vy});
-  }
-  shareExternal(moving);
+    if (owner[b] != owner_[b]) {
+      ++partition_.migrated_bodies;
+      if (!m_.at_rest[b])
+        moving.push_back(static_cast<std::uint32_t>(b));
+    }
+  const auto fields = elementState();
+  parallel::moveValues(
+      comm_, moving.size(), [&](std::size_t k) { return owner_[moving[k]]; },
+      [&](std::size_t k) { return owner[moving[k]]; },
+      [&](std::size_t k) {
+        const Body &body = m_.bodies[moving[k]];
+        return fields.size() * (body.element_end - body.element_begin) +
+               8 * (body.node_end - body.node_begin);
+      },
+      [&](std::size_t k, double *out) {
+        const Body &body = m_.bodies[moving[k]];
+        for (std::size_t e = body.element_begin; e < body.element_end; ++e)
+          for (auto *f : fields)
+            *out++ = (*f)[e];
+        for (std::size_t a = body.node_begin; a < body.node_end; ++a) {
+          const Nodes::External &x = nd.external[a];
+          *out++ = nd.x[a], *out++ = nd.y[a], *out++ = nd.vx[a], *out++ = nd.vy[a];
+          *out++ = x.fx, *out++ = x.fy, *out++ = x.friction_x, *out++ = x.friction_y;
+        }
+      },
+      [&](std::size_t k, const double *in) {
+        const Body &body = m_.bodies[moving[k]];
+        for (std::size_t e = body.element_begin; e < body.element_end; ++e)
+          for (auto *f : fields)
+            (*f)[e] = *in++;
+        for (std::size_t a = body.node_begin; a < body.node_end; ++a, in += 8) {
+          nd.x[a] = in[0], nd.y[a] = in[1];
+          nd.vx[a] = in[2], nd.vy[a] = in[3];
+          nd.external[a] = {in[4], in[5], in[6], in[7]};
+          if (!nd.is_loaded[a] && (in[4] != 0.0 || in[5] != 0.0 || in[6] != 0.0 || in[7] != 0.0))
+            nd.is_loaded[a] = 1, nd.loaded.push_back(static_cast<std::uint32_t>(a));
+        }
+      });
   for (ForceProvider *provider : providers_)
-    provider->bodiesMoving(m_, moving);
-  partition_.migrated_bodies += moving.size();
+    provider->bodiesMoving(m_, moving, owner);
   owner_ = std::move(owner);
 }
 
@@ -891,13 +923,13 @@ void Solver::collectCheckpoint() {
   Nodes &nd = m_.nodes;
   collectFrame();
   shareOwned<2>(active_bodies_, &Body::node_begin, &Body::node_end, {&nd.fx, &nd.fy}, true);
-  shareExternal(active_bodies_, true);
+  collectExternal(active_bodies_);
 }
 
 // The external forces at the nodes of `bodies`, complete at their owners only (the providers'
-// forces of this step), copied from them to every process (or `to_first` to the first only); a
-// node they load is listed as loaded.
-void Solver::shareExternal(const std::vector<std::uint32_t> &bodies, bool to_first) {
+// forces of this step), copied from them to the first process; a node they load is listed as
+// loaded there.
+void Solver::collectExternal(const std::vector<std::uint32_t> &bodies) {
   Nodes &nd = m_.nodes;
   std::size_t count = 0;
   for (std::uint32_t b : bodies)
@@ -922,10 +954,7 @@ void Solver::shareExternal(const std::vector<std::uint32_t> &bodies, bool to_fir
               nd.is_loaded[a] = 1, nd.loaded.push_back(static_cast<std::uint32_t>(a));
           }
   };
-  if (to_first)
-    comm_.collect(count, pack, unpack);
-  else
-    comm_.share(count, pack, unpack);
+  comm_.collect(count, pack, unpack);
 }
 
 // The active element with the shortest altitude, and what it has become: for the message of a

@@ -94,11 +94,13 @@ public:
   // process. A moving body's nodes are current at its owner only: a provider computes for this
   // process's bodies, exchanges the other processes' nodes it needs itself, and sends its forces
   // on their nodes to their owners (Nodes::external is complete at a node's owner only); before
-  // bodies change owner (bodiesMoving, every process, the owners not yet changed) what only their
-  // owner keeps goes with them.
+  // moving bodies change owner (bodiesMoving, every process, `owner` not yet changed, `new_owner`
+  // the owners to come; their nodes' positions already at their new owner) what only their owner
+  // keeps goes with them.
   virtual void shareWork(const parallel::Communicator & /*processes*/,
                          const std::vector<int> & /*owner*/) {}
-  virtual void bodiesMoving(const Model &, const std::vector<std::uint32_t> & /*bodies*/) {}
+  virtual void bodiesMoving(const Model &, const std::vector<std::uint32_t> & /*bodies*/,
+                            const std::vector<int> & /*new_owner*/) {}
   // Multiple time stepping: whether it honours Model::due and Model::window, and, from each
   // body's own level, the finest level of the bodies each body may meet through it (`cap`, lowered
   // only), so that bodies step together before they touch.
@@ -289,7 +291,7 @@ private:
   void shareOwned(const std::vector<std::uint32_t> &bodies, std::size_t Body::*begin,
                   std::size_t Body::*end, const std::array<std::vector<double> *, N> &fields,
                   bool to_first = false) const;
-  void shareExternal(const std::vector<std::uint32_t> &bodies, bool to_first = false);
+  void collectExternal(const std::vector<std::uint32_t> &bodies);
   void accountEnergy();
   void bodyStepsFromElements();
   // Multiple time stepping (fem/solver_levels.cpp).

@@ -89,4 +89,15 @@ public:
 // The one serial communicator (a solver's default).
 const Communicator &serial();
 
+// Values of `items` that move between processes: item k's `count(k)` values go from process
+// from(k) to process to(k), packed there (`pack(k, out)`) and unpacked at the receiver (`unpack(k,
+// in)`), in item order. Every process knows every item's sender, receiver and count: messages
+// alone (Communicator::exchange with the sizes given); an item whose processes are the same stays.
+void moveValues(const Communicator &processes, std::size_t items,
+                const std::function<int(std::size_t)> &from,
+                const std::function<int(std::size_t)> &to,
+                const std::function<std::size_t(std::size_t)> &count,
+                const std::function<void(std::size_t, double *)> &pack,
+                const std::function<void(std::size_t, const double *)> &unpack);
+
 } // namespace mesopen::parallel
