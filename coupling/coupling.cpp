@@ -337,14 +337,7 @@ void FeDemCoupling::applyReactions(fem::Model &model) {
   for (const Reaction &r : reactions_)
     if (model.at_rest[r.body] && (woken.empty() || woken.back() != r.body))
       woken.push_back(r.body);
-  std::sort(woken.begin(), woken.end());
-  woken.erase(std::unique(woken.begin(), woken.end()), woken.end());
-  std::vector<std::vector<std::int64_t>> to(ranks);
-  for (std::size_t r = 0; r < ranks; ++r)
-    if (static_cast<int>(r) != me) {
-      to[r].push_back(static_cast<std::int64_t>(woken.size()));
-      to[r].insert(to[r].end(), woken.begin(), woken.end());
-    }
+  std::vector<std::vector<std::int64_t>> to = fem::messagesWaking(woken, me, ranks);
   std::vector<Reaction> own;
   for (const Reaction &r : reactions_)
     if (const int owner = (*owner_)[r.body]; owner == me)
@@ -355,8 +348,7 @@ void FeDemCoupling::applyReactions(fem::Model &model) {
           {r.node, r.body, std::bit_cast<std::int64_t>(r.fx), std::bit_cast<std::int64_t>(r.fy),
            std::bit_cast<std::int64_t>(r.friction_x), std::bit_cast<std::int64_t>(r.friction_y)});
   const std::vector<std::vector<std::int64_t>> from = processes_->exchange(std::move(to));
-  for (const std::int64_t b : woken)
-    model.wake(static_cast<std::size_t>(b));
+  fem::wakeOwn(model, woken);
   std::vector<Reaction> received;
   for (std::size_t r = 0; r < ranks; ++r) {
     if (static_cast<int>(r) == me) {
@@ -364,11 +356,8 @@ void FeDemCoupling::applyReactions(fem::Model &model) {
       continue;
     }
     const std::vector<std::int64_t> &message = from[r];
-    const auto n_woken = static_cast<std::size_t>(message.at(0));
-    for (std::size_t i = 1; i <= n_woken; ++i)
-      model.wake(static_cast<std::size_t>(message[i]));
     received.clear();
-    for (std::size_t i = 1 + n_woken; i + 6 <= message.size(); i += 6)
+    for (std::size_t i = fem::wakeNamed(model, message); i + 6 <= message.size(); i += 6)
       received.push_back(
           {static_cast<std::uint32_t>(message[i]), static_cast<std::uint32_t>(message[i + 1]),
            std::bit_cast<double>(message[i + 2]), std::bit_cast<double>(message[i + 3]),

@@ -329,14 +329,7 @@ void Contact::sendLoads(Model &model) {
       for (const Load &l : loads)
         if (model.at_rest[l.body] && (woken.empty() || woken.back() != l.body))
           woken.push_back(l.body);
-  std::sort(woken.begin(), woken.end());
-  woken.erase(std::unique(woken.begin(), woken.end()), woken.end());
-  std::vector<std::vector<std::int64_t>> to(ranks);
-  for (std::size_t r = 0; r < ranks; ++r)
-    if (static_cast<int>(r) != me) {
-      to[r].push_back(static_cast<std::int64_t>(woken.size()));
-      to[r].insert(to[r].end(), woken.begin(), woken.end());
-    }
+  std::vector<std::vector<std::int64_t>> to = messagesWaking(woken, me, ranks);
   for (const Hits &hits : run_hits_)
     for (const auto &loads : hits.loads)
       for (const Load &l : loads)
@@ -347,18 +340,14 @@ void Contact::sendLoads(Model &model) {
                std::bit_cast<std::int64_t>(l.fy), std::bit_cast<std::int64_t>(l.friction_x),
                std::bit_cast<std::int64_t>(l.friction_y)});
   const std::vector<std::vector<std::int64_t>> from = processes_->exchange(std::move(to));
-  for (std::int64_t b : woken)
-    model.wake(static_cast<std::size_t>(b));
+  wakeOwn(model, woken);
   for (auto &loads : block_received_)
     loads.clear();
   for (std::size_t r = 0; r < ranks; ++r) {
     if (static_cast<int>(r) == me)
       continue;
     const std::vector<std::int64_t> &message = from[r];
-    const auto n_woken = static_cast<std::size_t>(message.at(0));
-    for (std::size_t i = 1; i <= n_woken; ++i)
-      model.wake(static_cast<std::size_t>(message[i]));
-    for (std::size_t i = 1 + n_woken; i + 6 <= message.size(); i += 6) {
+    for (std::size_t i = wakeNamed(model, message); i + 6 <= message.size(); i += 6) {
       const auto node = static_cast<std::uint32_t>(message[i + 1]);
       const std::uint32_t body = model.nodes.body[node];
       block_received_[block_[body]].push_back(

@@ -197,6 +197,31 @@ void Solver::addForceProvider(ForceProvider *provider) {
 // The steps that end a run at endAt's time: the last end_steps stable steps or less are made equal.
 constexpr double end_steps = 20.0;
 
+std::vector<std::vector<std::int64_t>> messagesWaking(std::vector<std::int64_t> &woken, int me,
+                                                      std::size_t processes) {
+  std::sort(woken.begin(), woken.end());
+  woken.erase(std::unique(woken.begin(), woken.end()), woken.end());
+  std::vector<std::vector<std::int64_t>> to(processes);
+  for (std::size_t r = 0; r < processes; ++r)
+    if (static_cast<int>(r) != me) {
+      to[r].push_back(static_cast<std::int64_t>(woken.size()));
+      to[r].insert(to[r].end(), woken.begin(), woken.end());
+    }
+  return to;
+}
+
+void wakeOwn(Model &model, const std::vector<std::int64_t> &woken) {
+  for (const std::int64_t b : woken)
+    model.wake(static_cast<std::size_t>(b));
+}
+
+std::size_t wakeNamed(Model &model, const std::vector<std::int64_t> &message) {
+  const auto n_woken = static_cast<std::size_t>(message.at(0));
+  for (std::size_t i = 1; i <= n_woken; ++i)
+    model.wake(static_cast<std::size_t>(message.at(i)));
+  return 1 + n_woken;
+}
+
 // The step to take from the stable one: within end_steps stable steps of endAt's time, the rest in
 // equal steps (past it: stable steps); `last` whether it ends at that time.
 double Solver::stepToTake(bool &last) const {

@@ -109,6 +109,16 @@ public:
                          std::vector<std::uint8_t> & /*cap*/) const {}
 };
 
+// With the work shared, a provider's messages to the other processes (Communicator::exchange, one
+// list per process) each begin with the bodies at rest its forces loaded (`woken`, sorted and
+// made unique here): their number, then the bodies. Every process wakes them: this one its own
+// (wakeOwn), the others those a message names (wakeNamed, which returns where the message's own
+// values begin).
+std::vector<std::vector<std::int64_t>> messagesWaking(std::vector<std::int64_t> &woken, int me,
+                                                      std::size_t processes);
+void wakeOwn(Model &model, const std::vector<std::int64_t> &woken);
+std::size_t wakeNamed(Model &model, const std::vector<std::int64_t> &message);
+
 // A run that cannot go on (an inverted element, a step collapsed by a sliver); the message says
 // which element and when.
 class RunFailure : public std::runtime_error {
