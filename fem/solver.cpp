@@ -471,9 +471,9 @@ void Solver::balanceLoad(bool forced) {
 
 // Every body to the rank the partitioner gives it: each process passes the bodies it owns, with
 // their nodes' centroid and their active elements `load`, and all learn every body's new owner.
-// Every process holds every body and moves every node alike, but only a body's owner keeps its
-// elements' state (stress, energy, plastic strain...) current: the bodies that change owner take
-// theirs with them, copied from the old owner to every process.
+// Every process holds every body, but only a body's owner keeps its elements' state (stress,
+// energy, plastic strain...) and its nodes' motion current: the moving bodies that change owner
+// take theirs to their new owner.
 void Solver::repartition(const std::vector<std::size_t> &load) {
   Nodes &nd = m_.nodes;
   parallel::PartitionItems mine;
