@@ -136,6 +136,23 @@ void expectSameFeRun(const std::string &a, const std::string &b, const std::stri
   }
 }
 
+// Every frame's disks (positions, velocities, spins) equal to the last bit, in more than one frame.
+void expectSameDisks(const std::string &a, const std::string &b, const std::string &label) {
+  const H5File one = H5File::open(a + "/run.h5"), two = H5File::open(b + "/run.h5");
+  int frames = 0;
+  for (;; ++frames) {
+    char group[40];
+    std::snprintf(group, sizeof group, "/frames/%06d/disks/", frames);
+    if (!one.exists(group + std::string("x")))
+      break;
+    for (const char *field : {"x", "y", "vx", "vy", "omega"})
+      EXPECT_TRUE(one.read<double>(group + std::string(field)) ==
+                  two.read<double>(group + std::string(field)))
+          << label << ": frame " << frames << "'s disks' " << field << " differ";
+  }
+  EXPECT_GT(frames, 1) << label;
+}
+
 nlohmann::json summaryOf(const std::string &out) {
   return nlohmann::json::parse(test::readFile(out + "/summary.json"));
 }
@@ -346,19 +363,7 @@ TEST(Mpi, HybridRunsAgreeOnOneTwoAndFourRanks) {
       EXPECT_LE(p["collectives_per_step"][rank].get<double>(), 9.0) << label << ", rank " << rank;
     }
     expectSameFeRun(dir / "one", out, label);
-    const H5File a = H5File::open(dir / "one/run.h5"), b = H5File::open(out + "/run.h5");
-    int frames = 0;
-    for (;; ++frames) {
-      char group[40];
-      std::snprintf(group, sizeof group, "/frames/%06d/disks/", frames);
-      if (!a.exists(group + std::string("x")))
-        break;
-      for (const char *field : {"x", "y", "vx", "vy", "omega"})
-        EXPECT_TRUE(a.read<double>(group + std::string(field)) ==
-                    b.read<double>(group + std::string(field)))
-            << label << ": frame " << frames << "'s disks' " << field << " differ";
-    }
-    EXPECT_GT(frames, 1) << label;
+    expectSameDisks(dir / "one", out, label);
   }
 }
 
@@ -389,19 +394,7 @@ TEST(Mpi, HybridStoppedAndResumedOnTwoRanksIsTheSameRun) {
   ASSERT_EQ(code(mpirun + MESOPEN_BINARY + " run --resume " + (dir / "stopped")), 0);
   ASSERT_EQ(code(mpirun + MESOPEN_BINARY + " run " + scene + " -o " + (dir / "whole")), 0);
   expectSameFeRun(dir / "whole", dir / "stopped", "hybrid, resumed on two ranks");
-  const H5File a = H5File::open(dir / "whole/run.h5"), b = H5File::open(dir / "stopped/run.h5");
-  int frames = 0;
-  for (;; ++frames) {
-    char group[40];
-    std::snprintf(group, sizeof group, "/frames/%06d/disks/", frames);
-    if (!a.exists(group + std::string("x")))
-      break;
-    for (const char *field : {"x", "y", "vx", "vy", "omega"})
-      EXPECT_TRUE(a.read<double>(group + std::string(field)) ==
-                  b.read<double>(group + std::string(field)))
-          << "frame " << frames << "'s disks' " << field << " differ";
-  }
-  EXPECT_GT(frames, 1);
+  expectSameDisks(dir / "whole", dir / "stopped", "hybrid, resumed on two ranks");
 }
 
 // The coupled baseline (examples/baseline-dem.toml: run 6's 6,198 grains as disks) runs to one
