@@ -304,7 +304,7 @@ void FeDemCoupling::exchangeBoundaries(fem::Model &model) {
       }
     }
   }
-  received_.clear();
+  std::vector<std::uint32_t> received;
   for (const std::vector<std::int64_t> &message : processes_->exchange(std::move(to)))
     for (std::size_t i = 0; i < message.size();) {
       const auto b = static_cast<std::uint32_t>(message[i++]);
@@ -317,10 +317,10 @@ void FeDemCoupling::exchangeBoundaries(fem::Model &model) {
         nd.vy[a] = std::bit_cast<double>(message[i + 3]);
       }
       current_[b] = 1;
-      received_.push_back(b);
+      received.push_back(b);
       halo_nodes_ += edges.size() / 2;
     }
-  contact_.measureBodies(model, received_);
+  contact_.measureBodies(model, received);
 }
 
 // The reactions into the FE nodes. With the FE bodies shared, each goes to its node's owner, who

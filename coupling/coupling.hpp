@@ -121,7 +121,6 @@ private:
   std::vector<char> current_;
   double fastest_of_all_ = 0.0; // the fastest boundary node over every process's bodies [m/s]
   DiskContact::Region region_of_all_{}; // the region every process's FE bodies cover
-  std::vector<std::uint32_t> received_;
   std::size_t halo_nodes_ = 0;
 };
 

@@ -153,6 +153,21 @@ void expectSameDisks(const std::string &a, const std::string &b, const std::stri
   EXPECT_GT(frames, 1) << label;
 }
 
+// A script that runs mesopen with its arguments, rank 1 of mpirun stopping itself after `step`
+// (MESOPEN_STOP_AT_STEP, as a SIGTERM there).
+void writeStopScript(const std::string &path, int step) {
+  std::ofstream(path) << "#!/bin/sh\nif [ \"$OMPI_COMM_WORLD_RANK\" = 1 ]; then "
+                         "export MESOPEN_STOP_AT_STEP="
+                      << step << "; fi\nexec " << MESOPEN_BINARY << " \"$@\"\n";
+  std::filesystem::permissions(path, std::filesystem::perms::owner_all);
+}
+
+// The exit code of `command` run quietly on one thread a rank (-1 if it did not exit).
+int exitCode(const std::string &command) {
+  const int status = std::system((command + " --threads 1 --quiet >/dev/null 2>&1").c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
 nlohmann::json summaryOf(const std::string &out) {
   return nlohmann::json::parse(test::readFile(out + "/summary.json"));
 }
@@ -379,20 +394,14 @@ TEST(Mpi, HybridStoppedAndResumedOnTwoRanksIsTheSameRun) {
       feScene(dir, "hybrid.toml", "0.6e-6",
               "representation = \"hybrid\"\nerode_step_ratio = 0.4\nrebalance_every = 200\n"
               "checkpoint_interval = 1e6\n");
-  std::ofstream(dir / "stop1.sh") << "#!/bin/sh\nif [ \"$OMPI_COMM_WORLD_RANK\" = 1 ]; then "
-                                     "export MESOPEN_STOP_AT_STEP=1500; fi\nexec "
-                                  << MESOPEN_BINARY << " \"$@\"\n";
-  std::filesystem::permissions(dir / "stop1.sh", std::filesystem::perms::owner_all);
+  writeStopScript(dir / "stop1.sh", 1500);
   const std::string mpirun = "timeout 300 mpirun --allow-run-as-root --oversubscribe -np 2 ";
-  auto code = [](const std::string &cmd) {
-    const int status = std::system((cmd + " --threads 1 --quiet >/dev/null 2>&1").c_str());
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  };
-  ASSERT_EQ(code(mpirun + (dir / "stop1.sh") + " run " + scene + " -o " + (dir / "stopped")), 143);
+  ASSERT_EQ(exitCode(mpirun + (dir / "stop1.sh") + " run " + scene + " -o " + (dir / "stopped")),
+            143);
   const auto stopped = nlohmann::json::parse(test::readFile(dir / "stopped/summary.json"));
   EXPECT_EQ(stopped["status"], "interrupted");
-  ASSERT_EQ(code(mpirun + MESOPEN_BINARY + " run --resume " + (dir / "stopped")), 0);
-  ASSERT_EQ(code(mpirun + MESOPEN_BINARY + " run " + scene + " -o " + (dir / "whole")), 0);
+  ASSERT_EQ(exitCode(mpirun + MESOPEN_BINARY + " run --resume " + (dir / "stopped")), 0);
+  ASSERT_EQ(exitCode(mpirun + MESOPEN_BINARY + " run " + scene + " -o " + (dir / "whole")), 0);
   expectSameFeRun(dir / "whole", dir / "stopped", "hybrid, resumed on two ranks");
   expectSameDisks(dir / "whole", dir / "stopped", "hybrid, resumed on two ranks");
 }
@@ -467,25 +476,19 @@ TEST(Mpi, StopOnOneRankStopsEveryRankAtOneStep) {
       << "[target]\nwidth = 1.0e-3\nheight = 0.5e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
          "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 1e-7\nframe_interval = 0\n"
          "vtk = false\ncheckpoint_interval = 1e6\n";
-  std::ofstream(dir / "stop1.sh") << "#!/bin/sh\nif [ \"$OMPI_COMM_WORLD_RANK\" = 1 ]; then "
-                                     "export MESOPEN_STOP_AT_STEP=40; fi\nexec "
-                                  << MESOPEN_BINARY << " \"$@\"\n";
-  std::filesystem::permissions(dir / "stop1.sh", std::filesystem::perms::owner_all);
+  writeStopScript(dir / "stop1.sh", 40);
   const std::string mpirun = "timeout 120 mpirun --allow-run-as-root --oversubscribe -np 2 ";
-  auto code = [](const std::string &cmd) {
-    const int status = std::system((cmd + " --threads 1 --quiet >/dev/null 2>&1").c_str());
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  };
-  EXPECT_EQ(code(mpirun + (dir / "stop1.sh") + " run " + (dir / "scene.toml") + " -o " +
-                 (dir / "stopped")),
+  EXPECT_EQ(exitCode(mpirun + (dir / "stop1.sh") + " run " + (dir / "scene.toml") + " -o " +
+                     (dir / "stopped")),
             143)
       << "124: a process went on alone";
   const auto stopped = nlohmann::json::parse(test::readFile(dir / "stopped/summary.json"));
   EXPECT_EQ(stopped["status"], "interrupted");
   EXPECT_EQ(stopped["steps"], 40);
-  EXPECT_EQ(code(mpirun + MESOPEN_BINARY + " run --resume " + (dir / "stopped")), 0);
+  EXPECT_EQ(exitCode(mpirun + MESOPEN_BINARY + " run --resume " + (dir / "stopped")), 0);
   EXPECT_EQ(
-      code(mpirun + MESOPEN_BINARY + " run " + (dir / "scene.toml") + " -o " + (dir / "whole")), 0);
+      exitCode(mpirun + MESOPEN_BINARY + " run " + (dir / "scene.toml") + " -o " + (dir / "whole")),
+      0);
   const std::string same = "/usr/bin/python3 " + std::string(MESOPEN_SOURCE_DIR) +
                            "/tests/support/same_run.py " + (dir / "stopped/run.h5") + " " +
                            (dir / "whole/run.h5");
