@@ -15,6 +15,26 @@
 namespace mesopen::fem {
 
 namespace {
+
+// The balance error of a run's energies (Energy).
+double balanceError(const Energy &e) {
+  const double total = e.kinetic + e.internal + e.friction + e.contact + e.eroded + e.mass_scaling;
+  const double scale = std::max({std::abs(total), std::abs(e.initial), std::abs(e.external)});
+  return scale > 0.0 ? (total - e.initial - e.external) / scale : 0.0;
+}
+
+// The energies each process holds a share of (Solver::energy), in the order they are sent.
+constexpr double Energy::*energy_shares[] = {
+    &Energy::kinetic, &Energy::internal, &Energy::plastic, &Energy::viscous,     &Energy::friction,
+    &Energy::contact, &Energy::external, &Energy::eroded,  &Energy::mass_scaling};
+
+std::vector<double> sharesOf(const Energy &e) {
+  std::vector<double> shares;
+  for (auto share : energy_shares)
+    shares.push_back(e.*share);
+  return shares;
+}
+
 constexpr std::size_t max_chunk = 256;        // elements per material batch (scratch on the stack)
 constexpr std::size_t node_block = 4096;      // nodes per block of the node loops
 constexpr std::size_t level_node_block = 512; // the same with levels (shared by node count)
@@ -150,13 +170,13 @@ Solver::Solver(Model &model, SolverSettings settings, const parallel::Communicat
   for (const Range &r : node_ranges_) // (this process's nodes; the processes' sums added)
     for (std::size_t a = r.begin; a < r.end; ++a)
       addKinetic(a, 0.5 * nd.mass[a] * (nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a]));
-  energy_.kinetic = comm_.sumInOrder({energy_.kinetic})[0];
   if (levels()) {
     bodySums(0, units_.size());
     std::fill(m_.window.begin(), m_.window.end(), dt_);
   }
   accountEnergy();
-  energy_.initial = energy_.kinetic + energy_.internal;
+  const std::vector<double> start = comm_.sumInOrder({energy_.kinetic, energy_.internal});
+  energy_.initial = start[0] + start[1];
   energy_.balance_error = 0.0;
 }
 
@@ -263,8 +283,9 @@ void Solver::step() {
   nextStep(stable, s_.dt_rise_interval);
   accountEnergy();
   // A state no longer finite (a material driven where its law has no value) would run on as NaN
-  // and be reported as completed: it ends the run here, naming where it began.
-  if (!std::isfinite(energy_.kinetic) || !std::isfinite(energy_.internal))
+  // and be reported as completed: it ends the run here (every process: the step's figures said
+  // whether any process's energies are), naming where it began.
+  if (not_finite_)
     throw RunFailure(notFinite());
   erode(); // elements that failed in this step leave the model
 }
@@ -311,13 +332,13 @@ std::string Solver::notFinite() const {
 
 // Work ranges over the bodies that move: element chunks of one material, node blocks. With levels,
 // level by level (each level's units and blocks together), a unit holding consecutive bodies.
-void Solver::updateActivity() {
+void Solver::updateActivity(bool may_partition) {
   const std::size_t n_bodies = m_.bodies.size();
   if (at_rest_seen_ == m_.at_rest && !rebalance_due_ && laid_levels_ == level_)
     return;
   at_rest_seen_ = m_.at_rest;
   laid_levels_ = level_;
-  balanceLoad(std::exchange(rebalance_due_, false));
+  balanceLoad(std::exchange(rebalance_due_, false), may_partition);
   chunks_.clear();
   units_.clear();
   unit_nodes_.clear();
@@ -419,8 +440,9 @@ std::vector<double> asDoubles(const std::vector<std::size_t> &counts) {
 // Out of balance is measured against the best a partition of whole bodies can do: the most loaded
 // rank's active elements over the larger of their mean and the heaviest body's, less 1 (with no
 // body heavier than the mean, the imbalance max / mean - 1). The bodies are partitioned at the
-// first load, when `forced`, and when that measure passes rebalance_above_.
-void Solver::balanceLoad(bool forced) {
+// first load, when `forced`, and when that measure passes rebalance_above_; never when not
+// `may_partition` (a run continued with its partition).
+void Solver::balanceLoad(bool forced, bool may_partition) {
   const std::size_t ranks = static_cast<std::size_t>(comm_.size());
   std::vector<std::size_t> load(m_.bodies.size(), 0);
   std::size_t total = 0, heaviest = 0;
@@ -438,7 +460,8 @@ void Solver::balanceLoad(bool forced) {
     return loads;
   };
   rank_elements_ = rankLoads();
-  if (ranks == 1 || total == 0) // one process owns every body; nothing moves: nothing to share
+  // (one process owns every body; nothing moves: nothing to share)
+  if (ranks == 1 || total == 0 || !may_partition)
     return;
   const double best = std::max(static_cast<double>(total) / static_cast<double>(ranks),
                                static_cast<double>(heaviest));
@@ -781,11 +804,12 @@ void Solver::forces(double dt, bool kick) {
         kick_sums_[u] = sums;
     }
   }
-  // The step's figures of every process in one exchange: its shortest element step, its first
-  // inverted element, whether elements failed or asked for mass (erode and scaleMasses gather
-  // theirs only then), its elements' energies (summed in rank order, as sumInOrder), the work at
-  // its nodes in the first half-kick and the constraints, its units' kick sums (in rank order and
-  // unit order) and the second half's constraints at its nodes (applyConstraints).
+  // This process's sums: its elements' energies (chunk order), its units' kick sums (unit order)
+  // and the second half's constraints at its nodes (applyConstraints); the processes' shares of
+  // the energies are summed only when asked (sumEnergy). The step's figures every process needs,
+  // in one reduction (the largest of each): the shortest element step, the first inverted
+  // element, whether elements failed or asked for mass (erode and scaleMasses gather theirs only
+  // then), whether the energies are no longer finite.
   const long n = static_cast<long>(chunks_.size());
   double dt_min = std::numeric_limits<double>::infinity();
   std::int64_t inverted = -1;
@@ -802,74 +826,34 @@ void Solver::forces(double dt, bool kick) {
     failing = failing || sums_[i].eroding;
     scaling = scaling || !sums_[i].scaled.empty();
   }
-  std::vector<double> late;
-  if (kick)
-    applyConstraints(0.5 * dt, true, &late);
-  constexpr std::size_t header = 12; // the figures before the kick sums
-  std::vector<double> mine{dt_min,
-                           static_cast<double>(inverted),
-                           failing ? 1.0 : 0.0,
-                           scaling ? 1.0 : 0.0,
-                           internal,
-                           plastic,
-                           viscous,
-                           kick_work_,
-                           provider_work_,
-                           friction_work_,
-                           static_cast<double>(kick ? kick_sums_.size() : 0),
-                           static_cast<double>(late.size())};
-  if (kick)
-    for (const KickSums &k : kick_sums_)
-      mine.insert(mine.end(), {k.gravity, k.kinetic, k.provider, k.friction});
-  mine.insert(mine.end(), late.begin(), late.end());
-  const std::vector<double> all = comm_.allGather(std::move(mine));
-  kick_sums_.clear();
-  std::vector<std::int64_t> inverted_by;
-  std::vector<double> all_late;
-  step_sums_ = {0.0, 0.0, 0.0};
-  failing_ = scaling_ = false;
-  double kick_work = 0.0, provider = 0.0, friction = 0.0;
-  for (std::size_t at = 0; at < all.size();) {
-    const double *f = &all[at];
-    dt_min = std::min(dt_min, f[0]);
-    inverted_by.push_back(static_cast<std::int64_t>(f[1]));
-    failing_ = failing_ || f[2] != 0.0;
-    scaling_ = scaling_ || f[3] != 0.0;
-    for (int k = 0; k < 3; ++k)
-      step_sums_[k] += f[4 + k];
-    kick_work += f[7], provider += f[8], friction += f[9];
-    const auto units = static_cast<std::size_t>(f[10]), n_late = static_cast<std::size_t>(f[11]);
-    for (std::size_t u = 0; u < units; ++u)
-      kick_sums_.push_back(
-          {f[header + 4 * u], f[header + 4 * u + 1], f[header + 4 * u + 2], f[header + 4 * u + 3]});
-    all_late.insert(all_late.end(), f + header + 4 * units, f + header + 4 * units + n_late);
-    at += header + 4 * units + n_late;
-  }
+  step_sums_ = {internal, plastic, viscous};
   if (kick) {
-    kick_work_ = kick_work, provider_work_ = provider, friction_work_ = friction;
+    std::vector<double> late;
+    applyConstraints(0.5 * dt, true, &late);
     energy_.kinetic = 0.0;
     addKickSums(kick_sums_, 0.5 * dt);
-    for (std::size_t k = 0; k < all_late.size(); k += 5) {
-      kick_work_ += all_late[k], provider_work_ += all_late[k + 1];
-      friction_work_ += all_late[k + 2], kick_work_ += all_late[k + 3];
-      energy_.kinetic += all_late[k + 4];
+    for (std::size_t k = 0; k < late.size(); k += 5) {
+      kick_work_ += late[k], provider_work_ += late[k + 1];
+      friction_work_ += late[k + 2], kick_work_ += late[k + 3];
+      energy_.kinetic += late[k + 4];
     }
   }
+  kick_sums_.clear();
+  const std::vector<double> all = comm_.max(
+      {-dt_min, inverted >= 0 ? -static_cast<double>(inverted) : -HUGE_VAL, failing ? 1.0 : 0.0,
+       scaling ? 1.0 : 0.0, std::isfinite(energy_.kinetic) && std::isfinite(internal) ? 0.0 : 1.0});
+  dt_min = -all[0];
+  failing_ = all[2] != 0.0, scaling_ = all[3] != 0.0, not_finite_ = all[4] != 0.0;
   // The first inverted element of any process, the lowest number whoever computed it (its area
   // from the process that did, gathered only then).
-  auto first = inverted_by.end();
-  for (auto it = inverted_by.begin(); it != inverted_by.end(); ++it)
-    if (*it >= 0 && (first == inverted_by.end() || *it < *first))
-      first = it;
-  if (first != inverted_by.end()) {
-    const double area = inverted >= 0 ? m_.elements.area[static_cast<std::size_t>(inverted)] : 0.0;
-    const double inverted_area =
-        comm_.allGather(std::vector<double>{area})[first - inverted_by.begin()];
-    const auto e = static_cast<std::size_t>(*first);
+  if (all[1] > -HUGE_VAL) {
+    const auto e = static_cast<std::size_t>(-all[1]);
+    const double area =
+        comm_.max({inverted == static_cast<std::int64_t>(e) ? m_.elements.area[e] : -HUGE_VAL})[0];
     const Body &body = m_.bodies[m_.elements.body[e]];
     std::ostringstream msg;
     msg << "element " << e << " of body " << body.name << " (material "
-        << m_.materials[body.material]->type() << ") is inverted: area " << inverted_area
+        << m_.materials[body.material]->type() << ") is inverted: area " << area
         << " m^2, initially " << m_.elements.area0[e] << " m^2, at t = " << time_ + dt
         << " s, step " << steps_ + 1;
     throw RunFailure(msg.str());
@@ -949,6 +933,9 @@ void Solver::collectCheckpoint() {
   collectFrame();
   shareOwned<2>(active_bodies_, &Body::node_begin, &Body::node_end, {&nd.fx, &nd.fy}, true);
   collectExternal(active_bodies_);
+  sumEnergy();
+  if (comm_.size() > 1)
+    checkpoint_shares_ = comm_.allGather(sharesOf(energy_));
 }
 
 // The external forces at the nodes of `bodies`, complete at their owners only (the providers'
@@ -1355,7 +1342,9 @@ void Solver::erode() {
     for (std::uint32_t e : failed)
       if (!el.eroded[e])
         body_internal_[el.body[e]] -= el.energy[e];
-  const double energy = erodeElements(m_, failed);
+  // (every process erodes every failed element: the energy they take is the first process's share)
+  const double taken = erodeElements(m_, failed);
+  const double energy = comm_.rank() == 0 ? taken : 0.0;
   energy_.eroded += energy;
   eroded_elements_ += failed.size();
   energy_.internal -= energy; // this step's pass summed theirs
@@ -1410,8 +1399,7 @@ void Solver::scaleMasses(double half_dt) {
     return 0.5 * nd.mass[a] * (nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a] - dvx * dvx - dvy * dvy);
   };
   // The kinetic energy a node's change takes is measured by its owner (its velocity and force are
-  // current there) and added in the elements' order, whoever measured it.
-  std::vector<double> changes; // this process's: the node's place (3 i + k) and the change
+  // current there), into its share of the energies, in the elements' order.
   for (std::size_t i = 0; i < scaled.size(); ++i) {
     const auto [e, needed] = scaled[i];
     double &added = added_mass_[e];
@@ -1427,18 +1415,12 @@ void Solver::scaleMasses(double half_dt) {
         nd.vx[a] *= ratio;
       if (!(constrained_[a] & 2))
         nd.vy[a] *= ratio;
-      if (own)
-        changes.insert(changes.end(), {static_cast<double>(3 * i + k), kinetic(a) - before});
+      if (own) {
+        const double change = kinetic(a) - before;
+        addKinetic(a, change);
+        energy_.mass_scaling -= change;
+      }
     }
-  }
-  std::vector<std::pair<std::size_t, double>> every;
-  const std::vector<double> all = comm_.allGather(std::move(changes));
-  for (std::size_t k = 0; k < all.size(); k += 2)
-    every.emplace_back(static_cast<std::size_t>(all[k]), all[k + 1]);
-  std::sort(every.begin(), every.end());
-  for (auto [place, change] : every) {
-    addKinetic(m_.elements.node[3 * scaled[place / 3].first + place % 3], change);
-    energy_.mass_scaling -= change;
   }
 }
 
@@ -1463,11 +1445,18 @@ void Solver::accountEnergy() {
   energy_.friction -= friction_work_;
   energy_.contact -= provider_work_ - friction_work_;
   energy_.external += kick_work_;
-  const double total = energy_.kinetic + internal + energy_.friction + energy_.contact +
-                       energy_.eroded + energy_.mass_scaling;
-  const double scale =
-      std::max({std::abs(total), std::abs(energy_.initial), std::abs(energy_.external)});
-  energy_.balance_error = scale > 0.0 ? (total - energy_.initial - energy_.external) / scale : 0.0;
+  energy_.balance_error = balanceError(energy_); // (with several processes: sumEnergy's)
+}
+
+const Energy &Solver::sumEnergy() const {
+  if (comm_.size() == 1)
+    return energy_;
+  const std::vector<double> all = comm_.sumInOrder(sharesOf(energy_));
+  for (std::size_t k = 0; k < std::size(energy_shares); ++k)
+    summed_.*energy_shares[k] = all[k];
+  summed_.initial = energy_.initial;
+  summed_.balance_error = balanceError(summed_);
+  return summed_;
 }
 
 Solver::State Solver::state() const {
@@ -1482,13 +1471,19 @@ Solver::State Solver::state() const {
            steps_,
            eroded_elements_,
            collapsed_elements_,
-           energy_,
+           energy(),
            {},
            {}};
   std::vector<std::pair<std::uint32_t, double>> added(added_mass_.begin(), added_mass_.end());
   std::sort(added.begin(), added.end());
   for (auto [e, mass] : added)
     st.scaled_elements.push_back(e), st.scaled_mass.push_back(mass);
+  st.energy_shares = checkpoint_shares_;
+  if (comm_.size() > 1 && partitioned_) {
+    st.owner = owner_;
+    st.partition_ranks = comm_.size();
+    st.partition_achieved = last_achieved_, st.partition_total = last_total_;
+  }
   return st;
 }
 
@@ -1498,7 +1493,16 @@ void Solver::restore(const State &st) {
   shortest_step_ = st.shortest_step;
   steps_ = st.steps, eroded_elements_ = st.eroded_elements;
   collapsed_elements_ = st.collapsed_elements;
-  energy_ = st.energy;
+  // (each process's share as it was, on as many processes; else the run's are the first
+  // process's share, the others' none)
+  energy_ = summed_ = st.energy;
+  const std::size_t n_shares = std::size(energy_shares);
+  if (st.energy_shares.size() == n_shares * static_cast<std::size_t>(comm_.size())) {
+    for (std::size_t k = 0; k < n_shares; ++k)
+      energy_.*energy_shares[k] =
+          st.energy_shares[n_shares * static_cast<std::size_t>(comm_.rank()) + k];
+  } else if (comm_.rank() != 0)
+    energy_ = Energy{.initial = st.energy.initial};
   added_mass_.clear();
   for (std::size_t k = 0; k < st.scaled_elements.size(); ++k)
     added_mass_[st.scaled_elements[k]] = st.scaled_mass[k];
@@ -1507,8 +1511,19 @@ void Solver::restore(const State &st) {
     inv_mass_[a] = nd.mass[a] > 0.0 ? 1.0 / nd.mass[a] : 0.0;
   constrained_.clear();
   std::fill(failed_.begin(), failed_.end(), 0);
+  // The partition as it was, on as many processes (a checkpoint holds every process's state:
+  // any partition could take it up, but the energies' shares would be summed in another order).
+  const bool same_partition = st.partition_ranks == comm_.size() &&
+                              st.owner.size() == owner_.size() &&
+                              std::all_of(st.owner.begin(), st.owner.end(),
+                                          [&](int r) { return r >= 0 && r < comm_.size(); });
+  if (same_partition) {
+    owner_ = st.owner;
+    partitioned_ = true;
+    last_achieved_ = st.partition_achieved, last_total_ = st.partition_total;
+  }
   at_rest_seen_.clear(); // the chunks laid out anew: eroded elements leave them
-  updateActivity();
+  updateActivity(!same_partition);
 }
 
 } // namespace mesopen::fem

@@ -169,7 +169,11 @@ public:
   // stiffer, and shifts the kinetic energy the leapfrog reports, 1.7e-3 of the impact's in
   // Energy.MultiBodyImpactWithoutViscosityClosesItsBalance).
   void endAt(double time) { end_at_ = time; }
-  const Energy &energy() const { return energy_; }
+  // The run's energies: with one process, as of the last step; with several, each holds its share
+  // (its elements' and nodes'; what every process knows, the first), summed only when asked:
+  // energy() gives them as sumEnergy, which every process calls, last summed them (in rank order).
+  const Energy &energy() const { return comm_.size() > 1 ? summed_ : energy_; }
+  const Energy &sumEnergy() const;
   void addForceProvider(ForceProvider *provider);
   // Elements updated in the last step (bodies at rest and eroded elements are skipped).
   std::size_t activeElements() const { return active_elements_; }
@@ -211,6 +215,7 @@ public:
   // current at their owners only. For output, from the owners to the first process, which writes
   // them (every process calls them): the active bodies' element state and velocities (a frame),
   // and with their nodes' forces and external forces (a checkpoint).
+  // (collectCheckpoint also sums the energies.)
   void collectFrame() const;
   void collectCheckpoint();
 
@@ -224,6 +229,14 @@ public:
     // mass scaling so far: the elements given mass, in element order, and the mass of each
     std::vector<std::uint32_t> scaled_elements;
     std::vector<double> scaled_mass;
+    // with several processes: each one's share of the energies (energy()), in rank order, as
+    // collectCheckpoint gathered them (empty with one)
+    std::vector<double> energy_shares;
+    // with several processes: every body's owner, and the partition's imbalance and total load
+    // when it was made (a run continued on as many processes keeps them; empty with one)
+    std::vector<int> owner;
+    int partition_ranks = 0;
+    double partition_achieved = 0, partition_total = 0;
   };
   State state() const;
   // Continues from `state` once the model's state was restored (nodes, elements, boundaries,
@@ -272,8 +285,8 @@ private:
     std::vector<std::pair<std::uint32_t, double>> scaled; // elements and the mass they need
   };
 
-  void updateActivity();
-  void balanceLoad(bool forced);
+  void updateActivity(bool may_partition = true);
+  void balanceLoad(bool forced, bool may_partition);
   void repartition(const std::vector<std::size_t> &load);
   void shareAmongThreads();
   struct KickSums {
@@ -367,13 +380,15 @@ private:
   bool measure_body_steps_ = false;
   std::vector<double> element_step_, body_step_;
   std::size_t body_steps_at_ = 0;
-  Energy energy_;
+  Energy energy_;                         // this process's share (see energy())
+  mutable Energy summed_;                 // with several processes: every process's, as last summed
+  std::vector<double> checkpoint_shares_; // every process's share, at the last collectCheckpoint
   // Work of this step: constraints and gravity; providers' forces; their frictional part.
   double kick_work_ = 0.0, provider_work_ = 0.0, friction_work_ = 0.0;
   // The last element pass of every process (forces): its internal energy, plastic and viscous
   // work, and whether any element failed or asked for mass.
   std::array<double, 3> step_sums_{};
-  bool failing_ = false, scaling_ = false;
+  bool failing_ = false, scaling_ = false, not_finite_ = false;
   // Multiple time stepping (levels()): per body its level, the level its own step allows, its
   // shortest element step at its last update (before the safety factor), its kinetic and internal
   // energy then; per level l the time at the last step whose number is a multiple of 2^l; the

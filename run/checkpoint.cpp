@@ -7,7 +7,10 @@
 //     fx, fy, friction_x, friction_y)}
 //   /model/elements/{area, sxx, syy, sxy, pressure, energy, plastic_strain, viscosity, eroded}
 //   /model/bodies/{eroded, at_rest, boundary, boundary_offset}
-//   /solver (attributes: fem::Solver::State's numbers, energy_*), {scaled_elements, scaled_mass}
+//   /solver (attributes: fem::Solver::State's numbers, energy_*), {scaled_elements, scaled_mass,
+//     energy_shares (with several ranks: each rank's share of the energies, 9 a rank), owner
+//     (with several ranks: each body's rank; attributes ranks, and achieved, total: the
+//     partition's imbalance and load when made)}
 //   /contact/{pairs, travel, travel_searched, listed, boxes, points, allowed, allowance, rate,
 //     pushed, pushed_depth, statistics (its bytes)}, attribute search_due
 //   /series/{time, dt, step, values (samples x columns)}, attribute columns (names, one a line)
@@ -222,6 +225,14 @@ void writeSolver(H5File &h5, const fem::Solver::State &st) {
   h5.attribute("/solver", "collapsed_elements", st.collapsed_elements);
   h5.write("/solver/scaled_elements", st.scaled_elements);
   h5.write("/solver/scaled_mass", st.scaled_mass);
+  if (!st.energy_shares.empty())
+    h5.write("/solver/energy_shares", st.energy_shares);
+  if (!st.owner.empty()) {
+    h5.write("/solver/owner", std::vector<std::int32_t>(st.owner.begin(), st.owner.end()));
+    h5.attribute("/solver/owner", "ranks", st.partition_ranks);
+    h5.attribute("/solver/owner", "achieved", st.partition_achieved);
+    h5.attribute("/solver/owner", "total", st.partition_total);
+  }
 }
 
 fem::Solver::State readSolver(const H5File &h5) {
@@ -235,6 +246,15 @@ fem::Solver::State readSolver(const H5File &h5) {
   st.collapsed_elements = h5.readAttribute<std::uint64_t>("/solver", "collapsed_elements");
   st.scaled_elements = h5.read<std::uint32_t>("/solver/scaled_elements");
   st.scaled_mass = readSized<double>(h5, "/solver/scaled_mass", st.scaled_elements.size());
+  if (h5.exists("/solver/energy_shares"))
+    st.energy_shares = h5.read<double>("/solver/energy_shares");
+  if (h5.exists("/solver/owner")) {
+    const std::vector<std::int32_t> owner = h5.read<std::int32_t>("/solver/owner");
+    st.owner.assign(owner.begin(), owner.end());
+    st.partition_ranks = h5.readAttribute<int>("/solver/owner", "ranks");
+    st.partition_achieved = h5.readAttribute<double>("/solver/owner", "achieved");
+    st.partition_total = h5.readAttribute<double>("/solver/owner", "total");
+  }
   return st;
 }
 

@@ -234,7 +234,7 @@ void Series::sample(const fem::Model &model, const fem::Solver &solver) {
   time_.push_back(solver.time());
   step_.push_back(solver.steps());
   dt_.push_back(solver.dt());
-  const fem::Energy &e = solver.energy();
+  const fem::Energy &e = solver.sumEnergy();
   const double values[] = {motion[0],  motion[1], motion[2],      motion[3],      motion[4],
                            motion[5],  motion[6], motion[7],      motion[8],      e.kinetic,
                            e.internal, e.plastic, e.viscous,      e.friction,     e.contact,

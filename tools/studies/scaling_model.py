@@ -8,7 +8,8 @@ Two designs of the FE decomposition (docs/solver.md, "A scaling model"):
            shared; every rank receives the box and travel of every moving body (48 bytes, an
            all-gather), the halo nodes' position and velocity (32 bytes) from the ranks it shares
            pairs with (messages whose sizes every rank knows) and the reactions on its nodes (16
-           bytes; messages, after an all-to-all of their sizes);
+           bytes; messages, after an all-to-all of their sizes); the step's figures in one
+           reduction, and another after the step (the ranks agree on a failure or a stop);
   spatial  a rank owns the bodies of its region (a near-square block of the moving region, as
            recursive coordinate bisection gives) and holds a halo, the other ranks' bodies within
            the contact margin: each step it receives the halo nodes' position and velocity
@@ -19,10 +20,10 @@ A step on one rank costs c_e per element update, c_n per node-step (kick, drift,
 and c_p per pair of bodies searched (the contact); the defaults are run 6's
 (examples/baseline.toml to one length on one thread: 126.1 s, 2.18e9 element updates, the element
 pass 51 % of the time, the node loops 20 %, the contact 25.7 s over 5.4e7 pair-steps). A message
-costs `latency + bytes / bandwidth`; a reduction 2 log2(P) latencies; today's design's two
-all-gathers (the boxes, the step's figures) P - 1 latencies each (a ring), its all-to-all of the
-reactions' sizes P - 1, its messages (the halo, the reactions) one latency per neighbour each (at
-most 8), and the reduction that ends a step. The scene scales as run 6: moving elements the share
+costs `latency + bytes / bandwidth`; a reduction 2 log2(P) latencies; today's design's
+all-gather of the boxes P - 1 latencies (a ring), its all-to-all of the reactions' sizes P - 1,
+its messages (the halo, the reactions) one latency per neighbour each (at most 8), and its two
+reductions (the step's figures, and the one that ends a step). The scene scales as run 6: moving elements the share
 `active` of all, nodes and pairs per moving element as in run 6, the halo a band `band` wide around
 each block of the moving region at run 6's node density. Memory per rank: bytes per element (run
 6's peak over its elements) times the elements it holds.
@@ -74,8 +75,8 @@ def today(a, s, p, serial):
     halo = halo_nodes(s, p, a.band)
     bodies = s["nodes"] * RUN6["bodies"] / RUN6["nodes"]
     received = 48.0 * halo + 48.0 * bodies * (p - 1) / p
-    comm = ((3 * (p - 1) + 2 * min(8, p - 1)) * a.latency + received / a.bandwidth +
-            2 * math.log2(p) * a.latency)
+    comm = ((2 * (p - 1) + 2 * min(8, p - 1)) * a.latency + received / a.bandwidth +
+            2 * 2 * math.log2(p) * a.latency)
     compute = s["moving"] / p * a.c_e + s["nodes"] / p * a.c_n + s["pairs"] / p * a.c_p
     return figures(p, compute, comm, received, halo, s["bytes_per_element"] * a.elements, serial)
 
