@@ -907,18 +907,22 @@ void Solver::shareOwned(const std::vector<std::uint32_t> &bodies, std::size_t Bo
           for (auto *f : fields)
             *mine++ = (*f)[i];
   };
-  auto unpack = [&](const double *all) {
-    for (int r = 0; r < comm_.size(); ++r)
-      for (std::uint32_t b : bodies)
-        if (owner(b) == r)
-          for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
-            for (auto *f : fields)
-              (*f)[i] = *all++;
+  // process r's values; returns where the next process's begin
+  auto unpack = [&](int r, const double *values) {
+    for (std::uint32_t b : bodies)
+      if (owner(b) == r)
+        for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
+          for (auto *f : fields)
+            (*f)[i] = *values++;
+    return values;
   };
   if (to_first)
     comm_.collect(count, pack, unpack);
   else
-    comm_.share(count, pack, unpack);
+    comm_.share(count, pack, [&](const double *all) {
+      for (int r = 0; r < comm_.size(); ++r)
+        all = unpack(r, all);
+    });
 }
 
 void Solver::collectFrame() const {
@@ -955,16 +959,15 @@ void Solver::collectExternal(const std::vector<std::uint32_t> &bodies) {
           *mine++ = e.fx, *mine++ = e.fy, *mine++ = e.friction_x, *mine++ = e.friction_y;
         }
   };
-  auto unpack = [&](const double *all) {
-    for (int r = 0; r < comm_.size(); ++r)
-      for (std::uint32_t b : bodies)
-        if (owner(b) == r)
-          for (std::size_t a = m_.bodies[b].node_begin; a < m_.bodies[b].node_end; ++a, all += 4) {
-            nd.external[a] = {all[0], all[1], all[2], all[3]};
-            if (!nd.is_loaded[a] &&
-                (all[0] != 0.0 || all[1] != 0.0 || all[2] != 0.0 || all[3] != 0.0))
-              nd.is_loaded[a] = 1, nd.loaded.push_back(static_cast<std::uint32_t>(a));
-          }
+  auto unpack = [&](int r, const double *values) {
+    for (std::uint32_t b : bodies)
+      if (owner(b) == r)
+        for (std::size_t a = m_.bodies[b].node_begin; a < m_.bodies[b].node_end; ++a, values += 4) {
+          nd.external[a] = {values[0], values[1], values[2], values[3]};
+          if (!nd.is_loaded[a] &&
+              (values[0] != 0.0 || values[1] != 0.0 || values[2] != 0.0 || values[3] != 0.0))
+            nd.is_loaded[a] = 1, nd.loaded.push_back(static_cast<std::uint32_t>(a));
+        }
   };
   comm_.collect(count, pack, unpack);
 }

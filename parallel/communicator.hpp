@@ -37,9 +37,11 @@ public:
   // them all already: neither is called.
   virtual void share(std::size_t count, const std::function<void(double *)> &pack,
                      const std::function<void(const double *)> &unpack) const = 0;
-  // The same to process 0 alone (what it writes): `unpack` is called there only.
+  // The same to process 0 alone (what it writes), process by process: there, `unpack(r, values)`
+  // is called for each other process r in rank order with its values, so that no process ever
+  // holds every process's at once (process 0's own are where they were).
   virtual void collect(std::size_t count, const std::function<void(double *)> &pack,
-                       const std::function<void(const double *)> &unpack) const = 0;
+                       const std::function<void(int, const double *)> &unpack) const = 0;
   // Values for some processes only: `to[r]` goes to process r (one list per process, this one's
   // own included); returns the lists every process sent this one, by sender rank.
   virtual std::vector<std::vector<std::int64_t>>
@@ -74,7 +76,7 @@ public:
   void share(std::size_t, const std::function<void(double *)> &,
              const std::function<void(const double *)> &) const override {}
   void collect(std::size_t, const std::function<void(double *)> &,
-               const std::function<void(const double *)> &) const override {}
+               const std::function<void(int, const double *)> &) const override {}
   std::vector<std::vector<std::int64_t>>
   exchange(std::vector<std::vector<std::int64_t>> to) const override {
     return to;

@@ -101,6 +101,35 @@ GatherLayout layoutOf(const std::vector<std::int64_t> &sizes) {
   return layout;
 }
 
+std::vector<std::int64_t> gatherCounts(std::int64_t count, int root, MPI_Comm comm) {
+  int ranks = 1, rank = 0;
+  MPI_Comm_size(comm, &ranks);
+  MPI_Comm_rank(comm, &rank);
+  std::vector<std::int64_t> counts(rank == root ? static_cast<std::size_t>(ranks) : 0);
+  MPI_Gather(&count, 1, MPI_INT64_T, counts.data(), 1, MPI_INT64_T, root, comm);
+  countReceived(rank == root ? static_cast<std::int64_t>(sizeof(count)) * (ranks - 1) : 0);
+  return counts;
+}
+
+namespace {
+constexpr int bytes_tag = 2;
+} // namespace
+
+void sendBytes(const void *data, std::int64_t bytes, int to, MPI_Comm comm, std::int64_t piece) {
+  const char *from = static_cast<const char *>(data);
+  for (std::int64_t at = 0; at < bytes; at += piece)
+    MPI_Send(from + at, static_cast<int>(std::min(piece, bytes - at)), MPI_BYTE, to, bytes_tag,
+             comm);
+}
+
+void receiveBytes(void *data, std::int64_t bytes, int from, MPI_Comm comm, std::int64_t piece) {
+  char *to = static_cast<char *>(data);
+  for (std::int64_t at = 0; at < bytes; at += piece)
+    MPI_Recv(to + at, static_cast<int>(std::min(piece, bytes - at)), MPI_BYTE, from, bytes_tag,
+             comm, MPI_STATUS_IGNORE);
+  countMessages(bytes);
+}
+
 } // namespace detail
 
 MpiCommunicator::MpiCommunicator(MPI_Comm comm) {
@@ -137,7 +166,10 @@ std::vector<std::int64_t> MpiCommunicator::allGather(std::vector<std::int64_t> m
 std::vector<double> MpiCommunicator::sumInOrder(std::vector<double> mine) const {
   if (size_ == 1 || mine.empty())
     return mine;
-  const std::vector<double> all = allGather(mine);
+  // (every process gives as many values: one call)
+  const std::vector<double> all =
+      allGather(mine, std::vector<std::int64_t>(static_cast<std::size_t>(size_),
+                                                static_cast<std::int64_t>(mine.size())));
   std::vector<double> sum(mine.size(), 0.0);
   for (std::size_t k = 0; k < all.size(); ++k)
     sum[k % mine.size()] += all[k];
@@ -167,14 +199,24 @@ void MpiCommunicator::share(std::size_t count, const std::function<void(double *
 }
 
 void MpiCommunicator::collect(std::size_t count, const std::function<void(double *)> &pack,
-                              const std::function<void(const double *)> &unpack) const {
+                              const std::function<void(int, const double *)> &unpack) const {
   if (size_ == 1)
     return;
-  std::vector<double> mine(count);
-  pack(mine.data());
-  const std::vector<double> all = gatherItems(std::move(mine), 0, comm_);
-  if (rank_ == 0)
-    unpack(all.data());
+  std::vector<double> values(rank_ == 0 ? 0 : count);
+  if (rank_ != 0)
+    pack(values.data());
+  const auto bytes = static_cast<std::int64_t>(sizeof(double) * count);
+  const std::vector<std::int64_t> counts = detail::gatherCounts(bytes, 0, comm_);
+  if (rank_ != 0) {
+    detail::sendBytes(values.data(), bytes, 0, comm_);
+    return;
+  }
+  for (int r = 1; r < size_; ++r) {
+    const std::int64_t received = counts[static_cast<std::size_t>(r)];
+    values.resize(static_cast<std::size_t>(received) / sizeof(double));
+    detail::receiveBytes(values.data(), received, r, comm_);
+    unpack(r, values.data());
+  }
 }
 
 std::vector<std::vector<std::int64_t>>

@@ -8,6 +8,7 @@
 #include <mpi.h>
 
 #include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -72,6 +73,15 @@ struct GatherLayout {
 GatherLayout gatherLayout(std::int64_t mine, MPI_Comm comm);
 // The same from byte counts every rank knows already (no message).
 GatherLayout layoutOf(const std::vector<std::int64_t> &sizes);
+// Every rank's 64-bit `count` at rank `root` (MPI_Gather; the others get none).
+std::vector<std::int64_t> gatherCounts(std::int64_t count, int root, MPI_Comm comm);
+// `bytes` bytes to or from one rank as messages in pieces of at most `piece` bytes (MPI counts
+// are int), counted by traffic() at the receiver.
+constexpr std::int64_t byte_piece = std::int64_t{1} << 30;
+void sendBytes(const void *data, std::int64_t bytes, int to, MPI_Comm comm,
+               std::int64_t piece = byte_piece);
+void receiveBytes(void *data, std::int64_t bytes, int from, MPI_Comm comm,
+                  std::int64_t piece = byte_piece);
 } // namespace detail
 
 // Every rank's items (plain data, sent as bytes), concatenated in rank order on every rank.
@@ -118,8 +128,8 @@ std::vector<T> allGatherItems(std::vector<T> mine, const std::vector<std::int64_
 }
 
 // Every rank's items (plain data, sent as bytes) concatenated in rank order on rank `root`; the
-// others get none. The byte counts are gathered as 64-bit integers first; a whole of more than
-// INT_MAX bytes, which MPI_Gatherv cannot address, throws std::length_error on every rank.
+// others get none. The byte counts go to `root` as 64-bit integers first (one call), then each
+// rank's items as messages (in pieces: any size, 64-bit counts and offsets).
 template <class T> std::vector<T> gatherItems(std::vector<T> mine, int root, MPI_Comm comm) {
   static_assert(std::is_trivially_copyable_v<T>);
   int ranks = 1, rank = 0;
@@ -127,12 +137,25 @@ template <class T> std::vector<T> gatherItems(std::vector<T> mine, int root, MPI
   if (ranks == 1)
     return mine;
   MPI_Comm_rank(comm, &rank);
-  const detail::GatherLayout layout =
-      detail::gatherLayout(static_cast<std::int64_t>(mine.size() * sizeof(T)), comm);
-  std::vector<T> all(rank == root ? static_cast<std::size_t>(layout.total) / sizeof(T) : 0);
-  MPI_Gatherv(mine.data(), layout.counts[rank], MPI_BYTE, all.data(), layout.counts.data(),
-              layout.offsets.data(), MPI_BYTE, root, comm);
-  detail::countReceived(rank == root ? layout.total - layout.counts[rank] : 0);
+  const auto bytes = static_cast<std::int64_t>(mine.size() * sizeof(T));
+  const std::vector<std::int64_t> counts = detail::gatherCounts(bytes, root, comm);
+  if (rank != root) {
+    detail::sendBytes(mine.data(), bytes, root, comm);
+    return {};
+  }
+  std::int64_t total = 0;
+  for (std::int64_t count : counts)
+    total += count;
+  std::vector<T> all(static_cast<std::size_t>(total) / sizeof(T));
+  char *at = reinterpret_cast<char *>(all.data());
+  for (int r = 0; r < ranks; ++r) {
+    const std::int64_t count = counts[static_cast<std::size_t>(r)];
+    if (r == rank)
+      std::memcpy(at, mine.data(), static_cast<std::size_t>(count));
+    else
+      detail::receiveBytes(at, count, r, comm);
+    at += count;
+  }
   return all;
 }
 
@@ -169,8 +192,10 @@ public:
   std::vector<double> max(std::vector<double> values) const override;
   void share(std::size_t count, const std::function<void(double *)> &pack,
              const std::function<void(const double *)> &unpack) const override;
+  // The counts to process 0 (MPI_Gather, 64-bit), then each process's values as messages to it
+  // (in pieces of at most 2^30 values), received one process after the other.
   void collect(std::size_t count, const std::function<void(double *)> &pack,
-               const std::function<void(const double *)> &unpack) const override;
+               const std::function<void(int, const double *)> &unpack) const override;
   // The lists' sizes first (MPI_Alltoall, 64-bit), then each list that is not empty as a message
   // of its own to its process only (in pieces of at most 2^30 values: MPI counts are int).
   std::vector<std::vector<std::int64_t>>

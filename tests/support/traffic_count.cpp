@@ -85,8 +85,9 @@ int main(int argc, char **argv) {
           comm.allGather(std::vector<double>{1.0 * rank, 2.0}, std::vector<std::int64_t>(size, 2));
       return static_cast<int>(all.size()) == 2 * size && all[2 * (size - 1)] == size - 1.0;
     });
-    // sums in order: an all-gather of the values; the least value: one reduction.
-    expectTraffic("sums of 7 doubles in rank order", 8 * 7 * others + sizes, 2, [&] {
+    // sums in order: an all-gather of the values (as many from every rank: one call); the least
+    // value: one reduction.
+    expectTraffic("sums of 7 doubles in rank order", 8 * 7 * others, 1, [&] {
       const std::vector<double> sums = comm.sumInOrder(std::vector<double>(7, 1.0));
       return sums.size() == 7 && sums[6] == size;
     });
@@ -111,21 +112,22 @@ int main(int argc, char **argv) {
           [&](const double *all) { ok = shared == 0 || all[shared - 1] == size - 1; });
       return ok;
     });
-    // collect: the same values to rank 0 alone (the sizes to all).
+    // collect: the same values to rank 0 alone, rank by rank (the counts gathered to rank 0, one
+    // collective call; the values as messages).
     expectTraffic("collect of 2 r values from rank r to rank 0",
-                  (rank == 0 ? 8 * shared : 0) + sizes, 2, [&] {
-                    bool ok = true, unpacked = false;
+                  rank == 0 ? 8 * shared + 8 * (size - 1) : 0, 1, [&] {
+                    bool ok = true;
+                    int unpacked = 0;
                     comm.collect(
                         static_cast<std::size_t>(2 * rank),
                         [&](double *mine) {
                           for (int i = 0; i < 2 * rank; ++i)
                             mine[i] = rank;
                         },
-                        [&](const double *all) {
-                          unpacked = true;
-                          ok = shared == 0 || all[shared - 1] == size - 1;
+                        [&](int r, const double *values) {
+                          ok = ok && r == ++unpacked && values[0] == r && values[2 * r - 1] == r;
                         });
-                    return ok && unpacked == (rank == 0);
+                    return ok && unpacked == (rank == 0 ? size - 1 : 0);
                   });
     // exchange: rank s sends rank q (q + 1) (s + 1) integers, none to the next rank up; the lists'
     // sizes (one 64-bit integer from each other rank, one collective call), then the lists from
@@ -165,13 +167,32 @@ int main(int argc, char **argv) {
         allGatherItems(std::vector<Item>(5, Item{rank, 1.0, 2.0}), MPI_COMM_WORLD);
     return static_cast<int>(all.size()) == 5 * size && all.back().id == size - 1;
   });
+  // a gather to rank 0: the counts to it (one call), then the items as messages
   expectTraffic("gather of rank + 2 items of 24 bytes to rank 0",
-                (rank == 0 ? 24 * (others * (others + 1) / 2 + 2 * others) : 0) + sizes, 2, [&] {
+                rank == 0 ? 24 * (others * (others + 1) / 2 + 2 * others) + 8 * others : 0, 1, [&] {
                   const std::vector<Item> all = gatherItems(
                       std::vector<Item>(rank + 2, Item{rank, 0.0, 0.0}), 0, MPI_COMM_WORLD);
                   return rank == 0 ? static_cast<std::int64_t>(all.size()) ==
                                          (size * (size - 1)) / 2 + 2 * size
                                    : all.empty();
+                });
+  // bytes sent in pieces (here of 7 bytes; 2^30 in the gathers) arrive whole and in order
+  expectTraffic("100 bytes from every rank to rank 0 in pieces of 7", rank == 0 ? 100 * others : 0,
+                0, [&] {
+                  std::vector<unsigned char> bytes(100);
+                  if (rank != 0) {
+                    for (std::size_t i = 0; i < bytes.size(); ++i)
+                      bytes[i] = static_cast<unsigned char>(rank + i);
+                    detail::sendBytes(bytes.data(), 100, 0, MPI_COMM_WORLD, 7);
+                    return true;
+                  }
+                  bool ok = true;
+                  for (int r = 1; r < size; ++r) {
+                    detail::receiveBytes(bytes.data(), 100, r, MPI_COMM_WORLD, 7);
+                    for (std::size_t i = 0; i < bytes.size(); ++i)
+                      ok = ok && bytes[i] == static_cast<unsigned char>(r + i);
+                  }
+                  return ok;
                 });
   expectTraffic("reduction of a double", 8 * others, 1,
                 [&] { return allReduce(double(rank), MPI_MAX, MPI_COMM_WORLD) == size - 1; });

@@ -38,7 +38,7 @@ void expectUnchanged(const parallel::Communicator &one) {
   one.share(
       3, [&](double *) { called = true; }, [&](const double *) { called = true; });
   one.collect(
-      3, [&](double *) { called = true; }, [&](const double *) { called = true; });
+      3, [&](double *) { called = true; }, [&](int, const double *) { called = true; });
   EXPECT_FALSE(called);
 }
 
@@ -66,7 +66,9 @@ TEST(Communicator, TrafficCountsPast32Bits) {
   EXPECT_EQ(parallel::traffic().operations - before.operations, 3);
 }
 
-TEST(Communicator, GatherPastIntMaxBytesIsRefused) {
+// An all-gather (every rank's parts on every rank, MPI_Allgatherv's int offsets) of more than
+// INT_MAX bytes is refused; the gathers to one rank (gatherItems, collect) go in pieces.
+TEST(Communicator, AllGatherPastIntMaxBytesIsRefused) {
   parallel::ensureMpi();
   EXPECT_NO_THROW(parallel::detail::gatherLayout(INT_MAX, MPI_COMM_SELF));
   EXPECT_THROW(parallel::detail::gatherLayout(std::int64_t{INT_MAX} + 1, MPI_COMM_SELF),
