@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -113,10 +114,15 @@ void Contact::addForces(Model &model, double time, double dt) {
   allowances_.release();
   // (with the work shared, each process measures its own bodies, and the pairs' other bodies come
   // from their owners: shareBoxes, exchangeHalo)
-  pairs_.measure(model, boundaries_, [&](std::size_t b) { return mine(b); });
+  auto own = [&](std::size_t b) { return mine(b); };
+  pairs_.measure(model, boundaries_, own);
+  double farthest = pairs_.farthest(boundaries_, own);
   if (shared())
-    shareBoxes();
-  if (pairs_.search(model, boundaries_))
+    farthest = processes_->max({farthest})[0];
+  const bool anew = pairs_.searchNeeded(farthest);
+  if (shared())
+    shareBoxes(model, anew);
+  if (pairs_.search(model, boundaries_, anew))
     ++stats_.searches;
   if (shared())
     exchangeHalo(model);
@@ -214,7 +220,8 @@ std::vector<Contact::BodyContact> Contact::lastContacts() const {
 std::vector<std::pair<std::uint32_t, std::uint32_t>> Contact::overlappingPairs() const {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> overlapping;
   for (const Pair &pair : pairs_.pairs())
-    if (boundaries_.boxes[pair.a].overlaps(boundaries_.boxes[pair.b]))
+    if ((mine(pair.a) || mine(pair.b)) &&
+        boundaries_.boxes[pair.a].overlaps(boundaries_.boxes[pair.b]))
       overlapping.emplace_back(pair.a, pair.b);
   return overlapping;
 }
@@ -361,24 +368,79 @@ void Contact::sendLoads(Model &model) {
               [](const Load &a, const Load &b) { return a.order < b.order; });
 }
 
-// With the work shared: every moving body's box and travel from its owner, who measured it, so
-// that every process finds the same pairs in the same order.
-void Contact::shareBoxes() {
+// With the work shared: the moving bodies' boxes and travel from their owners, who measured them
+// (5 values a body), where they are needed, so that every process finds the same pairs in the same
+// order as one would. At a search (`anew`) every process needs every moving body's: an all-gather.
+// Between searches the pairs stay, and a process needs those of the other processes' bodies its
+// pairs hold (messages), and those of the bodies that woke since the last step (every process
+// finds their pairs with the bodies at rest: to all). Every process knows the moving bodies, the
+// pairs and the owners: each knows what it receives, in body order.
+void Contact::shareBoxes(const Model &model, bool anew) {
   ContactBoundaries &bd = boundaries_;
-  std::vector<double> mine_boxes;
-  for (std::uint32_t b : pairs_.moving())
+  constexpr std::size_t values = 5;
+  const int me = processes_->rank();
+  const auto ranks = static_cast<std::size_t>(processes_->size());
+  auto owner = [&](std::uint32_t b) { return (*owner_)[b]; };
+  auto valuesOf = [&](std::uint32_t b) {
+    return std::array<double, values>{bd.boxes[b].x0, bd.boxes[b].y0, bd.boxes[b].x1,
+                                      bd.boxes[b].y1, bd.travel[b]};
+  };
+  auto unpack = [&](std::uint32_t b, const double *in) {
+    bd.boxes[b] = {in[0], in[1], in[2], in[3]};
+    bd.travel[b] = in[4];
+  };
+  if (anew) {
+    std::vector<double> mine_boxes;
+    std::vector<std::int64_t> sizes(ranks, 0);
+    for (std::uint32_t b : pairs_.moving()) {
+      sizes[static_cast<std::size_t>(owner(b))] += values;
+      if (mine(b))
+        for (double v : valuesOf(b))
+          mine_boxes.push_back(v);
+    }
+    const std::vector<double> all = processes_->allGather(std::move(mine_boxes), sizes);
+    const double *in = all.data();
+    for (std::size_t r = 0; r < ranks; ++r)
+      for (std::uint32_t b : pairs_.moving())
+        if (owner(b) == static_cast<int>(r))
+          unpack(b, in), in += values;
+    return;
+  }
+  std::vector<std::pair<int, std::uint32_t>> sends, receives; // (process, body)
+  auto share = [&](std::uint32_t b, int with) { // b's box to process `with`, if b moves
+    if (model.at_rest[b] || owner(b) == with)
+      return;
     if (mine(b))
-      mine_boxes.insert(mine_boxes.end(), {static_cast<double>(b), bd.boxes[b].x0, bd.boxes[b].y0,
-                                           bd.boxes[b].x1, bd.boxes[b].y1, bd.travel[b]});
-  // (every process knows every moving body's owner: how many boxes each gives)
-  std::vector<std::int64_t> sizes(static_cast<std::size_t>(processes_->size()), 0);
+      sends.emplace_back(with, b);
+    else if (with == me)
+      receives.emplace_back(owner(b), b);
+  };
+  for (const Pair &pair : pairs_.pairs())
+    share(pair.a, owner(pair.b)), share(pair.b, owner(pair.a));
+  const std::vector<char> &listed = pairs_.listed();
   for (std::uint32_t b : pairs_.moving())
-    sizes[static_cast<std::size_t>((*owner_)[b])] += 6;
-  const std::vector<double> all = processes_->allGather(std::move(mine_boxes), sizes);
-  for (std::size_t k = 0; k + 6 <= all.size(); k += 6) {
-    const auto b = static_cast<std::size_t>(all[k]);
-    bd.boxes[b] = {all[k + 1], all[k + 2], all[k + 3], all[k + 4]};
-    bd.travel[b] = all[k + 5];
+    if (!listed[b])
+      for (std::size_t r = 0; r < ranks; ++r)
+        share(b, static_cast<int>(r));
+  for (auto *list : {&sends, &receives}) {
+    std::sort(list->begin(), list->end());
+    list->erase(std::unique(list->begin(), list->end()), list->end());
+  }
+  std::vector<std::int64_t> sizes(ranks, 0);
+  for (auto [r, b] : receives)
+    sizes[static_cast<std::size_t>(r)] += values;
+  std::vector<std::vector<std::int64_t>> to(ranks);
+  for (auto [r, b] : sends)
+    for (double v : valuesOf(b))
+      to[static_cast<std::size_t>(r)].push_back(std::bit_cast<std::int64_t>(v));
+  const std::vector<std::vector<std::int64_t>> from = processes_->exchange(std::move(to), sizes);
+  std::vector<std::size_t> at(ranks, 0);
+  for (auto [r, b] : receives) {
+    const std::vector<std::int64_t> &message = from[static_cast<std::size_t>(r)];
+    double in[values];
+    for (std::size_t k = 0; k < values; ++k)
+      in[k] = std::bit_cast<double>(message[at[static_cast<std::size_t>(r)]++]);
+    unpack(b, in);
   }
 }
 
@@ -442,24 +504,30 @@ void Contact::shareWork(const parallel::Communicator &processes, const std::vect
   block_received_.assign(owner_blocks, {});
 }
 
-// Bodies about to change owner: the depths their nodes were pushed at and their allowances, kept
-// by their owner only, go to their new owner, who places their boundaries where their old owner
-// measured them this step (their nodes came with them: Solver::repartition); every side of every
-// pair is looked at whole at the next step (its clear nodes were measured by the process that
-// computed it).
+// Bodies about to change owner: their box and travel, and the depths their nodes were pushed at and
+// their allowances, kept by their owner only, go to their new owner, who places their boundaries
+// where their old owner measured them this step (their nodes came with them: Solver::repartition);
+// every side of every pair is looked at whole at the next step (its clear nodes were measured by
+// the process that computed it).
 void Contact::bodiesMoving(const Model &model, const std::vector<std::uint32_t> &bodies,
                            const std::vector<int> &new_owner) {
   if (!shared())
     return;
-  constexpr std::size_t values = 3; // per node: pushed depth, allowance, release per step
+  constexpr std::size_t values = 3;      // per node: pushed depth, allowance, release per step
+  constexpr std::size_t body_values = 5; // per body: box, travel
+  ContactBoundaries &bd = boundaries_;
   parallel::moveValues(
       *processes_, bodies.size(), [&](std::size_t k) { return (*owner_)[bodies[k]]; },
       [&](std::size_t k) { return new_owner[bodies[k]]; },
       [&](std::size_t k) {
-        return values * (model.bodies[bodies[k]].node_end - model.bodies[bodies[k]].node_begin);
+        return body_values +
+               values * (model.bodies[bodies[k]].node_end - model.bodies[bodies[k]].node_begin);
       },
       [&](std::size_t k, double *out) {
         const Body &body = model.bodies[bodies[k]];
+        const Box &box = bd.boxes[bodies[k]];
+        *out++ = box.x0, *out++ = box.y0, *out++ = box.x1, *out++ = box.y1;
+        *out++ = bd.travel[bodies[k]];
         for (std::size_t a = body.node_begin; a < body.node_end; ++a) {
           const auto p = static_cast<std::uint32_t>(a);
           const double allowance = allowances_.of(p);
@@ -469,6 +537,9 @@ void Contact::bodiesMoving(const Model &model, const std::vector<std::uint32_t> 
       },
       [&](std::size_t k, const double *in) {
         const std::uint32_t b = bodies[k];
+        bd.boxes[b] = {in[0], in[1], in[2], in[3]};
+        bd.travel[b] = in[4];
+        in += body_values;
         for (std::size_t a = model.bodies[b].node_begin; a < model.bodies[b].node_end;
              ++a, in += values) {
           const auto p = static_cast<std::uint32_t>(a);
@@ -478,7 +549,7 @@ void Contact::bodiesMoving(const Model &model, const std::vector<std::uint32_t> 
           if (in[1] > 0.0 || allowances_.of(p) > 0.0)
             allowances_.set(p, in[1], in[2]);
         }
-        boundaries_.place(model, b);
+        bd.place(model, b);
       });
   for (std::size_t r = 0; r < pairs_.runs(); ++r)
     for (Pair &pair : pairs_.run(r))
@@ -878,18 +949,30 @@ Contact::State Contact::state(const Model &model) const {
     st.boxes.insert(st.boxes.end(), {b.x0, b.y0, b.x1, b.y1});
   for (const Point &p : boundaries_.points)
     st.points.insert(st.points.end(), {p.x, p.y});
-  if (shared()) { // (the moving bodies' points from their owners, who measured them)
+  if (shared()) { // (the moving bodies' boxes, travel and points from their owners, who measured
+                  // them)
     std::vector<double> measured;
     for (std::uint32_t b : pairs_.moving())
-      if (mine(b))
+      if (mine(b)) {
+        const Box &box = boundaries_.boxes[b];
+        measured.insert(measured.end(),
+                        {-1.0 - b, box.x0, box.y0, box.x1, box.y1, boundaries_.travel[b]});
         for (std::size_t k = boundaries_.node_begin[b]; k < boundaries_.node_begin[b + 1]; ++k)
           measured.insert(measured.end(), {static_cast<double>(k), boundaries_.points[k].x,
                                            boundaries_.points[k].y});
+      }
     const std::vector<double> all = processes_->allGather(std::move(measured));
-    for (std::size_t i = 0; i + 3 <= all.size(); i += 3) {
-      const auto k = static_cast<std::size_t>(all[i]);
-      st.points[2 * k] = all[i + 1], st.points[2 * k + 1] = all[i + 2];
-    }
+    for (std::size_t i = 0; i < all.size();)
+      if (all[i] < 0.0) { // a body (-1 - b): its box and travel
+        const auto b = static_cast<std::size_t>(-1.0 - all[i]);
+        std::copy(&all[i + 1], &all[i + 5], &st.boxes[4 * b]);
+        st.travel[b] = all[i + 5];
+        i += 6;
+      } else { // a boundary node: its point
+        const auto k = static_cast<std::size_t>(all[i]);
+        st.points[2 * k] = all[i + 1], st.points[2 * k + 1] = all[i + 2];
+        i += 3;
+      }
   }
   // (with the work shared, each node's from its owner: every process's, in rank order)
   const std::vector<std::uint32_t> &body = model.nodes.body;

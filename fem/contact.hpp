@@ -125,7 +125,8 @@ public:
     std::uint32_t node_body, node, segment_body, segment_node[2];
   };
   std::vector<BodyContact> lastContacts() const;
-  // The last step's pairs of bodies whose boxes overlap (those the narrow phase looked at).
+  // The last step's pairs of bodies whose boxes overlap (those the narrow phase looked at; with the
+  // work shared, those of this process's bodies: the others' boxes are current at their owners).
   std::vector<std::pair<std::uint32_t, std::uint32_t>> overlappingPairs() const;
 
 private:
@@ -179,7 +180,7 @@ private:
   void addHits(Model &model);
   void addBlock(Model &model, std::size_t k);
   void sendLoads(Model &model);
-  void shareBoxes();
+  void shareBoxes(const Model &model, bool anew);
   void exchangeHalo(Model &model);
   bool shared() const { return processes_ != nullptr && processes_->size() > 1; }
   bool mine(std::size_t body) const { return !shared() || (*owner_)[body] == processes_->rank(); }

@@ -45,16 +45,12 @@ BodyPairs::BodyPairs(const Model &model, const ContactBoundaries &boundaries, st
   arenas_.resize(runs);
 }
 
-bool BodyPairs::search(const Model &model, const ContactBoundaries &boundaries) {
-  double farthest = 0.0; // the largest travel since the last search for pairs
-  for (std::uint32_t b : moving_)
-    farthest = std::max(farthest, boundaries.travel[b] - travel_searched_[b]);
-  if (run_pairs_.empty() || 2.0 * farthest > search_margin_) {
+bool BodyPairs::search(const Model &model, const ContactBoundaries &boundaries, bool anew) {
+  if (anew)
     findPairs(boundaries);
-    return true;
-  }
-  addPairsOfWoken(model, boundaries.boxes);
-  return false;
+  else
+    addPairsOfWoken(model, boundaries.boxes);
+  return anew;
 }
 
 // Cell lists of the bodies `which` over the rectangle their boxes cover (counting sort: cell by

@@ -61,10 +61,23 @@ public:
       if ((model.due.empty() || model.due[moving_[i]]) && measured(moving_[i]))
         boundaries.measure(model, moving_[i]);
   }
-  // The pairs: all anew when a body may have closed half the margin since the last search (or none
-  // was made since forget), else those of the bodies that woke since the last step added. Returns
-  // whether it searched anew.
-  bool search(const Model &model, const ContactBoundaries &boundaries);
+  // The largest travel since the last search for pairs of the moving bodies `which` accepts (with
+  // the work shared, a process's own: the largest over the processes is the run's).
+  template <class Which> double farthest(const ContactBoundaries &boundaries, Which which) const {
+    double most = 0.0;
+    for (std::uint32_t b : moving_)
+      if (which(b))
+        most = std::max(most, boundaries.travel[b] - travel_searched_[b]);
+    return most;
+  }
+  // Whether the pairs are to be found anew: a body may have closed half the margin since the last
+  // search (`farthest`, the largest travel since), or none was made since forget.
+  bool searchNeeded(double farthest) const {
+    return run_pairs_.empty() || 2.0 * farthest > search_margin_;
+  }
+  // The pairs: all anew (`anew`, as searchNeeded says), else those of the bodies that woke since
+  // the last step added. Returns `anew`.
+  bool search(const Model &model, const ContactBoundaries &boundaries, bool anew);
   // The boundaries changed: the lists hold indices into them, so all pairs are found anew, with
   // new lists, at the next update.
   void forget() { run_pairs_.clear(); }

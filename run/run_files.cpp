@@ -319,6 +319,7 @@ nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Seri
                     {"deep_node_steps", c.deep},
                     {"sudden_contacts", c.sudden},
                     {"last_step_pairs", c.pairs},
+                    {"pair_searches", c.searches},
                     {"pair_sides_skipped_as_clear",
                      static_cast<double>(c.skipped) / std::max<double>(c.sides, 1.0)},
                     {"pair_sides_hot_nodes_only",

@@ -231,7 +231,8 @@ TEST(Mpi, TwoRanksShareTheElementWork) {
 // twice as many (a pair of two ranks' bodies is searched by both, each pushing its own nodes); a
 // step makes at most 3.5 collective calls on average (the step's figures, one reduction, the
 // energies summed only when the series samples them; the moving bodies'
-// boxes, one, as every rank knows how many each gives; the sizes of the contact's loads, one; the
+// travel since the last search, one reduction, and their boxes, all-gathered at a search and
+// otherwise sent to the ranks whose pairs hold them; the sizes of the contact's loads, one; the
 // halo and the loads themselves are messages; the failed elements' states and a repartition only
 // at their steps); a body that changes owner goes to its new owner alone (with the bodies at rest,
 // the same everywhere, staying), so no rank receives in one step more than the state of every
