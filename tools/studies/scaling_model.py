@@ -5,11 +5,13 @@ Two designs of the FE decomposition (docs/solver.md, "A scaling model"):
 
   today    every rank holds the whole model; the element updates, the node loops (each rank moves
            the nodes of its bodies) and the FE-FE contact (the pairs of its own bodies) are
-           shared; every rank receives the box and travel of every moving body (48 bytes, an
-           all-gather), the halo nodes' position and velocity (32 bytes) from the ranks it shares
-           pairs with (messages whose sizes every rank knows) and the reactions on its nodes (16
-           bytes; messages, after an all-to-all of their sizes); the step's figures in one
-           reduction, and another after the step (the ranks agree on a failure or a stop);
+           shared; every rank receives the box and travel of every moving body (40 bytes, an
+           all-gather) at each search for pairs (every `search_every` steps) and between them of
+           the bodies its pairs hold, the halo nodes' position and velocity (32 bytes) from the
+           ranks it shares pairs with (messages whose sizes every rank knows) and the reactions on
+           its nodes (16 bytes; messages, after an all-to-all of their sizes); three reductions
+           (the largest travel, the step's figures, and after the step the ranks agree on a
+           failure or a stop);
   spatial  a rank owns the bodies of its region (a near-square block of the moving region, as
            recursive coordinate bisection gives) and holds a halo, the other ranks' bodies within
            the contact margin: each step it receives the halo nodes' position and velocity
@@ -21,9 +23,9 @@ and c_p per pair of bodies searched (the contact); the defaults are run 6's
 (examples/baseline.toml to one length on one thread: 126.1 s, 2.18e9 element updates, the element
 pass 51 % of the time, the node loops 20 %, the contact 25.7 s over 5.4e7 pair-steps). A message
 costs `latency + bytes / bandwidth`; a reduction 2 log2(P) latencies; today's design's
-all-gather of the boxes P - 1 latencies (a ring), its all-to-all of the reactions' sizes P - 1,
-its messages (the halo, the reactions) one latency per neighbour each (at most 8), and its two
-reductions (the step's figures, and the one that ends a step). The scene scales as run 6: moving elements the share
+all-gather of the boxes P - 1 latencies (a ring) at a search, its all-to-all of the reactions'
+sizes P - 1, its messages (the boxes, the halo, the reactions) one latency per neighbour each (at
+most 8), and its three reductions. The scene scales as run 6: moving elements the share
 `active` of all, nodes and pairs per moving element as in run 6, the halo a band `band` wide around
 each block of the moving region at run 6's node density. Memory per rank: bytes per element (run
 6's peak over its elements) times the elements it holds.
@@ -42,7 +44,7 @@ import sys
 RUN6 = {  # examples/baseline.toml, one projectile length, one thread (docs/solver.md)
     "elements": 446558, "nodes": 303205, "area_mm2": 7.076 * 3.538,
     "active_elements": 124306, "active_nodes": 82395, "pairs": 3089,
-    "peak_bytes": 224710656, "bodies": 6199,
+    "peak_bytes": 224710656, "bodies": 6199, "steps": 17501, "searches": 389,
 }
 
 
@@ -73,10 +75,13 @@ def halo_nodes(s, p, band):
 def today(a, s, p, serial):
     """Elements, nodes and contact shared; a halo by pair; the moving bodies' boxes all-gathered."""
     halo = halo_nodes(s, p, a.band)
-    bodies = s["nodes"] * RUN6["bodies"] / RUN6["nodes"]
-    received = 48.0 * halo + 48.0 * bodies * (p - 1) / p
-    comm = ((2 * (p - 1) + 2 * min(8, p - 1)) * a.latency + received / a.bandwidth +
-            2 * 2 * math.log2(p) * a.latency)
+    bodies_per_node = RUN6["bodies"] / RUN6["nodes"]
+    bodies = s["nodes"] * bodies_per_node
+    # halo nodes' state and reactions; the boxes of the bodies they belong to; all boxes at a search
+    received = ((48.0 + 40.0 * bodies_per_node) * halo +
+                40.0 * bodies * (p - 1) / p / a.search_every)
+    comm = (((p - 1) / a.search_every + (p - 1) + 3 * min(8, p - 1)) * a.latency +
+            received / a.bandwidth + 3 * 2 * math.log2(p) * a.latency)
     compute = s["moving"] / p * a.c_e + s["nodes"] / p * a.c_n + s["pairs"] / p * a.c_p
     return figures(p, compute, comm, received, halo, s["bytes_per_element"] * a.elements, serial)
 
@@ -124,6 +129,8 @@ def main():
     p.add_argument("--active", type=float, default=RUN6["active_elements"] / RUN6["elements"],
                    help="share of the elements moving in a step")
     p.add_argument("--band", type=float, default=0.07, help="halo band width [mm]")
+    p.add_argument("--search-every", dest="search_every", type=float,
+                   default=RUN6["steps"] / RUN6["searches"], help="steps per search for pairs")
     p.add_argument("--c-e", dest="c_e", type=float, default=29.6e-9, help="s per element update")
     p.add_argument("--c-n", dest="c_n", type=float, default=17.5e-9, help="s per node-step")
     p.add_argument("--c-p", dest="c_p", type=float, default=475e-9, help="s per pair-step")
@@ -135,7 +142,8 @@ def main():
         print("scaling_model.py: --ranks %s: comma-separated whole numbers expected" % a.ranks,
               file=sys.stderr)
         sys.exit(2)
-    for name in ("elements", "bandwidth", "latency", "active", "band", "c_e", "c_n", "c_p"):
+    for name in ("elements", "bandwidth", "latency", "active", "band", "search_every", "c_e", "c_n",
+                 "c_p"):
         value = getattr(a, name)
         if not (value > 0 and math.isfinite(value)) or (name == "active" and a.active > 1):
             print("scaling_model.py: --%s %g: allowed finite and > 0%s" % (
