@@ -147,10 +147,11 @@ public:
   // nodes; every process holds the whole model.
   // With more than one process `partitioner` says who owns which body, from the bodies' centroids
   // weighted by their active elements, at the start and whenever the load is out of balance
-  // (balanceLoad); a body that changes owner brings its elements' state and its nodes' external
-  // forces. After each drift the nodes of every process's active bodies (position and velocity)
-  // are gathered by all, and so are the failed elements' states; energies and the stable step are
-  // combined in rank order. Both outlive the solver.
+  // (balanceLoad); a moving body that changes owner brings its elements' state and its nodes'
+  // positions, velocities and external forces to its new owner. A moving body's nodes are current
+  // at its owner (the force providers exchange what they need of them); the failed elements'
+  // states go to all; the stable step is the least over the processes (the step's one
+  // reduction); each keeps its share of the energies (energy()). Both outlive the solver.
   Solver(Model &model, SolverSettings settings,
          const parallel::Communicator &processes = parallel::serial(),
          const parallel::Partitioner &partitioner = parallel::serialPartitioner());
