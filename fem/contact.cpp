@@ -949,30 +949,27 @@ Contact::State Contact::state(const Model &model) const {
     st.boxes.insert(st.boxes.end(), {b.x0, b.y0, b.x1, b.y1});
   for (const Point &p : boundaries_.points)
     st.points.insert(st.points.end(), {p.x, p.y});
-  if (shared()) { // (the moving bodies' boxes, travel and points from their owners, who measured
-                  // them)
+  if (shared()) { // the moving bodies' boxes, travel and points from their owners, who measured
+                  // them: per body its number, box, travel and its boundary nodes' points
     std::vector<double> measured;
     for (std::uint32_t b : pairs_.moving())
       if (mine(b)) {
         const Box &box = boundaries_.boxes[b];
-        measured.insert(measured.end(),
-                        {-1.0 - b, box.x0, box.y0, box.x1, box.y1, boundaries_.travel[b]});
+        measured.insert(measured.end(), {static_cast<double>(b), box.x0, box.y0, box.x1, box.y1,
+                                         boundaries_.travel[b]});
         for (std::size_t k = boundaries_.node_begin[b]; k < boundaries_.node_begin[b + 1]; ++k)
-          measured.insert(measured.end(), {static_cast<double>(k), boundaries_.points[k].x,
-                                           boundaries_.points[k].y});
+          measured.insert(measured.end(), {boundaries_.points[k].x, boundaries_.points[k].y});
       }
     const std::vector<double> all = processes_->allGather(std::move(measured));
-    for (std::size_t i = 0; i < all.size();)
-      if (all[i] < 0.0) { // a body (-1 - b): its box and travel
-        const auto b = static_cast<std::size_t>(-1.0 - all[i]);
-        std::copy(&all[i + 1], &all[i + 5], &st.boxes[4 * b]);
-        st.travel[b] = all[i + 5];
-        i += 6;
-      } else { // a boundary node: its point
-        const auto k = static_cast<std::size_t>(all[i]);
-        st.points[2 * k] = all[i + 1], st.points[2 * k + 1] = all[i + 2];
-        i += 3;
-      }
+    for (std::size_t i = 0; i < all.size();) {
+      const auto b = static_cast<std::size_t>(all[i]);
+      std::copy(&all[i + 1], &all[i + 5], &st.boxes[4 * b]);
+      st.travel[b] = all[i + 5];
+      i += 6;
+      for (std::size_t k = boundaries_.node_begin[b]; k < boundaries_.node_begin[b + 1];
+           ++k, i += 2)
+        st.points[2 * k] = all[i], st.points[2 * k + 1] = all[i + 1];
+    }
   }
   // (with the work shared, each node's from its owner: every process's, in rank order)
   const std::vector<std::uint32_t> &body = model.nodes.body;
