@@ -170,9 +170,9 @@ public:
   // stiffer, and shifts the kinetic energy the leapfrog reports, 1.7e-3 of the impact's in
   // Energy.MultiBodyImpactWithoutViscosityClosesItsBalance).
   void endAt(double time) { end_at_ = time; }
-  // The run's energies: with one process, as of the last step; with several, each holds its share
-  // (its elements' and nodes'; what every process knows, the first), summed only when asked:
-  // energy() gives them as sumEnergy, which every process calls, last summed them (in rank order).
+  // The run's energies. With one process, as of the last step. With several, each process holds
+  // its share (its elements' and its nodes'; what every process knows, the first process), and
+  // sumEnergy, which every process calls, adds the shares in rank order: energy() is the last sum.
   const Energy &energy() const { return comm_.size() > 1 ? summed_ : energy_; }
   const Energy &sumEnergy() const;
   void addForceProvider(ForceProvider *provider);
@@ -386,8 +386,9 @@ private:
   std::vector<double> checkpoint_shares_; // every process's share, at the last collectCheckpoint
   // Work of this step: constraints and gravity; providers' forces; their frictional part.
   double kick_work_ = 0.0, provider_work_ = 0.0, friction_work_ = 0.0;
-  // The last element pass of every process (forces): its internal energy, plastic and viscous
-  // work, and whether any element failed or asked for mass.
+  // This process's last element pass (forces): its internal energy, plastic and viscous work; and
+  // from the step's reduction whether any process's elements failed or asked for mass, or any
+  // process's energies are no longer finite.
   std::array<double, 3> step_sums_{};
   bool failing_ = false, scaling_ = false, not_finite_ = false;
   // Multiple time stepping (levels()): per body its level, the level its own step allows, its
