@@ -71,7 +71,7 @@ private:
 LiggghtsDem::LiggghtsDem(const std::string &script,
                          std::vector<std::pair<std::string, std::string>> variables,
                          const std::string &log, MPI_Comm comm, bool append_log)
-    : comm_(comm) {
+    : own_(comm), comm_(own_.handle()) {
   namespace fs = std::filesystem;
   if (!fs::is_regular_file(script))
     throw std::invalid_argument("LIGGGHTS input script " + script + " not found");

@@ -64,6 +64,9 @@ private:
   void setStep(double dt);
   void step(const Exchange *exchange);
   void *lmp_ = nullptr;
+  // mesopen's own gathers and reductions go through a duplicate of the processes' communicator:
+  // they never meet LIGGGHTS's messages
+  parallel::MpiCommunicator own_;
   MPI_Comm comm_;
   Particles p_;
   ParticleForces forces_;

@@ -368,45 +368,39 @@ void Contact::sendLoads(Model &model) {
               [](const Load &a, const Load &b) { return a.order < b.order; });
 }
 
-// With the work shared: the moving bodies' boxes and travel from their owners, who measured them
-// (5 values a body), where they are needed, so that every process finds the same pairs in the same
-// order as one would. At a search (`anew`) every process needs every moving body's: an all-gather.
-// Between searches the pairs stay, and a process needs those of the other processes' bodies its
-// pairs hold (messages), and those of the bodies that woke since the last step (every process
-// finds their pairs with the bodies at rest: to all). Every process knows the moving bodies, the
-// pairs and the owners: each knows what it receives, in body order.
+// With the work shared: the moving bodies' boxes and travel from their owners, who measured them,
+// where they are needed, so that every process finds the same pairs in the same order as one
+// would. At a search (`anew`) every process needs every moving body's: an all-gather. Between
+// searches the pairs stay, and a process needs those of the other processes' bodies its pairs hold,
+// and those of the bodies that woke since the last step (every process finds their pairs with the
+// bodies at rest: to all).
 void Contact::shareBoxes(const Model &model, bool anew) {
   ContactBoundaries &bd = boundaries_;
-  constexpr std::size_t values = 5;
-  const int me = processes_->rank();
+  constexpr std::size_t values = ContactBoundaries::box_values;
   const auto ranks = static_cast<std::size_t>(processes_->size());
   auto owner = [&](std::uint32_t b) { return (*owner_)[b]; };
-  auto valuesOf = [&](std::uint32_t b) {
-    return std::array<double, values>{bd.boxes[b].x0, bd.boxes[b].y0, bd.boxes[b].x1,
-                                      bd.boxes[b].y1, bd.travel[b]};
-  };
-  auto unpack = [&](std::uint32_t b, const double *in) {
-    bd.boxes[b] = {in[0], in[1], in[2], in[3]};
-    bd.travel[b] = in[4];
-  };
-  if (anew) {
+  if (anew) { // (every process knows every moving body's owner: how many values each gives)
     std::vector<double> mine_boxes;
     std::vector<std::int64_t> sizes(ranks, 0);
     for (std::uint32_t b : pairs_.moving()) {
       sizes[static_cast<std::size_t>(owner(b))] += values;
       if (mine(b))
-        for (double v : valuesOf(b))
+        for (double v : bd.boxAndTravel(b))
           mine_boxes.push_back(v);
     }
     const std::vector<double> all = processes_->allGather(std::move(mine_boxes), sizes);
-    const double *in = all.data();
-    for (std::size_t r = 0; r < ranks; ++r)
-      for (std::uint32_t b : pairs_.moving())
-        if (owner(b) == static_cast<int>(r))
-          unpack(b, in), in += values;
+    std::vector<const double *> from(ranks); // where each process's values are next
+    for (std::size_t r = 0, at = 0; r < ranks; at += static_cast<std::size_t>(sizes[r++]))
+      from[r] = all.data() + at;
+    for (std::uint32_t b : pairs_.moving()) {
+      const double *&in = from[static_cast<std::size_t>(owner(b))];
+      bd.setBoxAndTravel(b, in);
+      in += values;
+    }
     return;
   }
-  std::vector<std::pair<int, std::uint32_t>> sends, receives; // (process, body)
+  const int me = processes_->rank();
+  BodiesTo sends, receives;
   auto share = [&](std::uint32_t b, int with) { // b's box to process `with`, if b moves
     if (model.at_rest[b] || owner(b) == with)
       return;
@@ -422,26 +416,18 @@ void Contact::shareBoxes(const Model &model, bool anew) {
     if (!listed[b])
       for (std::size_t r = 0; r < ranks; ++r)
         share(b, static_cast<int>(r));
-  for (auto *list : {&sends, &receives}) {
-    std::sort(list->begin(), list->end());
-    list->erase(std::unique(list->begin(), list->end()), list->end());
-  }
-  std::vector<std::int64_t> sizes(ranks, 0);
-  for (auto [r, b] : receives)
-    sizes[static_cast<std::size_t>(r)] += values;
-  std::vector<std::vector<std::int64_t>> to(ranks);
-  for (auto [r, b] : sends)
-    for (double v : valuesOf(b))
-      to[static_cast<std::size_t>(r)].push_back(std::bit_cast<std::int64_t>(v));
-  const std::vector<std::vector<std::int64_t>> from = processes_->exchange(std::move(to), sizes);
-  std::vector<std::size_t> at(ranks, 0);
-  for (auto [r, b] : receives) {
-    const std::vector<std::int64_t> &message = from[static_cast<std::size_t>(r)];
-    double in[values];
-    for (std::size_t k = 0; k < values; ++k)
-      in[k] = std::bit_cast<double>(message[at[static_cast<std::size_t>(r)]++]);
-    unpack(b, in);
-  }
+  sendBodies(
+      std::move(sends), std::move(receives), [](std::uint32_t) { return values; },
+      [&](std::uint32_t b, std::int64_t *out) {
+        for (double v : bd.boxAndTravel(b))
+          *out++ = std::bit_cast<std::int64_t>(v);
+      },
+      [&](std::uint32_t b, const std::int64_t *in) {
+        double box[values];
+        for (std::size_t k = 0; k < values; ++k)
+          box[k] = std::bit_cast<double>(in[k]);
+        bd.setBoxAndTravel(b, box);
+      });
 }
 
 // With the work shared: the pairs whose boxes overlap and whose bodies two processes own are
@@ -451,52 +437,67 @@ void Contact::exchangeHalo(Model &model) {
   ContactBoundaries &bd = boundaries_;
   Nodes &nd = model.nodes;
   const int me = processes_->rank();
-  // to whom, which body; from whom, which body (every process knows the pairs, boxes and owners:
-  // what each receives is known without asking)
-  std::vector<std::pair<int, std::uint32_t>> sends, receives;
+  BodiesTo sends, receives; // (the boxes of both bodies of such a pair are current at both)
   for (const Pair &pair : pairs_.pairs()) {
     const int owner_a = (*owner_)[pair.a], owner_b = (*owner_)[pair.b];
-    if (owner_a == owner_b || !bd.boxes[pair.a].overlaps(bd.boxes[pair.b]))
+    if (owner_a == owner_b || (owner_a != me && owner_b != me) ||
+        !bd.boxes[pair.a].overlaps(bd.boxes[pair.b]))
       continue;
     if (owner_a == me)
       sends.emplace_back(owner_b, pair.a), receives.emplace_back(owner_b, pair.b);
-    else if (owner_b == me)
+    else
       sends.emplace_back(owner_a, pair.b), receives.emplace_back(owner_a, pair.a);
   }
+  sendBodies(
+      std::move(sends), std::move(receives),
+      [&](std::uint32_t b) { return 4 * (bd.node_begin[b + 1] - bd.node_begin[b]); },
+      [&](std::uint32_t b, std::int64_t *out) {
+        for (std::size_t k = bd.node_begin[b]; k < bd.node_begin[b + 1]; ++k) {
+          const std::uint32_t p = bd.nodes[k];
+          for (double v : {nd.x[p], nd.y[p], nd.vx[p], nd.vy[p]})
+            *out++ = std::bit_cast<std::int64_t>(v);
+        }
+      },
+      [&](std::uint32_t b, const std::int64_t *in) {
+        stats_.halo_nodes += bd.node_begin[b + 1] - bd.node_begin[b];
+        for (std::size_t k = bd.node_begin[b]; k < bd.node_begin[b + 1]; ++k, in += 4) {
+          const std::uint32_t p = bd.nodes[k];
+          nd.x[p] = std::bit_cast<double>(in[0]), nd.y[p] = std::bit_cast<double>(in[1]);
+          nd.vx[p] = std::bit_cast<double>(in[2]), nd.vy[p] = std::bit_cast<double>(in[3]);
+        }
+        bd.place(model, b);
+      });
+}
+
+// With the work shared: `count(b)` values of each body of `sends` (its process, the body), packed
+// by `pack(b, out)`, go to that process, and those of `receives` come from theirs, unpacked by
+// `unpack(b, in)`. Both sides know the lists (the pairs, the boxes and the owners): messages alone,
+// body after body in (process, body) order.
+template <class Count, class Pack, class Unpack>
+void Contact::sendBodies(BodiesTo sends, BodiesTo receives, Count count, Pack pack,
+                         Unpack unpack) const {
   for (auto *list : {&sends, &receives}) {
     std::sort(list->begin(), list->end());
     list->erase(std::unique(list->begin(), list->end()), list->end());
   }
-  std::vector<std::int64_t> sizes(static_cast<std::size_t>(processes_->size()), 0);
+  const auto ranks = static_cast<std::size_t>(processes_->size());
+  std::vector<std::int64_t> sizes(ranks, 0);
   for (auto [r, b] : receives)
-    sizes[static_cast<std::size_t>(r)] +=
-        1 + 4 * static_cast<std::int64_t>(bd.node_begin[b + 1] - bd.node_begin[b]);
-  std::vector<std::vector<std::int64_t>> to(static_cast<std::size_t>(processes_->size()));
+    sizes[static_cast<std::size_t>(r)] += static_cast<std::int64_t>(count(b));
+  std::vector<std::vector<std::int64_t>> to(ranks);
   for (auto [r, b] : sends) {
     std::vector<std::int64_t> &message = to[static_cast<std::size_t>(r)];
-    message.push_back(b);
-    for (std::size_t k = bd.node_begin[b]; k < bd.node_begin[b + 1]; ++k) {
-      const std::uint32_t p = bd.nodes[k];
-      message.insert(message.end(),
-                     {std::bit_cast<std::int64_t>(nd.x[p]), std::bit_cast<std::int64_t>(nd.y[p]),
-                      std::bit_cast<std::int64_t>(nd.vx[p]),
-                      std::bit_cast<std::int64_t>(nd.vy[p])});
-    }
+    const std::size_t at = message.size();
+    message.resize(at + count(b));
+    pack(b, message.data() + at);
   }
   const std::vector<std::vector<std::int64_t>> from = processes_->exchange(std::move(to), sizes);
-  for (const std::vector<std::int64_t> &message : from)
-    for (std::size_t i = 0; i < message.size();) {
-      const auto b = static_cast<std::size_t>(message[i++]);
-      stats_.halo_nodes += bd.node_begin[b + 1] - bd.node_begin[b];
-      for (std::size_t k = bd.node_begin[b]; k < bd.node_begin[b + 1]; ++k, i += 4) {
-        const std::uint32_t p = bd.nodes[k];
-        nd.x[p] = std::bit_cast<double>(message[i]);
-        nd.y[p] = std::bit_cast<double>(message[i + 1]);
-        nd.vx[p] = std::bit_cast<double>(message[i + 2]);
-        nd.vy[p] = std::bit_cast<double>(message[i + 3]);
-      }
-      bd.place(model, b);
-    }
+  std::vector<std::size_t> at(ranks, 0);
+  for (auto [r, b] : receives) {
+    const auto q = static_cast<std::size_t>(r);
+    unpack(b, from[q].data() + at[q]);
+    at[q] += count(b);
+  }
 }
 
 void Contact::shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) {
@@ -513,8 +514,8 @@ void Contact::bodiesMoving(const Model &model, const std::vector<std::uint32_t> 
                            const std::vector<int> &new_owner) {
   if (!shared())
     return;
-  constexpr std::size_t values = 3;      // per node: pushed depth, allowance, release per step
-  constexpr std::size_t body_values = 5; // per body: box, travel
+  constexpr std::size_t values = 3; // per node: pushed depth, allowance, release per step
+  constexpr std::size_t body_values = ContactBoundaries::box_values; // per body: box, travel
   ContactBoundaries &bd = boundaries_;
   parallel::moveValues(
       *processes_, bodies.size(), [&](std::size_t k) { return (*owner_)[bodies[k]]; },
@@ -525,9 +526,8 @@ void Contact::bodiesMoving(const Model &model, const std::vector<std::uint32_t> 
       },
       [&](std::size_t k, double *out) {
         const Body &body = model.bodies[bodies[k]];
-        const Box &box = bd.boxes[bodies[k]];
-        *out++ = box.x0, *out++ = box.y0, *out++ = box.x1, *out++ = box.y1;
-        *out++ = bd.travel[bodies[k]];
+        for (double v : bd.boxAndTravel(bodies[k]))
+          *out++ = v;
         for (std::size_t a = body.node_begin; a < body.node_end; ++a) {
           const auto p = static_cast<std::uint32_t>(a);
           const double allowance = allowances_.of(p);
@@ -537,8 +537,7 @@ void Contact::bodiesMoving(const Model &model, const std::vector<std::uint32_t> 
       },
       [&](std::size_t k, const double *in) {
         const std::uint32_t b = bodies[k];
-        bd.boxes[b] = {in[0], in[1], in[2], in[3]};
-        bd.travel[b] = in[4];
+        bd.setBoxAndTravel(b, in);
         in += body_values;
         for (std::size_t a = model.bodies[b].node_begin; a < model.bodies[b].node_end;
              ++a, in += values) {
@@ -954,9 +953,9 @@ Contact::State Contact::state(const Model &model) const {
     std::vector<double> measured;
     for (std::uint32_t b : pairs_.moving())
       if (mine(b)) {
-        const Box &box = boundaries_.boxes[b];
-        measured.insert(measured.end(), {static_cast<double>(b), box.x0, box.y0, box.x1, box.y1,
-                                         boundaries_.travel[b]});
+        measured.push_back(static_cast<double>(b));
+        for (double v : boundaries_.boxAndTravel(b))
+          measured.push_back(v);
         for (std::size_t k = boundaries_.node_begin[b]; k < boundaries_.node_begin[b + 1]; ++k)
           measured.insert(measured.end(), {boundaries_.points[k].x, boundaries_.points[k].y});
       }

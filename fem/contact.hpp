@@ -182,6 +182,9 @@ private:
   void sendLoads(Model &model);
   void shareBoxes(const Model &model, bool anew);
   void exchangeHalo(Model &model);
+  using BodiesTo = std::vector<std::pair<int, std::uint32_t>>; // (process, body)
+  template <class Count, class Pack, class Unpack>
+  void sendBodies(BodiesTo sends, BodiesTo receives, Count count, Pack pack, Unpack unpack) const;
   bool shared() const { return processes_ != nullptr && processes_->size() > 1; }
   bool mine(std::size_t body) const { return !shared() || (*owner_)[body] == processes_->rank(); }
 

@@ -11,6 +11,7 @@
 #include "contact_narrow.hpp"
 #include "model.hpp"
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -35,6 +36,17 @@ struct ContactBoundaries {
   void place(const Model &model, std::size_t b) {
     for (std::size_t k = node_begin[b]; k < node_begin[b + 1]; ++k)
       points[k] = {model.nodes.x[nodes[k]], model.nodes.y[nodes[k]]};
+  }
+
+  // Body b's box and travel as five values (x0, y0, x1, y1, travel), as they travel between
+  // processes; and set from them.
+  static constexpr std::size_t box_values = 5;
+  std::array<double, box_values> boxAndTravel(std::size_t b) const {
+    return {boxes[b].x0, boxes[b].y0, boxes[b].x1, boxes[b].y1, travel[b]};
+  }
+  void setBoxAndTravel(std::size_t b, const double *values) {
+    boxes[b] = {values[0], values[1], values[2], values[3]};
+    travel[b] = values[4];
   }
 
   // Whether body b has a boundary (erosion can leave a body without elements).

@@ -48,7 +48,8 @@ public:
   // `runs` runs of pairs (none yet).
   BodyPairs(const Model &model, const ContactBoundaries &boundaries, std::size_t runs);
   // This step's moving bodies listed, and those `measured` accepts measured (their boundaries'
-  // positions, boxes and travel; the others' are set before the search by whoever measured them).
+  // positions, boxes and travel; with the work shared, the other processes' bodies' come from
+  // their owners where needed: Contact::shareBoxes).
   template <class Measured>
   void measure(const Model &model, ContactBoundaries &boundaries, Measured measured) {
     moving_.clear();

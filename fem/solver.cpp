@@ -703,7 +703,9 @@ void Solver::kickAndDrift(double dt) {
 // external work. The kick took the work of the other external forces, and the kinetic energy, at
 // the velocity before the constraint: corrected, into the sums, or with `late` into it (per
 // imposed velocity: the kick's work, the providers', the frictional part, gravity's, the kinetic
-// energy's change) for the step's gather to add (forces).
+// energy's change) to be added after the kick's sums (forces). (Stored first, then added: added
+// here, their products could be fused into the sums, whose last bits would then depend on how the
+// compiler contracts them.)
 void Solver::applyConstraints(double half_dt, bool second_half, std::vector<double> *late) {
   Nodes &nd = m_.nodes;
   // After the first half the node has drifted with v: by 2 half_dt (target - v) more with the
@@ -896,24 +898,25 @@ template <std::size_t N>
 void Solver::shareOwned(const std::vector<std::uint32_t> &bodies, std::size_t Body::*begin,
                         std::size_t Body::*end, const std::array<std::vector<double> *, N> &fields,
                         bool to_first) const {
+  if (comm_.size() == 1) // (this process holds every value)
+    return;
+  const std::vector<std::vector<std::uint32_t>> of = byOwner(bodies);
+  const std::vector<std::uint32_t> &mine = of[static_cast<std::size_t>(comm_.rank())];
   std::size_t count = 0;
-  for (std::uint32_t b : bodies)
-    if (owns(b))
-      count += N * (m_.bodies[b].*end - m_.bodies[b].*begin);
-  auto pack = [&](double *mine) {
-    for (std::uint32_t b : bodies)
-      if (owns(b))
-        for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
-          for (auto *f : fields)
-            *mine++ = (*f)[i];
+  for (std::uint32_t b : mine)
+    count += N * (m_.bodies[b].*end - m_.bodies[b].*begin);
+  auto pack = [&](double *out) {
+    for (std::uint32_t b : mine)
+      for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
+        for (auto *f : fields)
+          *out++ = (*f)[i];
   };
   // process r's values; returns where the next process's begin
   auto unpack = [&](int r, const double *values) {
-    for (std::uint32_t b : bodies)
-      if (owner(b) == r)
-        for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
-          for (auto *f : fields)
-            (*f)[i] = *values++;
+    for (std::uint32_t b : of[static_cast<std::size_t>(r)])
+      for (std::size_t i = m_.bodies[b].*begin; i < m_.bodies[b].*end; ++i)
+        for (auto *f : fields)
+          (*f)[i] = *values++;
     return values;
   };
   if (to_first)
@@ -937,39 +940,52 @@ void Solver::collectCheckpoint() {
   collectFrame();
   shareOwned<2>(active_bodies_, &Body::node_begin, &Body::node_end, {&nd.fx, &nd.fy}, true);
   collectExternal(active_bodies_);
-  sumEnergy();
-  if (comm_.size() > 1)
-    checkpoint_shares_ = comm_.allGather(sharesOf(energy_));
+  if (comm_.size() > 1) { // every process's share, kept for the checkpoint, and their sum
+    checkpoint_shares_ = comm_.allGather(
+        sharesOf(energy_), std::vector<std::int64_t>(static_cast<std::size_t>(comm_.size()),
+                                                     std::ssize(energy_shares)));
+    sumShares(checkpoint_shares_);
+  }
 }
 
 // The external forces at the nodes of `bodies`, complete at their owners only (the providers'
 // forces of this step), copied from them to the first process; a node they load is listed as
 // loaded there.
 void Solver::collectExternal(const std::vector<std::uint32_t> &bodies) {
+  if (comm_.size() == 1) // (this process holds every value)
+    return;
   Nodes &nd = m_.nodes;
+  const std::vector<std::vector<std::uint32_t>> of = byOwner(bodies);
+  const std::vector<std::uint32_t> &mine = of[static_cast<std::size_t>(comm_.rank())];
   std::size_t count = 0;
-  for (std::uint32_t b : bodies)
-    if (owns(b))
-      count += 4 * (m_.bodies[b].node_end - m_.bodies[b].node_begin);
-  auto pack = [&](double *mine) {
-    for (std::uint32_t b : bodies)
-      if (owns(b))
-        for (std::size_t a = m_.bodies[b].node_begin; a < m_.bodies[b].node_end; ++a) {
-          const Nodes::External &e = nd.external[a];
-          *mine++ = e.fx, *mine++ = e.fy, *mine++ = e.friction_x, *mine++ = e.friction_y;
-        }
+  for (std::uint32_t b : mine)
+    count += 4 * (m_.bodies[b].node_end - m_.bodies[b].node_begin);
+  auto pack = [&](double *out) {
+    for (std::uint32_t b : mine)
+      for (std::size_t a = m_.bodies[b].node_begin; a < m_.bodies[b].node_end; ++a) {
+        const Nodes::External &e = nd.external[a];
+        *out++ = e.fx, *out++ = e.fy, *out++ = e.friction_x, *out++ = e.friction_y;
+      }
   };
   auto unpack = [&](int r, const double *values) {
-    for (std::uint32_t b : bodies)
-      if (owner(b) == r)
-        for (std::size_t a = m_.bodies[b].node_begin; a < m_.bodies[b].node_end; ++a, values += 4) {
-          nd.external[a] = {values[0], values[1], values[2], values[3]};
-          if (!nd.is_loaded[a] &&
-              (values[0] != 0.0 || values[1] != 0.0 || values[2] != 0.0 || values[3] != 0.0))
-            nd.is_loaded[a] = 1, nd.loaded.push_back(static_cast<std::uint32_t>(a));
-        }
+    for (std::uint32_t b : of[static_cast<std::size_t>(r)])
+      for (std::size_t a = m_.bodies[b].node_begin; a < m_.bodies[b].node_end; ++a, values += 4) {
+        nd.external[a] = {values[0], values[1], values[2], values[3]};
+        if (!nd.is_loaded[a] &&
+            (values[0] != 0.0 || values[1] != 0.0 || values[2] != 0.0 || values[3] != 0.0))
+          nd.is_loaded[a] = 1, nd.loaded.push_back(static_cast<std::uint32_t>(a));
+      }
   };
   comm_.collect(count, pack, unpack);
+}
+
+// Each process's bodies among `bodies`, in their order.
+std::vector<std::vector<std::uint32_t>>
+Solver::byOwner(const std::vector<std::uint32_t> &bodies) const {
+  std::vector<std::vector<std::uint32_t>> of(static_cast<std::size_t>(comm_.size()));
+  for (std::uint32_t b : bodies)
+    of[static_cast<std::size_t>(owner(b))].push_back(b);
+  return of;
 }
 
 // The active element with the shortest altitude, and what it has become: for the message of a
@@ -1439,7 +1455,7 @@ double Solver::addedMass(std::size_t body) const {
 }
 
 void Solver::accountEnergy() {
-  // Element sums of this step's pass (chunk order: the same for any thread count), every
+  // Element sums of this step's pass (chunk order: the same for any thread count), this
   // process's (forces).
   const double internal = step_sums_[0], plastic = step_sums_[1], viscous = step_sums_[2];
   energy_.internal = internal;
@@ -1454,12 +1470,20 @@ void Solver::accountEnergy() {
 const Energy &Solver::sumEnergy() const {
   if (comm_.size() == 1)
     return energy_;
-  const std::vector<double> all = comm_.sumInOrder(sharesOf(energy_));
-  for (std::size_t k = 0; k < std::size(energy_shares); ++k)
-    summed_.*energy_shares[k] = all[k];
-  summed_.initial = energy_.initial;
-  summed_.balance_error = balanceError(summed_);
+  sumShares(comm_.allGather(sharesOf(energy_),
+                            std::vector<std::int64_t>(static_cast<std::size_t>(comm_.size()),
+                                                      std::ssize(energy_shares))));
   return summed_;
+}
+
+// The run's energies from every process's shares (`all`, in rank order), added in rank order.
+void Solver::sumShares(const std::vector<double> &all) const {
+  const std::size_t n = std::size(energy_shares);
+  Energy sum{.initial = energy_.initial};
+  for (std::size_t k = 0; k < all.size(); ++k)
+    sum.*energy_shares[k % n] += all[k];
+  sum.balance_error = balanceError(sum);
+  summed_ = sum;
 }
 
 Solver::State Solver::state() const {

@@ -316,7 +316,9 @@ private:
                   std::size_t Body::*end, const std::array<std::vector<double> *, N> &fields,
                   bool to_first = false) const;
   void collectExternal(const std::vector<std::uint32_t> &bodies);
+  std::vector<std::vector<std::uint32_t>> byOwner(const std::vector<std::uint32_t> &bodies) const;
   void accountEnergy();
+  void sumShares(const std::vector<double> &all) const;
   void bodyStepsFromElements();
   // Multiple time stepping (fem/solver_levels.cpp).
   bool levels() const { return s_.max_level > 0; }

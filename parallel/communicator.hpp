@@ -25,8 +25,9 @@ public:
                                         const std::vector<std::int64_t> &sizes) const = 0;
   virtual std::vector<std::int64_t> allGather(std::vector<std::int64_t> mine,
                                               const std::vector<std::int64_t> &sizes) const = 0;
-  // Every process's `mine` summed element by element, the processes' values added in rank order
-  // (the same sums on every process, whatever the message order); one process: `mine` as it is.
+  // Every process's `mine` (as many values on every process) summed element by element, the
+  // processes' values added in rank order (the same sums on every process, whatever the message
+  // order); one process: `mine` as it is.
   virtual std::vector<double> sumInOrder(std::vector<double> mine) const = 0;
   // The smallest of every process's `value` (std::min taken in rank order).
   virtual double min(double value) const = 0;

@@ -150,10 +150,10 @@ template <class T> std::vector<T> gatherItems(std::vector<T> mine, int root, MPI
   char *at = reinterpret_cast<char *>(all.data());
   for (int r = 0; r < ranks; ++r) {
     const std::int64_t count = counts[static_cast<std::size_t>(r)];
-    if (r == rank)
-      std::memcpy(at, mine.data(), static_cast<std::size_t>(count));
-    else
+    if (r != rank)
       detail::receiveBytes(at, count, r, comm);
+    else if (count > 0)
+      std::memcpy(at, mine.data(), static_cast<std::size_t>(count));
     at += count;
   }
   return all;
@@ -181,6 +181,7 @@ public:
   MpiCommunicator &operator=(const MpiCommunicator &) = delete;
   int rank() const override { return rank_; }
   int size() const override { return size_; }
+  MPI_Comm handle() const { return comm_; } // the duplicate
   std::vector<double> allGather(std::vector<double> mine) const override;
   std::vector<std::int64_t> allGather(std::vector<std::int64_t> mine) const override;
   std::vector<double> allGather(std::vector<double> mine,
@@ -193,7 +194,7 @@ public:
   void share(std::size_t count, const std::function<void(double *)> &pack,
              const std::function<void(const double *)> &unpack) const override;
   // The counts to process 0 (MPI_Gather, 64-bit), then each process's values as messages to it
-  // (in pieces of at most 2^30 values), received one process after the other.
+  // (in pieces of at most 2^30 bytes), received one process after the other.
   void collect(std::size_t count, const std::function<void(double *)> &pack,
                const std::function<void(int, const double *)> &unpack) const override;
   // The lists' sizes first (MPI_Alltoall, 64-bit), then each list that is not empty as a message

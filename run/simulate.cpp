@@ -114,6 +114,7 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
   catchStopSignals(false);
   // Every rank takes part, before the files: rank 0 may fail to write them, and end here.
   const RankFigures rank_figures = rankFigures(assembly, report.loop);
+  solver.sumEnergy(); // (with several ranks, the energies at the end, however the loop ended)
   const nlohmann::json dem = assembly.coupled ? demFigures(assembly, world) : nlohmann::json();
   report.steps = solver.steps();
   report.time = solver.time();
