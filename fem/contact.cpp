@@ -937,6 +937,19 @@ void Contact::capLevels(const std::vector<std::uint8_t> &own,
   }
 }
 
+void Contact::capParts(const std::vector<std::uint8_t> &own, std::uint32_t body,
+                       const std::vector<double> &boxes, std::vector<std::uint8_t> &cap) const {
+  for (const Pair &pair : pairs_.pairs()) {
+    if (pair.a != body && pair.b != body)
+      continue;
+    const std::uint32_t other = pair.a == body ? pair.b : pair.a;
+    const Box reach = boundaries_.boxes[other].widened(pair.margin);
+    for (std::size_t p = 0; p < cap.size(); ++p)
+      if (reach.overlaps({boxes[4 * p], boxes[4 * p + 1], boxes[4 * p + 2], boxes[4 * p + 3]}))
+        cap[p] = std::min(cap[p], own[other]);
+  }
+}
+
 Contact::State Contact::state(const Model &model) const {
   State st;
   for (const BodyPairs::Pair &p : pairs_.pairs())

@@ -334,10 +334,12 @@ std::string Solver::notFinite() const {
 // level by level (each level's units and blocks together), a unit holding consecutive bodies.
 void Solver::updateActivity(bool may_partition) {
   const std::size_t n_bodies = m_.bodies.size();
-  if (at_rest_seen_ == m_.at_rest && !rebalance_due_ && laid_levels_ == level_)
+  if (at_rest_seen_ == m_.at_rest && !rebalance_due_ && laid_levels_ == level_ &&
+      laid_part_levels_ == part_level_)
     return;
   at_rest_seen_ = m_.at_rest;
   laid_levels_ = level_;
+  laid_part_levels_ = part_level_;
   balanceLoad(std::exchange(rebalance_due_, false), may_partition);
   chunks_.clear();
   units_.clear();
@@ -377,31 +379,44 @@ void Solver::updateActivity(bool may_partition) {
       // A work unit holds whole bodies (no node is shared between units, so each unit adds its
       // elements' forces into the nodes without races, in element order).
       // (with levels, a unit holds consecutive bodies: its nodes stay together)
+      // (a body in parts is a unit of its own)
+      const bool in_parts = by_body && part_begin_[b] < part_begin_[b + 1];
       const bool new_unit = units_.size() == first_unit || unit_elements >= unit_target ||
-                            (by_body && units_.back().node_hi != body.node_begin);
+                            (by_body && units_.back().node_hi != body.node_begin) || in_parts ||
+                            units_.back().in_parts;
       if (new_unit) {
         units_.push_back({chunks_.size(), chunks_.size(), unit_nodes_.size(), unit_nodes_.size(),
-                          body.node_begin, body.node_end, false});
+                          body.node_begin, body.node_end, false, in_parts});
         unit_elements = 0;
       }
       Unit &unit = units_.back();
-      // The body's elements in runs without eroded ones.
-      for (std::size_t e = body.element_begin; e < body.element_end;) {
-        std::size_t end = body.element_end;
-        if (body.eroded > 0) {
-          while (e < end && m_.elements.eroded[e])
-            ++e;
-          end = e;
-          while (end < body.element_end && !m_.elements.eroded[end])
-            ++end;
+      // The body's elements (part by part for a body in parts) in runs without eroded ones.
+      auto addElements = [&](std::size_t begin, std::size_t stop, std::uint8_t level,
+                             std::uint32_t part, std::size_t first_chunk) {
+        for (std::size_t e = begin; e < stop;) {
+          std::size_t end = stop;
+          if (body.eroded > 0) {
+            while (e < end && m_.elements.eroded[e])
+              ++e;
+            end = e;
+            while (end < stop && !m_.elements.eroded[end])
+              ++end;
+          }
+          appendInPieces(chunks_, first_chunk, Chunk{{e, end}, material, averaged, level, part},
+                         s_.chunk, [&](const Chunk &c) {
+                           return c.material == material && c.averaged_volume == averaged;
+                         });
+          unit_elements += end - e;
+          e = end;
         }
-        appendInPieces(chunks_, unit.chunk_begin, Chunk{{e, end}, material, averaged}, s_.chunk,
-                       [&](const Chunk &c) {
-                         return c.material == material && c.averaged_volume == averaged;
-                       });
-        unit_elements += end - e;
-        e = end;
-      }
+      };
+      if (in_parts)
+        for (std::size_t p = part_begin_[b]; p < part_begin_[b + 1]; ++p)
+          addElements(parts_[p].element_begin, parts_[p].element_end, part_level_[p],
+                      static_cast<std::uint32_t>(p), chunks_.size());
+      else
+        addElements(body.element_begin, body.element_end, static_cast<std::uint8_t>(l),
+                    Chunk::no_part, unit.chunk_begin);
       appendInPieces(unit_nodes_, unit.nodes_begin, Range{body.node_begin, body.node_end},
                      std::numeric_limits<std::size_t>::max(), [](const Range &) { return true; });
       unit.chunk_end = chunks_.size();
@@ -1238,12 +1253,15 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
 #pragma omp simd
     for (std::size_t i = 0; i < n; ++i)
       least[i] = leastStepGain(shear_share[i]);
+    // (an element of a body in parts: its part's step)
+    const double part_step = chunk.part != Chunk::no_part ? part_step_min_[chunk.part] : 0.0;
     const std::uint32_t *body = el.body.data() + e0;
     std::size_t picked = 0;
     for (std::size_t i = 0; i < n; ++i) {
       const bool refined = known_gain[i] == 1.0;
+      const double reference = chunk.part != Chunk::no_part ? part_step : body_step_min_[body[i]];
       pick[picked] = static_cast<std::uint32_t>(i);
-      picked += !refined && step[i] * least[i] < refine_margin * body_step_min_[body[i]];
+      picked += !refined && step[i] * least[i] < refine_margin * reference;
       known_gain[i] = refined ? 1.0 : least[i];
     }
     criticalStepGains(pick, picked, gx, gy, area, len, shear_share, exact);

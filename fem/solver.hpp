@@ -107,6 +107,11 @@ public:
   virtual bool takesLevels() const { return false; }
   virtual void capLevels(const std::vector<std::uint8_t> & /*own*/,
                          std::vector<std::uint8_t> & /*cap*/) const {}
+  // The same for the parts of body `body` (boxes x0, y0, x1, y1 each): the finest own level of the
+  // bodies each part may meet (`cap`, one per part, lowered only).
+  virtual void capParts(const std::vector<std::uint8_t> & /*own*/, std::uint32_t /*body*/,
+                        const std::vector<double> & /*boxes*/,
+                        std::vector<std::uint8_t> & /*cap*/) const {}
 };
 
 // With the work shared, a provider's messages to the other processes (Communicator::exchange, one
@@ -251,6 +256,9 @@ private:
   struct Chunk : Range {
     const Material *material;
     bool averaged_volume;
+    std::uint8_t level = 0; // with levels: its body's, or its part's in a body stepped in parts
+    std::uint32_t part = no_part;
+    static constexpr std::uint32_t no_part = ~std::uint32_t{0};
   };
   // Whole bodies: their element chunks and node ranges (no node is shared between units).
   struct Unit {
@@ -258,6 +266,7 @@ private:
     std::size_t nodes_begin, nodes_end; // in unit_nodes_
     std::size_t node_lo, node_hi;       // its nodes lie in [node_lo, node_hi)
     bool averaged_volume;               // some chunk needs the nodal volumes
+    bool in_parts = false;              // one body whose parts step at levels of their own
   };
   // A unit's nodes, numbered from its first node `base`: position and velocity side by side (the
   // element pass reads all four at once), the force being assembled, the nodal volume ratio J.
@@ -331,6 +340,9 @@ private:
   void startLevels();
   void bodySums(std::size_t unit_begin, std::size_t unit_end);
   void addKinetic(std::size_t node, double change);
+  void startParts();
+  void partsPass(const Unit &unit, int top, const double *tau, UnitScratch &scratch);
+  void choosePartLevels(std::uint32_t body, int top);
 
   Model &m_;
   SolverSettings s_;
@@ -405,6 +417,21 @@ private:
   std::vector<std::size_t> level_units_, level_blocks_;
   std::vector<std::vector<std::size_t>> due_thread_blocks_;
   double element_steps_ = 0.0, single_rate_element_steps_ = 0.0;
+  // Bodies stepped in parts (levels(), at least parts_from elements: the projectile): parts of
+  // part_elements consecutive elements, each at a level of its own at or above its body's. Per
+  // body the first of its parts (parts of b: [part_begin_[b], part_begin_[b + 1])); per part its
+  // elements, level, own level, the levels laid out; per body in parts and level l > 0 its nodes'
+  // positions at the last step whose number is a multiple of 2^l (window_x_[i][l], i the body's
+  // place in parted_bodies_).
+  struct Part {
+    std::size_t element_begin, element_end;
+  };
+  std::vector<Part> parts_;
+  std::vector<std::size_t> part_begin_;
+  std::vector<std::uint8_t> part_level_, part_own_level_, laid_part_levels_;
+  std::vector<double> part_step_min_; // its elements' shortest step at its last update
+  std::vector<std::uint32_t> parted_bodies_;
+  std::vector<std::vector<std::vector<double>>> window_x_, window_y_;
 };
 
 } // namespace mesopen::fem

@@ -40,6 +40,139 @@ void Solver::startLevels() {
   body_internal_.assign(n, 0.0);
   level_start_.assign(static_cast<std::size_t>(s_.max_level) + 1, 0.0);
   level_step_.assign(m_.elements.size(), HUGE_VAL);
+  startParts();
+}
+
+// The bodies of at least parts_from elements step in parts of part_elements consecutive elements
+// (the projectile: its elements are ordered from the tip, so that a part is a slab across it).
+void Solver::startParts() {
+  constexpr std::size_t parts_from = 2048, part_elements = 512;
+  const std::size_t n = m_.bodies.size();
+  part_begin_.assign(n + 1, 0);
+  for (std::size_t b = 0; b < n; ++b) {
+    part_begin_[b] = parts_.size();
+    const Body &body = m_.bodies[b];
+    if (body.element_end - body.element_begin < parts_from)
+      continue;
+    parted_bodies_.push_back(static_cast<std::uint32_t>(b));
+    for (std::size_t e = body.element_begin; e < body.element_end; e += part_elements)
+      parts_.push_back({e, std::min(e + part_elements, body.element_end)});
+    const std::size_t nodes = body.node_end - body.node_begin;
+    window_x_.emplace_back(static_cast<std::size_t>(s_.max_level) + 1, std::vector<double>(nodes));
+    window_y_.emplace_back(static_cast<std::size_t>(s_.max_level) + 1, std::vector<double>(nodes));
+    for (int l = 1; l <= s_.max_level; ++l)
+      for (std::size_t a = body.node_begin; a < body.node_end; ++a)
+        window_x_.back()[l][a - body.node_begin] = m_.nodes.x[a],
+                                window_y_.back()[l][a - body.node_begin] = m_.nodes.y[a];
+  }
+  part_begin_[n] = parts_.size();
+  part_level_.assign(parts_.size(), 0);
+  part_own_level_.assign(parts_.size(), static_cast<std::uint8_t>(s_.max_level));
+  part_step_min_.assign(parts_.size(), HUGE_VAL);
+}
+
+// A body in parts (one unit) over the due levels: the parts of each level l above the body's e
+// from their nodes' mean velocity over their window, (x - x at the window's start) / tau_l, the
+// coarser levels' forces first and scaled by tau_l / tau_(l-1) before each finer level's are
+// added, so that each part's force comes to the nodes as its impulse over the body's window,
+//   f = f_e + (tau_(e+1) / tau_e) (f_(e+1) + (tau_(e+2) / tau_(e+1)) (f_(e+2) + ...)),
+// (the asynchronous variational integrator's impulses, Lew et al. 2003); then gravity and the
+// body's own level's parts at the nodes' velocities. Each level's window start is kept.
+void Solver::partsPass(const Unit &unit, int top, const double *tau, UnitScratch &scratch) {
+  const Nodes &nd = m_.nodes;
+  const std::uint32_t b = nd.body[unit.node_lo];
+  const int e = level_[b];
+  const std::size_t base = unit.node_lo, n = unit.node_hi - base;
+  const std::size_t i_body = static_cast<std::size_t>(
+      std::find(parted_bodies_.begin(), parted_bodies_.end(), b) - parted_bodies_.begin());
+  std::vector<NodeState> &state = scratch.state;
+  std::vector<NodeForce> &force = scratch.force;
+  state.resize(n);
+  force.assign(n, NodeForce{0.0, 0.0});
+  scratch.jacobian.resize(unit.averaged_volume ? n : 0);
+  const UnitNodes nodes{state.data(), force.data(), scratch.jacobian.data(), base};
+  for (std::size_t a = base; a < unit.node_hi; ++a)
+    state[a - base] = {nd.x[a], nd.y[a], nd.vx[a], nd.vy[a]};
+  if (unit.averaged_volume)
+    nodalVolumes(unit, nodes);
+  for (int l = top; l >= e; --l) {
+    const auto level = static_cast<std::uint8_t>(l);
+    const bool any = std::any_of(chunks_.begin() + static_cast<long>(unit.chunk_begin),
+                                 chunks_.begin() + static_cast<long>(unit.chunk_end),
+                                 [&](const Chunk &c) { return c.level == level; });
+    if (l > e) {
+      if (any) {
+        const std::vector<double> &x0 = window_x_[i_body][static_cast<std::size_t>(l)],
+                                  &y0 = window_y_[i_body][static_cast<std::size_t>(l)];
+        const double inv_tau = 1.0 / tau[l];
+        for (std::size_t k = 0; k < n; ++k)
+          state[k].vx = (state[k].x - x0[k]) * inv_tau,
+          state[k].vy = (state[k].y - y0[k]) * inv_tau;
+      }
+    } else {
+      for (std::size_t a = base; a < unit.node_hi; ++a)
+        state[a - base].vx = nd.vx[a], state[a - base].vy = nd.vy[a];
+      if (s_.gravity_x != 0.0 || s_.gravity_y != 0.0)
+        for (std::size_t a = base; a < unit.node_hi; ++a)
+          force[a - base].x += nd.mass[a] * s_.gravity_x,
+              force[a - base].y += nd.mass[a] * s_.gravity_y;
+    }
+    if (any)
+      for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
+        if (chunks_[i].level == level)
+          elementPass(chunks_[i], tau[l], nodes, sums_[i]);
+    if (l > e) {
+      const double ratio = tau[l] / tau[l - 1];
+      for (std::size_t k = 0; k < n; ++k)
+        force[k].x *= ratio, force[k].y *= ratio;
+    }
+  }
+  // the parts not due add nothing to this step's sums
+  for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
+    if (chunks_[i].level > top)
+      sums_[i] = ChunkSums{0.0, 0.0, 0.0, HUGE_VAL, -1, false, {}};
+  for (int l = 1; l <= top; ++l) {
+    std::vector<double> &x0 = window_x_[i_body][static_cast<std::size_t>(l)],
+                        &y0 = window_y_[i_body][static_cast<std::size_t>(l)];
+    for (std::size_t k = 0; k < n; ++k)
+      x0[k] = state[k].x, y0[k] = state[k].y;
+  }
+}
+
+// The levels of the parts of body `body` (which stepped) that stepped: each part's own level from
+// its elements' shortest step, no coarser than the own level of a body it may meet (its box within
+// the provider's reach), nor than the step number allows.
+void Solver::choosePartLevels(std::uint32_t body, int top) {
+  const std::size_t p0 = part_begin_[body], p1 = part_begin_[body + 1];
+  const Elements &el = m_.elements;
+  const Nodes &nd = m_.nodes;
+  std::vector<double> boxes(4 * (p1 - p0));
+  for (std::size_t p = p0; p < p1; ++p) {
+    double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, step = HUGE_VAL;
+    for (std::size_t e = parts_[p].element_begin; e < parts_[p].element_end; ++e) {
+      if (el.eroded[e])
+        continue;
+      step = std::min(step, level_step_[e]);
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t a = el.node[3 * e + static_cast<std::size_t>(k)];
+        x0 = std::min(x0, nd.x[a]), x1 = std::max(x1, nd.x[a]);
+        y0 = std::min(y0, nd.y[a]), y1 = std::max(y1, nd.y[a]);
+      }
+    }
+    double *box = &boxes[4 * (p - p0)];
+    box[0] = x0, box[1] = y0, box[2] = x1, box[3] = y1;
+    if (part_level_[p] <= top) {
+      part_step_min_[p] = step;
+      part_own_level_[p] = static_cast<std::uint8_t>(
+          ownLevel(s_.safety * step_scale_ * step, dt_, part_own_level_[p], s_.max_level));
+    }
+  }
+  std::vector<std::uint8_t> cap(p1 - p0, static_cast<std::uint8_t>(s_.max_level));
+  for (auto *provider : providers_)
+    provider->capParts(own_level_, body, boxes, cap);
+  for (std::size_t p = p0; p < p1; ++p)
+    if (part_level_[p] <= top)
+      part_level_[p] = std::min({part_own_level_[p], cap[p - p0], static_cast<std::uint8_t>(top)});
 }
 
 void Solver::addKinetic(std::size_t node, double change) {
@@ -73,7 +206,13 @@ std::vector<std::size_t> Solver::elementsByLevel() const {
   std::vector<std::size_t> count(static_cast<std::size_t>(s_.max_level) + 1, 0);
   for (std::uint32_t b : active_bodies_) {
     const Body &body = m_.bodies[b];
-    count[level_[b]] += body.element_end - body.element_begin - body.eroded;
+    if (part_begin_[b] == part_begin_[b + 1]) {
+      count[level_[b]] += body.element_end - body.element_begin - body.eroded;
+      continue;
+    }
+    for (std::size_t p = part_begin_[b]; p < part_begin_[b + 1]; ++p)
+      for (std::size_t e = parts_[p].element_begin; e < parts_[p].element_end; ++e)
+        count[part_level_[p]] += m_.elements.eroded[e] ? 0 : 1;
   }
   return count;
 }
@@ -217,7 +356,10 @@ void Solver::forcesLevels(int top, const double *tau) {
           (level_units_.begin() + 1));
       const double dt = tau[level];
       const std::size_t base = unit.node_lo;
-      unitPass(unit, dt, scratch);
+      if (unit.in_parts)
+        partsPass(unit, top, tau, scratch);
+      else
+        unitPass(unit, dt, scratch);
       bodySums(u, u + 1); // a unit holds whole bodies
       const std::vector<NodeState> &state = scratch.state;
       const std::vector<NodeForce> &force = scratch.force;
@@ -251,7 +393,8 @@ void Solver::forcesLevels(int top, const double *tau) {
     scaling_ = scaling_ || !sums_[i].scaled.empty();
     if (inverted < 0)
       inverted = sums_[i].inverted;
-    element_steps_ += static_cast<double>(chunks_[i].end - chunks_[i].begin);
+    if (chunks_[i].level <= top)
+      element_steps_ += static_cast<double>(chunks_[i].end - chunks_[i].begin);
   }
   if (inverted >= 0) {
     const auto e = static_cast<std::size_t>(inverted);
@@ -294,8 +437,20 @@ void Solver::chooseLevels(int top) {
     for (std::uint32_t a : c.nodes)
       cap[m_.nodes.body[a]] = 0;
   for (std::size_t b = 0; b < n; ++b)
-    if (!m_.at_rest[b] && level_[b] <= top)
-      level_[b] = std::min({own_level_[b], cap[b], static_cast<std::uint8_t>(top)});
+    if (!m_.at_rest[b] && level_[b] <= top) {
+      if (part_begin_[b] == part_begin_[b + 1]) {
+        level_[b] = std::min({own_level_[b], cap[b], static_cast<std::uint8_t>(top)});
+        continue;
+      }
+      // a body in parts: at its finest part's level, no coarser than the bodies it may meet
+      choosePartLevels(static_cast<std::uint32_t>(b), top);
+      const auto finest =
+          std::min_element(part_level_.begin() + static_cast<long>(part_begin_[b]),
+                           part_level_.begin() + static_cast<long>(part_begin_[b + 1]));
+      level_[b] = std::min({*finest, cap[b], static_cast<std::uint8_t>(top)});
+      for (std::size_t p = part_begin_[b]; p < part_begin_[b + 1]; ++p)
+        part_level_[p] = std::max(part_level_[p], level_[b]);
+    }
 }
 
 } // namespace mesopen::fem

@@ -6,8 +6,11 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <numeric>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace mesopen {
 
@@ -197,7 +200,26 @@ double exactCentroidY(const ProjectileShape &s) {
 TriangleMesh projectileMesh(const ProjectileShape &shape, const ProjectileSpec &spec, double edge,
                             std::vector<double> &outline_x, std::vector<double> &outline_y) {
   projectileOutline(shape, edge, outline_x, outline_y);
-  return qualityMesh(outline_x.data(), outline_y.data(), outline_x.size(), edge, spec.min_angle);
+  TriangleMesh mesh =
+      qualityMesh(outline_x.data(), outline_y.data(), outline_x.size(), edge, spec.min_angle);
+  // The triangles from the tip to the base (by their centroid's y, then x): consecutive elements
+  // lie in a slab across the projectile, which the solver's levels step as parts of their own.
+  const std::size_t n = mesh.tri.size() / 3;
+  std::vector<std::pair<double, double>> centroid(n);
+  for (std::size_t t = 0; t < n; ++t) {
+    const std::uint32_t *v = &mesh.tri[3 * t];
+    centroid[t] = {mesh.y[v[0]] + mesh.y[v[1]] + mesh.y[v[2]],
+                   mesh.x[v[0]] + mesh.x[v[1]] + mesh.x[v[2]]};
+  }
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return centroid[a] < centroid[b]; });
+  std::vector<std::uint32_t> tri(mesh.tri.size());
+  for (std::size_t t = 0; t < n; ++t)
+    std::copy_n(&mesh.tri[3 * order[t]], 3, &tri[3 * t]);
+  mesh.tri = std::move(tri);
+  return mesh;
 }
 
 // A plate W wide and `length` thick in the body frame: its face on y = 0 from x = -W/2 to W/2,
