@@ -146,8 +146,11 @@ void Solver::choosePartLevels(std::uint32_t body, int top) {
   const std::size_t p0 = part_begin_[body], p1 = part_begin_[body + 1];
   const Elements &el = m_.elements;
   const Nodes &nd = m_.nodes;
-  std::vector<double> boxes(4 * (p1 - p0));
+  // (the parts that did not step keep their level: an empty box)
+  std::vector<double> boxes(4 * (p1 - p0), HUGE_VAL);
   for (std::size_t p = p0; p < p1; ++p) {
+    if (part_level_[p] > top)
+      continue;
     double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, step = HUGE_VAL;
     for (std::size_t e = parts_[p].element_begin; e < parts_[p].element_end; ++e) {
       if (el.eroded[e])
@@ -161,11 +164,9 @@ void Solver::choosePartLevels(std::uint32_t body, int top) {
     }
     double *box = &boxes[4 * (p - p0)];
     box[0] = x0, box[1] = y0, box[2] = x1, box[3] = y1;
-    if (part_level_[p] <= top) {
-      part_step_min_[p] = step;
-      part_own_level_[p] = static_cast<std::uint8_t>(
-          ownLevel(s_.safety * step_scale_ * step, dt_, part_own_level_[p], s_.max_level));
-    }
+    part_step_min_[p] = step;
+    part_own_level_[p] = static_cast<std::uint8_t>(
+        ownLevel(s_.safety * step_scale_ * step, dt_, part_own_level_[p], s_.max_level));
   }
   std::vector<std::uint8_t> cap(p1 - p0, static_cast<std::uint8_t>(s_.max_level));
   for (auto *provider : providers_)
