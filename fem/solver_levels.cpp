@@ -207,7 +207,7 @@ std::vector<std::size_t> Solver::elementsByLevel() const {
   std::vector<std::size_t> count(static_cast<std::size_t>(s_.max_level) + 1, 0);
   for (std::uint32_t b : active_bodies_) {
     const Body &body = m_.bodies[b];
-    if (part_begin_[b] == part_begin_[b + 1]) {
+    if (part_begin_.empty() || part_begin_[b] == part_begin_[b + 1]) {
       count[level_[b]] += body.element_end - body.element_begin - body.eroded;
       continue;
     }
