@@ -285,7 +285,7 @@ private:
   // A thread's copies of a unit's nodes (cache-resident) and the forces being assembled on them.
   struct UnitScratch {
     std::vector<NodeState> state;
-    std::vector<NodeForce> force;
+    std::vector<NodeForce> force, part_force; // (part_force: a body in parts, part by part)
     std::vector<double> jacobian;
   };
   struct ChunkSums {
@@ -430,6 +430,11 @@ private:
   std::vector<std::size_t> part_begin_;
   std::vector<std::uint8_t> part_level_, part_own_level_, laid_part_levels_;
   std::vector<double> part_step_min_; // its elements' shortest step at its last update
+  // each part's nodes (sorted), [part_node_begin_[p], part_node_begin_[p + 1]) in part_nodes_, and
+  // its force on them at its last update
+  std::vector<std::size_t> part_node_begin_;
+  std::vector<std::uint32_t> part_nodes_;
+  std::vector<NodeForce> part_force_;
   std::vector<std::uint32_t> parted_bodies_;
   std::vector<std::vector<std::vector<double>>> window_x_, window_y_;
 };

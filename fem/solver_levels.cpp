@@ -66,18 +66,30 @@ void Solver::startParts() {
                                 window_y_.back()[l][a - body.node_begin] = m_.nodes.y[a];
   }
   part_begin_[n] = parts_.size();
+  // each part's nodes (sorted), and room for its force at them
+  part_node_begin_.assign(1, 0);
+  for (const Part &part : parts_) {
+    const auto first = m_.elements.node.begin() + 3 * static_cast<long>(part.element_begin);
+    std::vector<std::uint32_t> nodes(
+        first, first + 3 * static_cast<long>(part.element_end - part.element_begin));
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    part_nodes_.insert(part_nodes_.end(), nodes.begin(), nodes.end());
+    part_node_begin_.push_back(part_nodes_.size());
+  }
+  part_force_.assign(part_nodes_.size(), NodeForce{0.0, 0.0});
   part_level_.assign(parts_.size(), 0);
   part_own_level_.assign(parts_.size(), static_cast<std::uint8_t>(s_.max_level));
   part_step_min_.assign(parts_.size(), HUGE_VAL);
 }
 
-// A body in parts (one unit) over the due levels: the parts of each level l above the body's e
-// from their nodes' mean velocity over their window, (x - x at the window's start) / tau_l, the
-// coarser levels' forces first and scaled by tau_l / tau_(l-1) before each finer level's are
-// added, so that each part's force comes to the nodes as its impulse over the body's window,
-//   f = f_e + (tau_(e+1) / tau_e) (f_(e+1) + (tau_(e+2) / tau_(e+1)) (f_(e+2) + ...)),
-// (the asynchronous variational integrator's impulses, Lew et al. 2003); then gravity and the
-// body's own level's parts at the nodes' velocities. Each level's window start is kept.
+// A body in parts (one unit): its due parts in order, each from its nodes' velocities over its
+// window (at the body's own level e the nodes' velocities; at a coarser level l their mean
+// velocity, (x - x at the window's start) / tau_l), its force on its nodes kept. The second
+// half-kick takes half of each part's impulse over the body's window,
+//   f = sum over the due parts p of (tau_l(p) / tau_e) f_p,
+// the first half-kick of the body's next step the rest (chooseLevels). Each level's window start
+// is kept.
 void Solver::partsPass(const Unit &unit, int top, const double *tau, UnitScratch &scratch) {
   const Nodes &nd = m_.nodes;
   const std::uint32_t b = nd.body[unit.node_lo];
@@ -86,51 +98,53 @@ void Solver::partsPass(const Unit &unit, int top, const double *tau, UnitScratch
   const std::size_t i_body = static_cast<std::size_t>(
       std::find(parted_bodies_.begin(), parted_bodies_.end(), b) - parted_bodies_.begin());
   std::vector<NodeState> &state = scratch.state;
-  std::vector<NodeForce> &force = scratch.force;
+  std::vector<NodeForce> &force = scratch.force, &part_force = scratch.part_force;
   state.resize(n);
-  force.assign(n, NodeForce{0.0, 0.0});
+  force.resize(n);
+  part_force.resize(n);
   scratch.jacobian.resize(unit.averaged_volume ? n : 0);
-  const UnitNodes nodes{state.data(), force.data(), scratch.jacobian.data(), base};
-  for (std::size_t a = base; a < unit.node_hi; ++a)
+  const double gx = s_.gravity_x, gy = s_.gravity_y;
+  for (std::size_t a = base; a < unit.node_hi; ++a) {
     state[a - base] = {nd.x[a], nd.y[a], nd.vx[a], nd.vy[a]};
+    force[a - base] = {nd.mass[a] * gx, nd.mass[a] * gy};
+  }
   if (unit.averaged_volume)
-    nodalVolumes(unit, nodes);
-  for (int l = top; l >= e; --l) {
-    const auto level = static_cast<std::uint8_t>(l);
-    const bool any = std::any_of(chunks_.begin() + static_cast<long>(unit.chunk_begin),
-                                 chunks_.begin() + static_cast<long>(unit.chunk_end),
-                                 [&](const Chunk &c) { return c.level == level; });
-    if (l > e) {
-      if (any) {
-        const std::vector<double> &x0 = window_x_[i_body][static_cast<std::size_t>(l)],
-                                  &y0 = window_y_[i_body][static_cast<std::size_t>(l)];
-        const double inv_tau = 1.0 / tau[l];
-        for (std::size_t k = 0; k < n; ++k)
-          state[k].vx = (state[k].x - x0[k]) * inv_tau,
-          state[k].vy = (state[k].y - y0[k]) * inv_tau;
-      }
-    } else {
-      for (std::size_t a = base; a < unit.node_hi; ++a)
-        state[a - base].vx = nd.vx[a], state[a - base].vy = nd.vy[a];
-      if (s_.gravity_x != 0.0 || s_.gravity_y != 0.0)
-        for (std::size_t a = base; a < unit.node_hi; ++a)
-          force[a - base].x += nd.mass[a] * s_.gravity_x,
-              force[a - base].y += nd.mass[a] * s_.gravity_y;
+    nodalVolumes(unit, {state.data(), force.data(), scratch.jacobian.data(), base});
+  const UnitNodes nodes{state.data(), part_force.data(), scratch.jacobian.data(), base};
+  std::size_t i = unit.chunk_begin;
+  for (std::size_t p = part_begin_[b]; p < part_begin_[b + 1]; ++p) {
+    const int l = part_level_[p];
+    if (l > top) {
+      for (; i < unit.chunk_end && chunks_[i].part == p; ++i) // not due: no sums this step
+        sums_[i] = ChunkSums{0.0, 0.0, 0.0, HUGE_VAL, -1, false, {}};
+      continue;
     }
-    if (any)
-      for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
-        if (chunks_[i].level == level)
-          elementPass(chunks_[i], tau[l], nodes, sums_[i]);
-    if (l > e) {
-      const double ratio = tau[l] / tau[l - 1];
-      for (std::size_t k = 0; k < n; ++k)
-        force[k].x *= ratio, force[k].y *= ratio;
+    const std::uint32_t *part_node = part_nodes_.data() + part_node_begin_[p];
+    const std::size_t count = part_node_begin_[p + 1] - part_node_begin_[p];
+    const std::vector<double> &x0 = window_x_[i_body][static_cast<std::size_t>(l)],
+                              &y0 = window_y_[i_body][static_cast<std::size_t>(l)];
+    const double inv_tau = 1.0 / tau[l];
+    for (std::size_t j = 0; j < count; ++j) {
+      const std::size_t k = part_node[j] - base;
+      if (l == e)
+        state[k].vx = nd.vx[part_node[j]], state[k].vy = nd.vy[part_node[j]];
+      else
+        state[k].vx = (state[k].x - x0[k]) * inv_tau, state[k].vy = (state[k].y - y0[k]) * inv_tau;
+      part_force[k] = {0.0, 0.0};
+    }
+    for (; i < unit.chunk_end && chunks_[i].part == p; ++i)
+      elementPass(chunks_[i], tau[l], nodes, sums_[i]);
+    const double ratio = tau[l] / tau[e];
+    NodeForce *kept = part_force_.data() + part_node_begin_[p];
+    for (std::size_t j = 0; j < count; ++j) {
+      const std::size_t k = part_node[j] - base;
+      force[k].x += ratio * part_force[k].x, force[k].y += ratio * part_force[k].y;
+      kept[j] = part_force[k];
     }
   }
-  // the parts not due add nothing to this step's sums
-  for (std::size_t i = unit.chunk_begin; i < unit.chunk_end; ++i)
-    if (chunks_[i].level > top)
-      sums_[i] = ChunkSums{0.0, 0.0, 0.0, HUGE_VAL, -1, false, {}};
+  for (std::size_t a = base; a < unit.node_hi;
+       ++a) // the nodes' velocities for the second half-kick
+    state[a - base].vx = nd.vx[a], state[a - base].vy = nd.vy[a];
   for (int l = 1; l <= top; ++l) {
     std::vector<double> &x0 = window_x_[i_body][static_cast<std::size_t>(l)],
                         &y0 = window_y_[i_body][static_cast<std::size_t>(l)];
@@ -444,13 +458,34 @@ void Solver::chooseLevels(int top) {
         continue;
       }
       // a body in parts: at its finest part's level, no coarser than the bodies it may meet
+      const std::size_t p0 = part_begin_[b], p1 = part_begin_[b + 1];
+      const std::vector<std::uint8_t> stepped_at(part_level_.begin() + static_cast<long>(p0),
+                                                 part_level_.begin() + static_cast<long>(p1));
       choosePartLevels(static_cast<std::uint32_t>(b), top);
-      const auto finest =
-          std::min_element(part_level_.begin() + static_cast<long>(part_begin_[b]),
-                           part_level_.begin() + static_cast<long>(part_begin_[b + 1]));
-      level_[b] = std::min({*finest, cap[b], static_cast<std::uint8_t>(top)});
-      for (std::size_t p = part_begin_[b]; p < part_begin_[b + 1]; ++p)
-        part_level_[p] = std::max(part_level_[p], level_[b]);
+      const auto finest = *std::min_element(part_level_.begin() + static_cast<long>(p0),
+                                            part_level_.begin() + static_cast<long>(p1));
+      level_[b] = std::min({finest, cap[b], static_cast<std::uint8_t>(top)});
+      // The force for the first half-kick of its next step (over its window tau_e'): of each part
+      // that stepped, the rest of its impulse, tau_l' f_p with tau_l' its next window (the
+      // asynchronous variational integrator's impulse at an update, Lew et al. 2003;
+      // its second half-kick took tau_l / 2 f_p), as (2 tau_l' - tau_l) / tau_e' f_p / 2.
+      Nodes &nd = m_.nodes;
+      const Body &body = m_.bodies[b];
+      for (std::size_t a = body.node_begin; a < body.node_end; ++a) {
+        nd.fx[a] = nd.mass[a] * s_.gravity_x, nd.fy[a] = nd.mass[a] * s_.gravity_y;
+        if (nd.is_loaded[a])
+          nd.fx[a] += nd.external[a].fx, nd.fy[a] += nd.external[a].fy;
+      }
+      for (std::size_t p = p0; p < p1; ++p) {
+        if (stepped_at[p - p0] > top)
+          continue;
+        const double weight = std::ldexp(
+            std::ldexp(1.0, part_level_[p] + 1) - std::ldexp(1.0, stepped_at[p - p0]), -level_[b]);
+        for (std::size_t j = part_node_begin_[p]; j < part_node_begin_[p + 1]; ++j) {
+          const std::uint32_t a = part_nodes_[j];
+          nd.fx[a] += weight * part_force_[j].x, nd.fy[a] += weight * part_force_[j].y;
+        }
+      }
     }
 }
 

@@ -426,17 +426,20 @@ PartsImpact partsImpact(int max_level, int threads) {
 // A body in parts (Solver, max_level; bodies of 2,048 elements or more): the bar's part struck by
 // the fine block steps at level 0 with it while the parts away from it step at level 2, their
 // forces coming to the nodes as impulses over their window (the asynchronous variational
-// integrator). The energy balance closes within the goal of 2e-3 of the initial kinetic energy,
-// the contact takes energy out, none is found suddenly deep; the momentum and kinetic energy the
-// bar took up are the single rate's to 1 % and 3 % (the single rate's error against a finer step is
-// of that order in this coarse mesh); the run is the same for one and two threads.
+// integrator). The energy balance closes as at a single rate (well within the goal of 2e-3 of the
+// initial kinetic energy), the contact takes energy out, none is found suddenly deep; the momentum
+// and kinetic energy the bar took up are the single rate's to 1 % and 3 % (the single rate's error
+// against a finer step is of that order in this coarse mesh); the run is the same for one and two
+// threads.
 TEST(Levels, BodyInPartsStepsThemAtTheirLevels) {
   const PartsImpact single = partsImpact(0, 1);
   const PartsImpact levels = partsImpact(2, 1);
   EXPECT_GE(levels.most_at_0, 512u);
   EXPECT_GE(levels.most_at_2, 1024u);
   EXPECT_LT(levels.element_steps, 0.6 * levels.single_rate);
-  EXPECT_LT(std::abs(levels.energy.balance_error), 2e-3);
+  // (2.3e-4 at a single rate; 1.7e-3 with each part's impulse over its last window instead of its
+  // next one, 1.0e-3 over their mean)
+  EXPECT_LT(std::abs(levels.energy.balance_error), 5e-4);
   EXPECT_GT(levels.energy.contact, 0.0);
   EXPECT_EQ(levels.contact.sudden, 0u);
   EXPECT_LT(levels.contact.max_depth, 1.5 * single.contact.max_depth);
