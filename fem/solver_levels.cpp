@@ -10,7 +10,8 @@
 // contact across levels. A body's level is the longest power of two of base steps within its own
 // stable step, no coarser than the own level of any body it may meet (the contact's Verlet pairs,
 // found before the bodies touch), chosen at its own steps (aligned: a level l begins at a step
-// number that is a multiple of 2^l). Bodies with imposed velocities stay at level 0.
+// number that is a multiple of 2^l). Bodies with imposed velocities stay at level 0. A large body
+// (the projectile) steps in parts, each at its own level at or above its body's (partsPass).
 #include "levels.hpp"
 #include "solver.hpp"
 #include "threads.hpp"
