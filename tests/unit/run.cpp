@@ -183,10 +183,11 @@ TEST(Run, SignalEndsTheLoopAndKeepsTheFiles) {
             "--threads", "1", static_cast<char *>(nullptr));
     ::_exit(127);
   }
-  // The loop runs once run.h5.tmp exists (it is opened just before); then a little longer.
+  // The loop runs once run.h5.tmp exists (it is opened just before); then a little longer (a
+  // second: on a loaded machine 0.3 s was once not enough for a step).
   for (int i = 0; i < 600 && !std::filesystem::exists(dir / "out/run.h5.tmp"); ++i)
     ::usleep(50000);
-  ::usleep(300000);
+  ::usleep(1000000);
   ::kill(pid, SIGTERM);
   int status = 0;
   ::waitpid(pid, &status, 0);
