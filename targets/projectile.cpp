@@ -197,13 +197,10 @@ double exactCentroidY(const ProjectileShape &s) {
   return (facet + nose + shank) / exactArea(s);
 }
 
-TriangleMesh projectileMesh(const ProjectileShape &shape, const ProjectileSpec &spec, double edge,
-                            std::vector<double> &outline_x, std::vector<double> &outline_y) {
-  projectileOutline(shape, edge, outline_x, outline_y);
-  TriangleMesh mesh =
-      qualityMesh(outline_x.data(), outline_y.data(), outline_x.size(), edge, spec.min_angle);
-  // The triangles from the tip to the base (by their centroid's y, then x): consecutive elements
-  // lie in a slab across the projectile, which the solver's levels step as parts of their own.
+// The triangles by their centroid's y (then x), from the body frame's y = 0 (the tip, the
+// plate's face) on: consecutive elements lie in a slab across the projectile, which the solver's
+// levels step as parts of their own.
+static void orderFromTheFront(TriangleMesh &mesh) {
   const std::size_t n = mesh.tri.size() / 3;
   std::vector<std::pair<double, double>> centroid(n);
   for (std::size_t t = 0; t < n; ++t) {
@@ -219,6 +216,14 @@ TriangleMesh projectileMesh(const ProjectileShape &shape, const ProjectileSpec &
   for (std::size_t t = 0; t < n; ++t)
     std::copy_n(&mesh.tri[3 * order[t]], 3, &tri[3 * t]);
   mesh.tri = std::move(tri);
+}
+
+TriangleMesh projectileMesh(const ProjectileShape &shape, const ProjectileSpec &spec, double edge,
+                            std::vector<double> &outline_x, std::vector<double> &outline_y) {
+  projectileOutline(shape, edge, outline_x, outline_y);
+  TriangleMesh mesh =
+      qualityMesh(outline_x.data(), outline_y.data(), outline_x.size(), edge, spec.min_angle);
+  orderFromTheFront(mesh);
   return mesh;
 }
 
@@ -236,7 +241,9 @@ static TriangleMesh plateMesh(const ProjectileSpec &spec, double width, double e
     x.push_back(width * (0.5 - static_cast<double>(k) / nw)), y.push_back(spec.length);
   for (int k = 0; k < nt; ++k) // left side
     x.push_back(-0.5 * width), y.push_back(spec.length * (1.0 - static_cast<double>(k) / nt));
-  return qualityMesh(x.data(), y.data(), x.size(), edge, spec.min_angle);
+  TriangleMesh mesh = qualityMesh(x.data(), y.data(), x.size(), edge, spec.min_angle);
+  orderFromTheFront(mesh);
+  return mesh;
 }
 
 PlacedProjectile placeProjectile(const ProjectileSpec &spec, double default_mesh_size,

@@ -53,7 +53,8 @@ double exactArea(const ProjectileShape &shape);
 double exactCentroidY(const ProjectileShape &shape);
 
 // The projectile's quality mesh in its body frame (sharp tip at the origin, axis along +y), at
-// triangle edge `edge` and the spec's smallest angle; its outline in `outline_x`, `outline_y`.
+// triangle edge `edge` and the spec's smallest angle, its triangles from the tip to the base; its
+// outline in `outline_x`, `outline_y`.
 TriangleMesh projectileMesh(const ProjectileShape &shape, const ProjectileSpec &spec, double edge,
                             std::vector<double> &outline_x, std::vector<double> &outline_y);
 

@@ -378,6 +378,25 @@ TEST(ProjectileMesh, AreaEqualsOutlineArea) {
   }
 }
 
+// The projectile's triangles come from the tip to the base (centroid y non-decreasing, the body
+// frame's tip at y = 0), so that consecutive elements lie in slabs across it (the solver's parts
+// under multiple time stepping): 512 consecutive triangles span less than a tenth of its length.
+TEST(ProjectileMesh, TrianglesFromTheTip) {
+  ProjectileSpec spec;
+  const ProjectileShape s = projectileShape(spec);
+  std::vector<double> ox, oy;
+  const TriangleMesh m = projectileMesh(s, spec, 10e-6, ox, oy);
+  const std::size_t n = m.tri.size() / 3;
+  ASSERT_GT(n, 2048u);
+  auto centroid_y = [&](std::size_t t) {
+    return m.y[m.tri[3 * t]] + m.y[m.tri[3 * t + 1]] + m.y[m.tri[3 * t + 2]];
+  };
+  for (std::size_t t = 1; t < n; ++t)
+    ASSERT_LE(centroid_y(t - 1), centroid_y(t)) << "triangle " << t;
+  for (std::size_t t = 0; t + 512 <= n; t += 512)
+    EXPECT_LT((centroid_y(t + 511) - centroid_y(t)) / 3.0, 0.1 * spec.length) << "from " << t;
+}
+
 TEST(PlaceProjectile, RestsOnTheBoxTopWithoutGrains) {
   const ProjectileSpec spec;
   const TargetSpec t = box();
