@@ -943,7 +943,7 @@ void Contact::capParts(const std::vector<std::uint8_t> &own, std::uint32_t body,
     if (pair.a != body && pair.b != body)
       continue;
     const std::uint32_t other = pair.a == body ? pair.b : pair.a;
-    const Box reach = boundaries_.boxes[other].widened(pair.margin);
+    const Box reach = boundaries_.boxes[other].widened(pairs_.searchMargin());
     for (std::size_t p = 0; p < cap.size(); ++p)
       if (reach.overlaps({boxes[4 * p], boxes[4 * p + 1], boxes[4 * p + 2], boxes[4 * p + 3]}))
         cap[p] = std::min(cap[p], own[other]);

@@ -107,8 +107,8 @@ public:
   bool takesLevels() const override { return true; }
   void capLevels(const std::vector<std::uint8_t> &own,
                  std::vector<std::uint8_t> &cap) const override;
-  // A part may meet the bodies of its body's pairs whose boxes, widened by the pair's margin,
-  // overlap its box.
+  // A part may meet the bodies of its body's pairs whose boxes, widened by the search margin (by
+  // which the pairs were found), overlap its box.
   void capParts(const std::vector<std::uint8_t> &own, std::uint32_t body,
                 const std::vector<double> &boxes, std::vector<std::uint8_t> &cap) const override;
   // This process's statistics (with the work shared, of the pairs and sides it computed); of all

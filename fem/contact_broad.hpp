@@ -76,6 +76,8 @@ public:
   bool searchNeeded(double farthest) const {
     return run_pairs_.empty() || 2.0 * farthest > search_margin_;
   }
+  // The margin by which bodies' boxes are widened to find their pairs.
+  double searchMargin() const { return search_margin_; }
   // The pairs: all anew (`anew`, as searchNeeded says), else those of the bodies that woke since
   // the last step added. Returns `anew`.
   bool search(const Model &model, const ContactBoundaries &boundaries, bool anew);

@@ -1362,12 +1362,13 @@ void Solver::erode() {
     collapsed_elements_ += k == 2;
   if (failed.empty())
     return;
-  // Their forces leave f(n+1) with them: f_k = -A B_k^T sigma, as in elementPass.
+  // Their forces leave f(n+1) with them: f_k = -A B_k^T sigma, as in elementPass (in a body in
+  // parts, as its part's force came into f(n+1): nextForceWeight).
   Nodes &nd = m_.nodes;
   for (std::uint32_t e : failed) {
     const std::uint32_t *v = &el.node[3 * e];
-    const double pq = el.pressure[e] + el.viscosity[e];
-    const double sxx = el.sxx[e] - pq, syy = el.syy[e] - pq, sxy = el.sxy[e];
+    const double pq = el.pressure[e] + el.viscosity[e], w = nextForceWeight(e);
+    const double sxx = w * (el.sxx[e] - pq), syy = w * (el.syy[e] - pq), sxy = w * el.sxy[e];
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t b = v[(k + 1) % 3], c = v[(k + 2) % 3];
       const double gx = nd.y[b] - nd.y[c], gy = nd.x[c] - nd.x[b];

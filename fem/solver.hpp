@@ -187,8 +187,11 @@ public:
   // run would have computed (the active elements of every step); equal without levels.
   double elementSteps() const { return element_steps_; }
   double singleRateElementSteps() const { return single_rate_element_steps_; }
-  // With levels: the active elements at each level now.
+  // With levels: the active elements at each level now (a body in parts by its parts' levels);
+  // the bodies stepped in parts and their parts.
   std::vector<std::size_t> elementsByLevel() const;
+  std::size_t bodiesInParts() const { return parted_bodies_.size(); }
+  std::size_t parts() const { return parts_.size(); }
   std::size_t erodedElements() const { return eroded_elements_; } // over the run
   // Of those, the ones eroded for a collapsed step (erode_step_ratio).
   std::size_t collapsedElements() const { return collapsed_elements_; }
@@ -342,7 +345,8 @@ private:
   void addKinetic(std::size_t node, double change);
   void startParts();
   void partsPass(const Unit &unit, int top, const double *tau, UnitScratch &scratch);
-  void choosePartLevels(std::uint32_t body, int top);
+  void choosePartLevels(std::uint32_t body, int top, std::uint8_t limit);
+  double nextForceWeight(std::size_t element) const;
 
   Model &m_;
   SolverSettings s_;
@@ -435,6 +439,9 @@ private:
   std::vector<std::size_t> part_node_begin_;
   std::vector<std::uint32_t> part_nodes_;
   std::vector<NodeForce> part_force_;
+  // each part's force in the body's next first half-kick, per unit of its force (chooseLevels)
+  std::vector<double> part_weight_;
+  static constexpr std::size_t part_elements = 512;
   std::vector<std::uint32_t> parted_bodies_;
   std::vector<std::vector<std::vector<double>>> window_x_, window_y_;
 };

@@ -47,7 +47,7 @@ void Solver::startLevels() {
 // The bodies of at least parts_from elements step in parts of part_elements consecutive elements
 // (the projectile: its elements are ordered from the tip, so that a part is a slab across it).
 void Solver::startParts() {
-  constexpr std::size_t parts_from = 2048, part_elements = 512;
+  constexpr std::size_t parts_from = 2048;
   const std::size_t n = m_.bodies.size();
   part_begin_.assign(n + 1, 0);
   for (std::size_t b = 0; b < n; ++b) {
@@ -79,6 +79,7 @@ void Solver::startParts() {
     part_node_begin_.push_back(part_nodes_.size());
   }
   part_force_.assign(part_nodes_.size(), NodeForce{0.0, 0.0});
+  part_weight_.assign(parts_.size(), 1.0);
   part_level_.assign(parts_.size(), 0);
   part_own_level_.assign(parts_.size(), static_cast<std::uint8_t>(s_.max_level));
   part_step_min_.assign(parts_.size(), HUGE_VAL);
@@ -157,7 +158,7 @@ void Solver::partsPass(const Unit &unit, int top, const double *tau, UnitScratch
 // The levels of the parts of body `body` (which stepped) that stepped: each part's own level from
 // its elements' shortest step, no coarser than the own level of a body it may meet (its box within
 // the provider's reach), nor than the step number allows.
-void Solver::choosePartLevels(std::uint32_t body, int top) {
+void Solver::choosePartLevels(std::uint32_t body, int top, std::uint8_t limit) {
   const std::size_t p0 = part_begin_[body], p1 = part_begin_[body + 1];
   const Elements &el = m_.elements;
   const Nodes &nd = m_.nodes;
@@ -188,7 +189,18 @@ void Solver::choosePartLevels(std::uint32_t body, int top) {
     provider->capParts(own_level_, body, boxes, cap);
   for (std::size_t p = p0; p < p1; ++p)
     if (part_level_[p] <= top)
-      part_level_[p] = std::min({part_own_level_[p], cap[p - p0], static_cast<std::uint8_t>(top)});
+      part_level_[p] = std::min({part_own_level_[p], cap[p - p0], limit});
+}
+
+// The share of element e's force in the nodes' force for their next first half-kick: 1, or in a
+// body in parts its part's weight (chooseLevels).
+double Solver::nextForceWeight(std::size_t element) const {
+  if (part_begin_.empty())
+    return 1.0;
+  const std::uint32_t b = m_.elements.body[element];
+  if (part_begin_[b] == part_begin_[b + 1])
+    return 1.0;
+  return part_weight_[part_begin_[b] + (element - m_.bodies[b].element_begin) / part_elements];
 }
 
 void Solver::addKinetic(std::size_t node, double change) {
@@ -449,9 +461,10 @@ void Solver::chooseLevels(int top) {
   std::vector<std::uint8_t> cap(n, max_level);
   for (auto *provider : providers_)
     provider->capLevels(own_level_, cap);
+  std::vector<std::uint8_t> constrained(n, max_level); // 0: imposed velocities, its parts too
   for (const auto &c : m_.constraints)
     for (std::uint32_t a : c.nodes)
-      cap[m_.nodes.body[a]] = 0;
+      cap[m_.nodes.body[a]] = 0, constrained[m_.nodes.body[a]] = 0;
   for (std::size_t b = 0; b < n; ++b)
     if (!m_.at_rest[b] && level_[b] <= top) {
       if (part_begin_[b] == part_begin_[b + 1]) {
@@ -462,7 +475,8 @@ void Solver::chooseLevels(int top) {
       const std::size_t p0 = part_begin_[b], p1 = part_begin_[b + 1];
       const std::vector<std::uint8_t> stepped_at(part_level_.begin() + static_cast<long>(p0),
                                                  part_level_.begin() + static_cast<long>(p1));
-      choosePartLevels(static_cast<std::uint32_t>(b), top);
+      choosePartLevels(static_cast<std::uint32_t>(b), top,
+                       std::min(constrained[b], static_cast<std::uint8_t>(top)));
       const auto finest = *std::min_element(part_level_.begin() + static_cast<long>(p0),
                                             part_level_.begin() + static_cast<long>(p1));
       level_[b] = std::min({finest, cap[b], static_cast<std::uint8_t>(top)});
@@ -482,6 +496,7 @@ void Solver::chooseLevels(int top) {
           continue;
         const double weight = std::ldexp(
             std::ldexp(1.0, part_level_[p] + 1) - std::ldexp(1.0, stepped_at[p - p0]), -level_[b]);
+        part_weight_[p] = weight;
         for (std::size_t j = part_node_begin_[p]; j < part_node_begin_[p + 1]; ++j) {
           const std::uint32_t a = part_nodes_[j];
           nd.fx[a] += weight * part_force_[j].x, nd.fy[a] += weight * part_force_[j].y;

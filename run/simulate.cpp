@@ -151,7 +151,9 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
         {"element_updates", solver.elementSteps()},
         {"single_rate_element_updates", single},
         {"element_update_share", single > 0.0 ? solver.elementSteps() / single : 1.0},
-        {"active_elements_by_level_at_end", solver.elementsByLevel()}};
+        {"active_elements_by_level_at_end", solver.elementsByLevel()},
+        {"bodies_in_parts", solver.bodiesInParts()},
+        {"parts", solver.parts()}};
   }
   if (checkpoints.on() || checkpoints.resumed())
     summary["checkpoints"] = {{"written", checkpoints.written()},
