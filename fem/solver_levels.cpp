@@ -61,10 +61,12 @@ void Solver::startParts() {
     const std::size_t nodes = body.node_end - body.node_begin;
     window_x_.emplace_back(static_cast<std::size_t>(s_.max_level) + 1, std::vector<double>(nodes));
     window_y_.emplace_back(static_cast<std::size_t>(s_.max_level) + 1, std::vector<double>(nodes));
-    for (int l = 1; l <= s_.max_level; ++l)
-      for (std::size_t a = body.node_begin; a < body.node_end; ++a)
-        window_x_.back()[l][a - body.node_begin] = m_.nodes.x[a],
-                                window_y_.back()[l][a - body.node_begin] = m_.nodes.y[a];
+    for (int l = 1; l <= s_.max_level; ++l) { // every window starts at the first positions
+      std::copy(m_.nodes.x.begin() + static_cast<long>(body.node_begin),
+                m_.nodes.x.begin() + static_cast<long>(body.node_end), window_x_.back()[l].begin());
+      std::copy(m_.nodes.y.begin() + static_cast<long>(body.node_begin),
+                m_.nodes.y.begin() + static_cast<long>(body.node_end), window_y_.back()[l].begin());
+    }
   }
   part_begin_[n] = parts_.size();
   // each part's nodes (sorted), and room for its force at them
