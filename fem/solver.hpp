@@ -347,6 +347,7 @@ private:
   void partsPass(const Unit &unit, int top, const double *tau, UnitScratch &scratch);
   void choosePartLevels(std::uint32_t body, int top, std::uint8_t limit);
   double nextForceWeight(std::size_t element) const;
+  void nextPartForces(std::uint32_t body, int top, const std::vector<std::uint8_t> &stepped_at);
 
   Model &m_;
   SolverSettings s_;

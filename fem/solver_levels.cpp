@@ -146,8 +146,8 @@ void Solver::partsPass(const Unit &unit, int top, const double *tau, UnitScratch
       kept[j] = part_force[k];
     }
   }
-  for (std::size_t a = base; a < unit.node_hi;
-       ++a) // the nodes' velocities for the second half-kick
+  // the nodes' velocities for the second half-kick
+  for (std::size_t a = base; a < unit.node_hi; ++a)
     state[a - base].vx = nd.vx[a], state[a - base].vy = nd.vy[a];
   for (int l = 1; l <= top; ++l) {
     std::vector<double> &x0 = window_x_[i_body][static_cast<std::size_t>(l)],
@@ -449,6 +449,34 @@ void Solver::forcesLevels(int top, const double *tau) {
   shortest_step_ = dt_min;
 }
 
+// The force for the first half-kick of the next step of body `body` in parts (over its window
+// tau_e', its level chosen): gravity and the external forces, as for any body, and of each part
+// that stepped (at level l, `stepped_at`, window tau_l) the rest of its impulse tau_l' f_p, tau_l'
+// its next window (the asynchronous variational integrator's impulse at an update, Lew et al. 2003;
+// its second half-kick took tau_l / 2 f_p), as (2 tau_l' - tau_l) / tau_e' f_p / 2.
+void Solver::nextPartForces(std::uint32_t body, int top,
+                            const std::vector<std::uint8_t> &stepped_at) {
+  Nodes &nd = m_.nodes;
+  const Body &bd = m_.bodies[body];
+  for (std::size_t a = bd.node_begin; a < bd.node_end; ++a) {
+    nd.fx[a] = nd.mass[a] * s_.gravity_x, nd.fy[a] = nd.mass[a] * s_.gravity_y;
+    if (nd.is_loaded[a])
+      nd.fx[a] += nd.external[a].fx, nd.fy[a] += nd.external[a].fy;
+  }
+  const std::size_t p0 = part_begin_[body];
+  for (std::size_t p = p0; p < part_begin_[body + 1]; ++p) {
+    if (stepped_at[p - p0] > top)
+      continue;
+    const double weight = std::ldexp(
+        std::ldexp(1.0, part_level_[p] + 1) - std::ldexp(1.0, stepped_at[p - p0]), -level_[body]);
+    part_weight_[p] = weight;
+    for (std::size_t j = part_node_begin_[p]; j < part_node_begin_[p + 1]; ++j) {
+      const std::uint32_t a = part_nodes_[j];
+      nd.fx[a] += weight * part_force_[j].x, nd.fy[a] += weight * part_force_[j].y;
+    }
+  }
+}
+
 // The levels of the bodies that stepped: each body's own level from its own step on the base step
 // to come, no coarser than the own level of a body it may meet, nor than the step number allows.
 void Solver::chooseLevels(int top) {
@@ -482,28 +510,7 @@ void Solver::chooseLevels(int top) {
       const auto finest = *std::min_element(part_level_.begin() + static_cast<long>(p0),
                                             part_level_.begin() + static_cast<long>(p1));
       level_[b] = std::min({finest, cap[b], static_cast<std::uint8_t>(top)});
-      // The force for the first half-kick of its next step (over its window tau_e'): of each part
-      // that stepped, the rest of its impulse, tau_l' f_p with tau_l' its next window (the
-      // asynchronous variational integrator's impulse at an update, Lew et al. 2003;
-      // its second half-kick took tau_l / 2 f_p), as (2 tau_l' - tau_l) / tau_e' f_p / 2.
-      Nodes &nd = m_.nodes;
-      const Body &body = m_.bodies[b];
-      for (std::size_t a = body.node_begin; a < body.node_end; ++a) {
-        nd.fx[a] = nd.mass[a] * s_.gravity_x, nd.fy[a] = nd.mass[a] * s_.gravity_y;
-        if (nd.is_loaded[a])
-          nd.fx[a] += nd.external[a].fx, nd.fy[a] += nd.external[a].fy;
-      }
-      for (std::size_t p = p0; p < p1; ++p) {
-        if (stepped_at[p - p0] > top)
-          continue;
-        const double weight = std::ldexp(
-            std::ldexp(1.0, part_level_[p] + 1) - std::ldexp(1.0, stepped_at[p - p0]), -level_[b]);
-        part_weight_[p] = weight;
-        for (std::size_t j = part_node_begin_[p]; j < part_node_begin_[p + 1]; ++j) {
-          const std::uint32_t a = part_nodes_[j];
-          nd.fx[a] += weight * part_force_[j].x, nd.fy[a] += weight * part_force_[j].y;
-        }
-      }
+      nextPartForces(static_cast<std::uint32_t>(b), top, stepped_at);
     }
 }
 
