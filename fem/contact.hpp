@@ -105,7 +105,7 @@ public:
   // Levels: a pair is computed at steps where both bodies are due, over the coarser body's window;
   // a body may meet the bodies of its pairs (boxes within the search margin).
   bool takesLevels() const override { return true; }
-  void capLevels(const std::vector<std::uint8_t> &own,
+  void capLevels(const std::vector<std::uint8_t> &reach,
                  std::vector<std::uint8_t> &cap) const override;
   // A part may meet the bodies of its body's pairs whose boxes, widened by the search margin (by
   // which the pairs were found), overlap its box.

@@ -59,6 +59,11 @@ struct SolverSettings {
   // A body at level l steps every 2^l base steps (the base step is the shortest body's), within
   // its own stable step and no coarser than the bodies it may meet; 0: every body every step.
   int max_level = 0;
+  // With levels: a body steps at most this many levels coarser than the own level of a body it may
+  // meet (0: no coarser). A pair of bodies on different levels is computed at the coarser body's
+  // steps, its penalty softer by the square of the windows' ratio: contacts go deeper, but most of
+  // the grains beside a grain with one thin element step at the coarser level (docs/solver.md).
+  int level_gap = 1;
 };
 
 // Energies per metre of depth [J/m]. Internal includes the plastic and viscous work done.
@@ -102,10 +107,11 @@ public:
   virtual void bodiesMoving(const Model &, const std::vector<std::uint32_t> & /*bodies*/,
                             const std::vector<int> & /*new_owner*/) {}
   // Multiple time stepping: whether it honours Model::due and Model::window, and, from each
-  // body's own level, the finest level of the bodies each body may meet through it (`cap`, lowered
-  // only), so that bodies step together before they touch.
+  // body's `reach` (its own level plus the level gap: the coarsest level a body it may meet may
+  // take), the least reach of the bodies each body may meet through it (`cap`, lowered only), so
+  // that bodies step together, or a level gap apart at most, before they touch.
   virtual bool takesLevels() const { return false; }
-  virtual void capLevels(const std::vector<std::uint8_t> & /*own*/,
+  virtual void capLevels(const std::vector<std::uint8_t> & /*reach*/,
                          std::vector<std::uint8_t> & /*cap*/) const {}
   // The same for the parts of body `body` (boxes x0, y0, x1, y1 each): the finest own level of the
   // bodies each part may meet (`cap`, one per part, lowered only).

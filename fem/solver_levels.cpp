@@ -31,6 +31,8 @@ void Solver::startLevels() {
   if (s_.max_level > 7)
     throw std::invalid_argument("max_level " + std::to_string(s_.max_level) +
                                 ": at most 7 levels above the base step");
+  if (s_.level_gap < 0)
+    throw std::invalid_argument("level_gap " + std::to_string(s_.level_gap) + ": at least 0");
   const std::size_t n = m_.bodies.size();
   m_.due.assign(n, 1);
   m_.window.assign(n, 0.0);
@@ -488,9 +490,13 @@ void Solver::chooseLevels(int top) {
     else if (level_[b] <= top)
       own_level_[b] = static_cast<std::uint8_t>(
           ownLevel(s_.safety * step_scale_ * body_step_min_[b], dt_, own_level_[b], s_.max_level));
+  // the coarsest level a body may take beside each body (its own level plus the gap)
+  std::vector<std::uint8_t> reach(n);
+  for (std::size_t b = 0; b < n; ++b)
+    reach[b] = static_cast<std::uint8_t>(std::min(own_level_[b] + s_.level_gap, s_.max_level));
   std::vector<std::uint8_t> cap(n, max_level);
   for (auto *provider : providers_)
-    provider->capLevels(own_level_, cap);
+    provider->capLevels(reach, cap);
   std::vector<std::uint8_t> constrained(n, max_level); // 0: imposed velocities, its parts too
   for (const auto &c : m_.constraints)
     for (std::uint32_t a : c.nodes)

@@ -16,7 +16,8 @@ fem::SolverSettings solverSettings(const Scene &scene, double max_dt) {
           .mass_scaling_step_ratio = run.mass_scaling_step_ratio,
           .rebalance_imbalance = run.rebalance_imbalance,
           .rebalance_every = static_cast<std::size_t>(run.rebalance_every),
-          .max_level = static_cast<int>(run.max_level)};
+          .max_level = static_cast<int>(run.max_level),
+          .level_gap = static_cast<int>(run.level_gap)};
 }
 
 fem::ContactSettings contactSettings(const Scene &scene, bool walls) {

@@ -325,8 +325,13 @@ const std::vector<Key> &keys() {
         integer("run", "max_level", r, &R::max_level, 0, 3,
                 "multiple time stepping by body: the largest level, a body stepping every "
                 "2^level base steps (the shortest body's step) within its own stable step and "
-                "no coarser than the bodies it may meet, a contact pair when both its bodies "
-                "step (docs/solver.md, one process); 0: every body every step"),
+                "at most level_gap levels coarser than the bodies it may meet, a contact pair "
+                "when both its bodies step (docs/solver.md, one process); 0: every body every "
+                "step"),
+        integer("run", "level_gap", r, &R::level_gap, 0, 3,
+                "multiple time stepping: the most levels a body steps coarser than the own level "
+                "of a body it may meet (a pair across levels is computed at the coarser body's "
+                "steps, with a softer penalty; docs/solver.md); 0: no coarser"),
         real("run", "end_depth", r, &R::end_depth, "", 0, false, 100,
              "stop when the projectile's depth reaches this many projectile lengths (thesis: 1); "
              "0: run to end_time"),

@@ -63,6 +63,8 @@ struct RunSpec {
   // multiple time stepping: the largest level, a batch of elements updating every 2^level base
   // steps within its own stable step (fem/solver.hpp); 0: every element every step
   std::int64_t max_level = fem::SolverSettings{}.max_level;
+  // with levels: the most levels a body steps coarser than the own level of a body it may meet
+  std::int64_t level_gap = fem::SolverSettings{}.level_gap;
   double end_depth = 0.0;       // stop when the depth reaches this many projectile lengths
   double frame_interval = 1e-7; // simulated time between frames [s]; 0: no frames
   bool vtk = true;              // frames also as VTK files for ParaView

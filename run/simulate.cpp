@@ -148,6 +148,7 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
     const double single = solver.singleRateElementSteps();
     summary["multiple_time_stepping"] = {
         {"max_level", scene.run.max_level},
+        {"level_gap", scene.run.level_gap},
         {"element_updates", solver.elementSteps()},
         {"single_rate_element_updates", single},
         {"element_update_share", single > 0.0 ? solver.elementSteps() / single : 1.0},

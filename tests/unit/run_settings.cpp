@@ -28,6 +28,8 @@ TEST(RunSettings, SceneDefaultsAreTheSolversDefaults) {
   Scene levels;
   levels.run.max_level = 2;
   EXPECT_EQ(solverSettings(levels, HUGE_VAL).max_level, 2);
+  levels.run.level_gap = 0;
+  EXPECT_EQ(solverSettings(levels, HUGE_VAL).level_gap, 0);
 }
 
 TEST(RunSettings, SceneDefaultsAreTheContactsDefaults) {
