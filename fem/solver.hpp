@@ -61,9 +61,10 @@ struct SolverSettings {
   int max_level = 0;
   // With levels: a body steps at most this many levels coarser than the own level of a body it may
   // meet (0: no coarser). A pair of bodies on different levels is computed at the coarser body's
-  // steps, its penalty softer by the square of the windows' ratio: contacts go deeper, but most of
-  // the grains beside a grain with one thin element step at the coarser level (docs/solver.md).
-  int level_gap = 1;
+  // steps, its penalty softer by the square of the windows' ratio: most of the grains beside a
+  // grain with one thin element step at the coarser level, but contacts go deeper
+  // (docs/solver.md, "The level gap").
+  int level_gap = 0;
 };
 
 // Energies per metre of depth [J/m]. Internal includes the plastic and viscous work done.

@@ -8,10 +8,11 @@
 // this step's second half-kick and half in the next first half-kick: the impulse (r-RESPA,
 // Tuckerman et al. 1992; asynchronous variational integrators, Lew et al. 2003) form of the
 // contact across levels. A body's level is the longest power of two of base steps within its own
-// stable step, no coarser than the own level of any body it may meet (the contact's Verlet pairs,
-// found before the bodies touch), chosen at its own steps (aligned: a level l begins at a step
-// number that is a multiple of 2^l). Bodies with imposed velocities stay at level 0. A large body
-// (the projectile) steps in parts, each at its own level at or above its body's (partsPass).
+// stable step, at most level_gap levels coarser than the own level of any body it may meet (the
+// contact's Verlet pairs, found before the bodies touch), chosen at its own steps (aligned: a
+// level l begins at a step number that is a multiple of 2^l). Bodies with imposed velocities stay
+// at level 0. A large body (the projectile) steps in parts, each at its own level at or above its
+// body's (partsPass).
 #include "levels.hpp"
 #include "solver.hpp"
 #include "threads.hpp"
@@ -480,7 +481,8 @@ void Solver::nextPartForces(std::uint32_t body, int top,
 }
 
 // The levels of the bodies that stepped: each body's own level from its own step on the base step
-// to come, no coarser than the own level of a body it may meet, nor than the step number allows.
+// to come, at most level_gap levels coarser than the own level of a body it may meet, and no
+// coarser than the step number allows.
 void Solver::chooseLevels(int top) {
   const std::size_t n = m_.bodies.size();
   const auto max_level = static_cast<std::uint8_t>(s_.max_level);

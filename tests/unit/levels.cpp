@@ -335,7 +335,7 @@ TEST(Levels, ImpactAcrossLevelsKeepsEnergyAndContact) {
               single.energy.kinetic);
 }
 
-// A level gap of 1 (the default): the first coarse block steps one level coarser than the fine
+// A level gap of 1: the first coarse block steps one level coarser than the fine
 // block it meets, so that their pair is computed every second base step, over the coarse block's
 // window, with a penalty softer by 4. The balance closes within the goal of 2e-3, the contacts take
 // energy out, none is found suddenly deep, and the fine block goes at most 4 times as deep as at a

@@ -2,7 +2,7 @@
 beside the same scene with levels, timed side by side and compared seed by seed.
 
     python3 tools/bench/bench_levels.py [--mesopen build/bin/mesopen] [--out build/bench]
-        [--scene examples/thesis/run-06.toml] [--level 2] [--threads 2] [--runs 3]
+        [--scene examples/thesis/run-06.toml] [--level 2] [--gap 0] [--threads 2] [--runs 3]
         [--seeds 1,1001,2001,3001,4001]
 
 Timing: the first seed at max_level 0 and at --level, alternately, --runs times each (the machine
@@ -70,12 +70,15 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "build", "bench"))
     ap.add_argument("--scene", default=os.path.join(ROOT, "examples", "thesis", "run-06.toml"))
     ap.add_argument("--level", type=int, default=2)
+    ap.add_argument("--gap", type=int, default=0, help="run.level_gap of the runs with levels")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--seeds", default="1,1001,2001,3001,4001")
     args = ap.parse_args()
     if not 1 <= args.level <= 3:
         ap.error(f"--level {args.level}: allowed 1 <= level <= 3 (run.max_level)")
+    if not 0 <= args.gap <= 3:
+        ap.error(f"--gap {args.gap}: allowed 0 <= gap <= 3 (run.level_gap)")
     if not 1 <= args.runs <= 100:
         ap.error(f"--runs {args.runs}: allowed 1 <= runs <= 100")
     try:
@@ -90,7 +93,8 @@ def main():
     levels = {0: 0, 1: args.level}
 
     def scene(seed, which):
-        return with_run_key(with_target_key(base, "seed", seed), "max_level", levels[which])
+        text = with_run_key(with_target_key(base, "seed", seed), "max_level", levels[which])
+        return with_run_key(text, "level_gap", args.gap) if which else text
 
     times = {0: [], 1: []}
     results = {0: {}, 1: {}}
@@ -106,7 +110,7 @@ def main():
 
     ratios = [b / a for a, b in zip(times[0], times[1])]
     print(f"mesopen run {os.path.relpath(args.scene, ROOT)}, {args.threads} threads, no frames: "
-          f"max_level 0 beside {args.level}")
+          f"max_level 0 beside {args.level} (level gap {args.gap})")
     print(f"  timing (seed {seeds[0]}, {args.runs} runs each, alternately): time loop median "
           f"{statistics.median(times[0]):.2f} s vs {statistics.median(times[1]):.2f} s, ratio "
           f"{statistics.median(ratios):.3f} (pairs {', '.join(f'{r:.3f}' for r in ratios)}); "
@@ -130,7 +134,7 @@ def main():
         print(f"  {name:32s} {mean0:11.4g} {min(single):11.4g}-{max(single):<11.4g} {mean1:11.4g}  "
               f"{'yes' if within else 'NO ':6s} {diff:22.4g}")
     result = {"scene": os.path.relpath(args.scene, ROOT), "threads": args.threads,
-              "level": args.level, "seeds": seeds, "runs": args.runs,
+              "level": args.level, "level_gap": args.gap, "seeds": seeds, "runs": args.runs,
               "loop_seconds": {"single_rate": times[0], "levels": times[1]},
               "ratio_median": statistics.median(ratios), "ratios": ratios,
               "steps": {"single_rate": [results[0][s]["steps"] for s in seeds],
