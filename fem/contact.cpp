@@ -27,6 +27,14 @@ constexpr std::size_t prefetch_ahead = 8;  // contacts and loads ahead whose nod
 
 double sq(double x) { return x * x; }
 
+// With levels, the level of the pair of bodies A and B (B no_node: a wall): the coarser body's, at
+// whose steps it is computed; 0 without.
+std::uint8_t pairLevel(const Model &model, std::uint32_t A, std::uint32_t B) {
+  if (model.level.empty())
+    return 0;
+  return B == no_node ? model.level[A] : std::max(model.level[A], model.level[B]);
+}
+
 // The settings with one friction coefficient per pair of materials.
 ContactSettings frictionPerPair(ContactSettings s, std::size_t n_materials) {
   if (s.friction.size() == 1)
@@ -109,8 +117,16 @@ double Contact::penetration(std::size_t B, double px, double py, Scratch &scratc
 void Contact::addForces(Model &model, double time, double dt) {
   const auto start = std::chrono::steady_clock::now();
   time_ = time;
-  if (!model.due.empty() && pushed_time_.empty())
-    pushed_time_.assign(pushed_.size(), -HUGE_VAL);
+  if (!model.due.empty()) { // a pushed depth per level of pair (pushed_)
+    std::size_t levels = 1;
+    for (std::uint8_t l : model.level)
+      levels = std::max<std::size_t>(levels, l + 1u);
+    if (levels > pushed_levels_ || pushed_time_.empty()) {
+      pushed_levels_ = std::max(levels, pushed_levels_);
+      pushed_.resize(pushed_levels_ * model.nodes.size(), 0.0);
+      pushed_time_.resize(pushed_.size(), -HUGE_VAL);
+    }
+  }
   allowances_.release();
   // (with the work shared, each process measures its own bodies, and the pairs' other bodies come
   // from their owners: shareBoxes, exchangeHalo)
@@ -296,8 +312,9 @@ void Contact::addBlock(Model &model, std::size_t k) {
   std::size_t next = 0;
   auto add = [&](const Load &l) {
     if (levels) {
-      if (l.depth > 0.0 && (pushed_time_[l.node] != time_ || l.depth > pushed_[l.node]))
-        pushed_[l.node] = l.depth, pushed_time_[l.node] = time_;
+      const std::size_t at = l.level * nd.size() + l.node;
+      if (l.depth > 0.0 && (pushed_time_[at] != time_ || l.depth > pushed_[at]))
+        pushed_[at] = l.depth, pushed_time_[at] = time_;
     } else if (l.depth > 0.0 && l.depth > pushed_[l.node]) { // (a reaction is pushed at 0)
       if (pushed_[l.node] == 0.0)
         block_pushed_[k].push_back(l.node);
@@ -863,7 +880,7 @@ void Contact::prefetchHit(const Model &model, const Found &f) const {
     const std::uint32_t p = bd.nodes[k];
     __builtin_prefetch(&nd.mass[p]), __builtin_prefetch(&nd.vx[p]), __builtin_prefetch(&nd.vy[p]);
   }
-  __builtin_prefetch(&pushed_[bd.nodes[f.k]]);
+  __builtin_prefetch(&pushed_[pairLevel(model, f.A, f.B) * model.nodes.size() + bd.nodes[f.k]]);
 }
 
 // The force of a contact (the first `touching` h of the depth is free), relative velocities at
@@ -898,8 +915,13 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
   // (approachReach), the node was not reached by approach: B's boundary folded over it, or a new
   // closest segment took over in a dented body. Pushed out at once it would leave at depth / dt;
   // the excess is allowed for instead and let go over release_steps steps, as erosion's overlaps.
-  // (with levels, the depth pushed at the pair's last step, the pair's window ago, or since)
-  const double pushed = levels && pushed_time_[p] < time_ - dt * (1.0 + 1e-9) ? 0.0 : pushed_[p];
+  // (with levels, the deepest the node was pushed at by the pairs of each level at their last
+  // step within the pair's window: its own last step's depth, whichever pairs were computed since)
+  const std::uint8_t level = pairLevel(model, A, B);
+  double pushed = levels ? 0.0 : pushed_[p];
+  for (std::size_t l = 0; levels && l < pushed_levels_; ++l)
+    if (const std::size_t at = l * nd.size() + p; pushed_time_[at] >= time_ - dt * (1.0 + 1e-9))
+      pushed = std::max(pushed, pushed_[at]);
   const double reach = approachReach(pushed, h, vn, dt);
   if (depth > reach)
     hits.sudden.emplace_back(p, depth - reach), depth = reach;
@@ -913,8 +935,8 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
   const double fx = f_c.fx, fy = f_c.fy, friction_x = -f_c.ft * f_c.tx,
                friction_y = -f_c.ft * f_c.ty;
   const double scale_a = levels ? dt / model.window[A] : 1.0;
-  hits.loads[block_[A]].push_back(
-      {p, A, scale_a * fx, scale_a * fy, scale_a * friction_x, scale_a * friction_y, depth, order});
+  hits.loads[block_[A]].push_back({p, A, scale_a * fx, scale_a * fy, scale_a * friction_x,
+                                   scale_a * friction_y, depth, order, level});
   if (k1 != no_node) {
     std::vector<Load> &loads = hits.loads[block_[B]];
     const double scale_b = levels ? dt / model.window[B] : 1.0;

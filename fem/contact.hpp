@@ -146,6 +146,7 @@ private:
     std::uint32_t node, body;
     double fx, fy, friction_x, friction_y, depth;
     std::uint64_t order;
+    std::uint8_t level = 0; // with levels: its pair's (the coarser body's)
   };
   // A contact: boundary node k (index into the boundary nodes) of body A, pushed out along
   // (nx, ny) by `depth` from the segment k1-k2 of body B (at weight w2 from k1) or from a wall
@@ -230,9 +231,13 @@ private:
   std::vector<std::vector<Load>> block_received_;
   // The depth each model node was pushed at in the last step (the deepest of its contacts; 0 if
   // none; the nodes where it is not 0 are in block_pushed_).
+  // With levels, one such depth per level of pair, level l's at [l n, (l + 1) n) (n nodes): the
+  // deepest of the node's contacts in the last step its pairs of level l were computed, so that
+  // a pair reads its own level's (a node between pairs on two levels would otherwise see the
+  // depth of the last pair computed, not its own), and pushed_time_ the time each was pushed at.
   std::vector<double> pushed_;
-  // With levels: the time each node's depth in pushed_ was pushed at, and this step's time.
   std::vector<double> pushed_time_;
+  std::size_t pushed_levels_ = 1;
   double time_ = 0.0;
   ContactStatistics stats_;
 

@@ -102,6 +102,8 @@ struct Model {
   // window as a force over the body's window. Empty: every body steps every step.
   std::vector<std::uint8_t> due;
   std::vector<double> window;
+  // Per due body: its level (a pair of bodies is computed at the steps of the coarser one's).
+  std::vector<std::uint8_t> level;
   // Per due body: the step of its own level (2^level base steps within its own stable step), which
   // sets the stiffness of its contacts (a pair's penalty takes the finer body's, at least the
   // pair's window): a penalty tied to the pair's window would stiffen fourfold or more each time

@@ -37,6 +37,7 @@ void Solver::startLevels() {
   const std::size_t n = m_.bodies.size();
   m_.due.assign(n, 1);
   m_.window.assign(n, 0.0);
+  m_.level.assign(n, 0);
   m_.own_step.assign(n, 0.0);
   own_level_.assign(n, static_cast<std::uint8_t>(s_.max_level));
   body_step_min_.assign(n, HUGE_VAL);
@@ -301,7 +302,8 @@ void Solver::stepLevels() {
     const bool due = m_.at_rest[b] || level_[b] <= top;
     m_.due[b] = due;
     if (due)
-      m_.window[b] = tau[level_[b]], m_.own_step[b] = own_steps[own_level_[b]];
+      m_.window[b] = tau[level_[b]], m_.own_step[b] = own_steps[own_level_[b]],
+      m_.level[b] = level_[b];
   }
   { // the due bodies' external forces cleared; the others keep theirs for their next half-kick
     std::size_t kept = 0;

@@ -544,3 +544,40 @@ TEST(Levels, PartsChangingLevelKeepTheEnergy) {
               "%.2e)\n",
               worst, levels.energy.balance_error, single.energy.balance_error);
 }
+
+// A node pushed by pairs on two levels (the contact alone, the levels set by hand, the block moved
+// by hand): a block's corner node comes at (-2, -20) m/s into the crossing of a horizontal bar (its
+// pair at level 1, computed every second step of 10 ns) and a vertical one (level 0, every step),
+// deeper in the first (20 m/s) than in the second (2 m/s). The level 1 pair reads the depth its
+// node was pushed at by the level 1 pairs at their last step, not the shallower depth the level 0
+// pair pushed it at since, and finds no contact deeper than its approach allows (with one depth per
+// node, the last pair's, it found the node suddenly deep and let the excess go).
+TEST(Levels, NodeBetweenPairsOnTwoLevelsIsNotSuddenlyDeep) {
+  TestMesh mesh;
+  mesh.addRectangle(-1e-3, -0.1e-3, 2e-3, 0.2e-3, 5, 1);           // bar B, level 1
+  mesh.addRectangle(-0.1e-3, -1e-3, 0.2e-3, 2e-3, 1, 5);           // bar C, level 0
+  mesh.addRectangle(0.1005e-3, 0.1005e-3, 0.25e-3, 0.25e-3, 4, 4); // block A, level 0
+  fem::Model model = mesh.model(test::oneMaterial("quartz"));
+  for (std::size_t b = 0; b < 3; ++b)
+    model.wake(b);
+  const double h = 1e-8, vx = -2.0, vy = -20.0; // the base step [s], A's velocity [m/s]
+  model.due.assign(3, 1);
+  model.level = {1, 0, 0};
+  model.window = {2 * h, h, h};
+  model.own_step = {2 * h, h, h};
+  fem::Nodes &nd = model.nodes;
+  const fem::Body &a = model.bodies[2];
+  for (std::size_t n = a.node_begin; n < a.node_end; ++n)
+    nd.vx[n] = vx, nd.vy[n] = vy;
+  fem::Contact contact(model, {});
+  std::size_t in_both = 0; // steps A's corner node is inside both bars
+  for (int step = 1; step <= 40; ++step) {
+    for (std::size_t n = a.node_begin; n < a.node_end; ++n)
+      nd.x[n] += vx * h, nd.y[n] += vy * h;
+    model.due[0] = step % 2; // bar B at the odd steps
+    contact.addForces(model, step * h, h);
+    in_both += nd.x[a.node_begin] < 0.1e-3 && nd.y[a.node_begin] < 0.1e-3;
+  }
+  EXPECT_GT(in_both, 10u);
+  EXPECT_EQ(contact.statistics().sudden, 0u);
+}
