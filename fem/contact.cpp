@@ -118,6 +118,10 @@ void Contact::addForces(Model &model, double time, double dt) {
   const auto start = std::chrono::steady_clock::now();
   time_ = time;
   if (!model.due.empty()) { // a pushed depth per level of pair (pushed_)
+    if (model.level.size() != model.bodies.size())
+      throw std::invalid_argument(
+          "contact with levels: Model::level has " + std::to_string(model.level.size()) +
+          " entries, not one per body (" + std::to_string(model.bodies.size()) + ")");
     std::size_t levels = 1;
     for (std::uint8_t l : model.level)
       levels = std::max<std::size_t>(levels, l + 1u);
@@ -1043,7 +1047,7 @@ void Contact::restore(const Model &model, const State &st) {
     throw std::invalid_argument("contact state: sizes not of this model");
   for (const auto *nodes : {&st.allowed, &st.pushed})
     for (std::uint32_t p : *nodes)
-      if (p >= pushed_.size())
+      if (p >= model.nodes.size())
         throw std::invalid_argument("contact state: a node not of this model");
   for (std::uint32_t b : st.pairs)
     if (b >= n_bodies)
@@ -1060,7 +1064,10 @@ void Contact::restore(const Model &model, const State &st) {
   for (std::size_t k = 0; k < st.allowed.size(); ++k)
     allowed.push_back({st.allowed[k], st.rate[k]});
   allowances_.restore(allowed, st.allowance);
-  std::fill(pushed_.begin(), pushed_.end(), 0.0);
+  // (a checkpoint is of a run without levels: one depth per node)
+  pushed_.assign(model.nodes.size(), 0.0);
+  pushed_time_.clear();
+  pushed_levels_ = 1;
   for (auto &nodes : block_pushed_)
     nodes.clear();
   for (std::size_t k = 0; k < st.pushed.size(); ++k) {

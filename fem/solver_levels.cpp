@@ -32,8 +32,9 @@ void Solver::startLevels() {
   if (s_.max_level > 7)
     throw std::invalid_argument("max_level " + std::to_string(s_.max_level) +
                                 ": at most 7 levels above the base step");
-  if (s_.level_gap < 0)
-    throw std::invalid_argument("level_gap " + std::to_string(s_.level_gap) + ": at least 0");
+  if (s_.level_gap < 0 || s_.level_gap > 7)
+    throw std::invalid_argument("level_gap " + std::to_string(s_.level_gap) +
+                                ": allowed 0 <= level_gap <= 7");
   const std::size_t n = m_.bodies.size();
   m_.due.assign(n, 1);
   m_.window.assign(n, 0.0);

@@ -53,17 +53,18 @@ const char *series_names[] = {"step",
 } // namespace
 
 // With levels (run.max_level) a projectile of 2,048 elements or more steps in parts, and the
-// summary says what the levels did: the element updates against a single rate's, the active
-// elements by level at the end, the bodies in parts and their parts.
+// summary says what the levels did: the level gap, the element updates against a single rate's,
+// the active elements by level at the end, the bodies in parts and their parts.
 TEST(Run, LevelsAndPartsInTheSummary) {
   ScratchDir dir("run-levels");
-  std::string text = tinyScene("frame_interval = 0\nmax_level = 2\n");
+  std::string text = tinyScene("frame_interval = 0\nmax_level = 2\nlevel_gap = 1\n");
   text.replace(text.find("[projectile]\n"), 13, "[projectile]\nmesh_size = 3e-6\n");
   const test::Result r = test::runScene(dir, text);
   ASSERT_EQ(r.code, 0) << r.output;
   const auto summary = nlohmann::json::parse(test::readFile(dir / "out/summary.json"));
   const auto &mts = summary["multiple_time_stepping"];
   EXPECT_EQ(mts["max_level"], 2);
+  EXPECT_EQ(mts["level_gap"], 1);
   EXPECT_EQ(mts["bodies_in_parts"], 1);
   const std::size_t parts = mts["parts"].get<std::size_t>();
   EXPECT_GE(parts, 4u); // at least 2,048 elements in parts of 512

@@ -28,8 +28,9 @@ TEST(RunSettings, SceneDefaultsAreTheSolversDefaults) {
   Scene levels;
   levels.run.max_level = 2;
   EXPECT_EQ(solverSettings(levels, HUGE_VAL).max_level, 2);
-  levels.run.level_gap = 0;
-  EXPECT_EQ(solverSettings(levels, HUGE_VAL).level_gap, 0);
+  EXPECT_EQ(s.level_gap, d.level_gap);
+  levels.run.level_gap = 1;
+  EXPECT_EQ(solverSettings(levels, HUGE_VAL).level_gap, 1);
 }
 
 TEST(RunSettings, SceneDefaultsAreTheContactsDefaults) {
