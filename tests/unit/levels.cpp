@@ -335,13 +335,13 @@ TEST(Levels, ImpactAcrossLevelsKeepsEnergyAndContact) {
               single.energy.kinetic);
 }
 
-// A level gap of 1: the first coarse block steps one level coarser than the fine
-// block it meets, so that their pair is computed every second base step, over the coarse block's
-// window, with a penalty softer by 4. The balance closes within the goal of 2e-3, the contacts take
-// energy out, none is found suddenly deep, and the fine block goes at most 4 times as deep as at a
-// single rate (the penalty's depth for an approach grows as its window, twice as long, and the
-// approach in a window with it); the blocks do fewer updates than with gap 0, and the run is the
-// same for one and two threads.
+// A level gap of 1: the first coarse block steps one level coarser than the fine block it meets,
+// so that their pair is computed every second base step, over the coarse block's window, with a
+// penalty softer by 4. The balance closes within the goal of 2e-3, the contacts take energy out,
+// none is found suddenly deep, and the fine block goes at most 4 times as deep as at a single rate
+// (the penalty's depth for an approach grows as its window, twice as long, and the approach in a
+// window with it); the blocks do fewer updates than with gap 0, and the run is the same for one
+// and two threads.
 TEST(Levels, ImpactOneLevelApartKeepsEnergyAndContact) {
   const LevelsImpact single = levelsImpact(0, 1);
   const LevelsImpact strict = levelsImpact(2, 1, 0);
