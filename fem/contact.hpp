@@ -232,9 +232,9 @@ private:
   // The depth each model node was pushed at in the last step (the deepest of its contacts; 0 if
   // none; the nodes where it is not 0 are in block_pushed_).
   // With levels, one such depth per level of pair, level l's at [l n, (l + 1) n) (n nodes): the
-  // deepest of the node's contacts in the last step its pairs of level l were computed, so that
-  // a pair reads its own level's (a node between pairs on two levels would otherwise see the
-  // depth of the last pair computed, not its own), and pushed_time_ the time each was pushed at.
+  // deepest of the node's contacts in the last step its pairs of level l were computed, and in
+  // pushed_time_ when; a pair takes the deepest within its window (hit), so its own last step's
+  // whatever finer pairs pushed the node since.
   std::vector<double> pushed_;
   std::vector<double> pushed_time_;
   std::size_t pushed_levels_ = 1;

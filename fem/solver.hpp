@@ -57,7 +57,8 @@ struct SolverSettings {
   std::size_t chunk = 256; // elements per material batch
   // Multiple time stepping by body (docs/solver.md, "Multiple time stepping"): the largest level.
   // A body at level l steps every 2^l base steps (the base step is the shortest body's), within
-  // its own stable step and no coarser than the bodies it may meet; 0: every body every step.
+  // its own stable step and at most level_gap levels coarser than the bodies it may meet; 0: every
+  // body every step.
   int max_level = 0;
   // With levels: a body steps at most this many levels coarser than the own level of a body it may
   // meet (0: no coarser). A pair of bodies on different levels is computed at the coarser body's
