@@ -495,10 +495,13 @@ void Solver::chooseLevels(int top) {
     else if (level_[b] <= top)
       own_level_[b] = static_cast<std::uint8_t>(
           ownLevel(s_.safety * step_scale_ * body_step_min_[b], dt_, own_level_[b], s_.max_level));
-  // the coarsest level a body may take beside each body (its own level plus the gap)
+  // the coarsest level a body may take beside each body: its own level plus the gap, and beside a
+  // body in parts its own level (the projectile's pairs with the grains it meets at one level)
   std::vector<std::uint8_t> reach(n);
-  for (std::size_t b = 0; b < n; ++b)
-    reach[b] = static_cast<std::uint8_t>(std::min(own_level_[b] + s_.level_gap, s_.max_level));
+  for (std::size_t b = 0; b < n; ++b) {
+    const int gap = part_begin_[b] < part_begin_[b + 1] ? 0 : s_.level_gap;
+    reach[b] = static_cast<std::uint8_t>(std::min(own_level_[b] + gap, s_.max_level));
+  }
   std::vector<std::uint8_t> cap(n, max_level);
   for (auto *provider : providers_)
     provider->capLevels(reach, cap);

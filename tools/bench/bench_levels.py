@@ -3,11 +3,14 @@ beside the same scene with levels, timed side by side and compared seed by seed.
 
     python3 tools/bench/bench_levels.py [--mesopen build/bin/mesopen] [--out build/bench]
         [--scene examples/thesis/run-06.toml] [--level 2] [--gap 0] [--threads 2] [--runs 3]
-        [--seeds 1,1001,2001,3001,4001]
+        [--seeds 1,1001,2001,3001,4001] [--baseline OTHER_MESOPEN]
 
 Timing: the first seed at max_level 0 and at --level, alternately, --runs times each (the machine
 drifts within an hour: only ratios measured side by side mean something); the table gives the
-median time loop of each and the median of the pairs' ratios. Accuracy: every seed once at each
+median time loop of each and the median of the pairs' ratios. With --baseline (a mesopen built from
+another commit, e.g. the one before multiple time stepping) that program's single rate runs first in
+each round of the series, and the table adds the levels' time over the baseline's, round by round
+(its scene without the levels' keys, which an older program does not know). Accuracy: every seed once at each
 setting (a run is the same on any thread count, so one run per seed and setting is its answer),
 and per measure the single rate's mean and seed-to-seed range beside the levels' mean and their
 largest difference seed by seed. The measures are those of the convergence study
@@ -74,6 +77,7 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--seeds", default="1,1001,2001,3001,4001")
+    ap.add_argument("--baseline", help="another mesopen whose single rate is timed in the series")
     args = ap.parse_args()
     if not 1 <= args.level <= 3:
         ap.error(f"--level {args.level}: allowed 1 <= level <= 3 (run.max_level)")
@@ -87,6 +91,8 @@ def main():
         ap.error(f"--seeds {args.seeds}: a comma-separated list of integers")
     if not os.access(args.mesopen, os.X_OK):
         ap.error(f"--mesopen {args.mesopen}: not an executable (build first: tools/test.sh)")
+    if args.baseline is not None and not os.access(args.baseline, os.X_OK):
+        ap.error(f"--baseline {args.baseline}: not an executable")
     os.makedirs(args.out, exist_ok=True)
     with open(args.scene) as f:
         base = without_frames(f.read())
@@ -98,8 +104,12 @@ def main():
 
     times = {0: [], 1: []}
     results = {0: {}, 1: {}}
+    baseline_times = []
     with tempfile.TemporaryDirectory() as tmp:
         for _ in range(args.runs):
+            if args.baseline is not None:
+                text = with_target_key(base, "seed", seeds[0])
+                baseline_times.append(run(args.baseline, text, tmp, args.threads)["loop_seconds"])
             for which in (0, 1):
                 r = run(args.mesopen, scene(seeds[0], which), tmp, args.threads)
                 times[which].append(r["loop_seconds"])
@@ -115,6 +125,18 @@ def main():
           f"{statistics.median(times[0]):.2f} s vs {statistics.median(times[1]):.2f} s, ratio "
           f"{statistics.median(ratios):.3f} (pairs {', '.join(f'{r:.3f}' for r in ratios)}); "
           f"element updates {results[1][seeds[0]]['element_update_share']:.3f} of the single rate's")
+    baseline = None
+    if baseline_times:
+        over = [b / a for a, b in zip(baseline_times, times[1])]
+        single_over = [b / a for a, b in zip(baseline_times, times[0])]
+        baseline = {"program": args.baseline, "loop_seconds": baseline_times,
+                    "levels_over_baseline": over, "levels_over_baseline_median": statistics.median(over),
+                    "single_rate_over_baseline": single_over,
+                    "single_rate_over_baseline_median": statistics.median(single_over)}
+        print(f"  against the baseline's single rate ({args.baseline}), round by round: time loop "
+              f"median {statistics.median(baseline_times):.2f} s; levels {statistics.median(over):.3f} "
+              f"of it (rounds {', '.join(f'{r:.3f}' for r in over)}), this program's single rate "
+              f"{statistics.median(single_over):.3f}")
     print(f"  accuracy over seeds {', '.join(map(str, seeds))}:")
     print(f"  {'measure':32s} {'L=0 mean':>11s} {'L=0 range':>23s} {'L mean':>11s}  within "
           f"{'largest |diff| by seed':>22s}")
@@ -136,7 +158,7 @@ def main():
     result = {"scene": os.path.relpath(args.scene, ROOT), "threads": args.threads,
               "level": args.level, "level_gap": args.gap, "seeds": seeds, "runs": args.runs,
               "loop_seconds": {"single_rate": times[0], "levels": times[1]},
-              "ratio_median": statistics.median(ratios), "ratios": ratios,
+              "ratio_median": statistics.median(ratios), "ratios": ratios, "baseline": baseline,
               "steps": {"single_rate": [results[0][s]["steps"] for s in seeds],
                         "levels": [results[1][s]["steps"] for s in seeds]},
               "element_update_share": [results[1][s]["element_update_share"] for s in seeds],
