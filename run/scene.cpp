@@ -330,8 +330,9 @@ const std::vector<Key> &keys() {
                 "step"),
         integer("run", "level_gap", r, &R::level_gap, 0, 3,
                 "multiple time stepping: the most levels a body steps coarser than the own level "
-                "of a body it may meet (a pair across levels is computed at the coarser body's "
-                "steps, with a softer penalty; docs/solver.md); 0: no coarser"),
+                "of a body it may meet, none beside a body stepped in parts (the projectile) (a "
+                "pair across levels is computed at the coarser body's steps, with a softer "
+                "penalty; docs/solver.md); 0: no coarser"),
         real("run", "end_depth", r, &R::end_depth, "", 0, false, 100,
              "stop when the projectile's depth reaches this many projectile lengths (thesis: 1); "
              "0: run to end_time"),
