@@ -7,11 +7,11 @@ beside the same scene with levels, timed side by side and compared seed by seed.
 
 Timing: the first seed at max_level 0 and at --level, alternately, --runs times each (the machine
 drifts within an hour: only ratios measured side by side mean something); the table gives the
-median time loop of each and the median of the pairs' ratios. With --baseline (a mesopen built from
-another commit, e.g. the one before multiple time stepping) that program's single rate runs first in
-each round of the series, and the table adds the levels' time over the baseline's, round by round
-(its scene without the levels' keys, which an older program does not know). Accuracy: every seed once at each
-setting (a run is the same on any thread count, so one run per seed and setting is its answer),
+median time loop of each and the median of the pairs' ratios. With --baseline (a mesopen built
+from another commit, e.g. the one before multiple time stepping) that program's single rate runs
+first in each round, on the scene without the levels' keys (which an older program does not know),
+and a line gives the levels' time over the baseline's, round by round. Accuracy: every seed once at
+each setting (a run is the same on any thread count, so one run per seed and setting is its answer),
 and per measure the single rate's mean and seed-to-seed range beside the levels' mean and their
 largest difference seed by seed. The measures are those of the convergence study
 (tools/studies/convergence.py: time to the end depth, speed there, peak |H|, lateral displacement,
