@@ -24,6 +24,8 @@ constexpr double list_margin = 0.5;  // a pair's lists: margin / the smaller bod
 constexpr std::size_t runs_per_thread = 4; // runs of pairs: a thread takes the next one free
 constexpr std::size_t owner_blocks = 16;   // blocks of bodies, each adding its nodes' forces
 constexpr std::size_t prefetch_ahead = 8;  // contacts and loads ahead whose nodes are fetched
+constexpr double kept_softer = 2.0; // with levels: a contact's kept penalty step, at most this
+                                    // times a beginning contact's (hit)
 
 double sq(double x) { return x * x; }
 
@@ -129,6 +131,7 @@ void Contact::addForces(Model &model, double time, double dt) {
       pushed_levels_ = std::max(levels, pushed_levels_);
       pushed_.resize(pushed_levels_ * model.nodes.size(), 0.0);
       pushed_time_.resize(pushed_.size(), -HUGE_VAL);
+      pushed_penalty_.resize(pushed_.size(), 0.0);
     }
   }
   allowances_.release();
@@ -317,8 +320,13 @@ void Contact::addBlock(Model &model, std::size_t k) {
   auto add = [&](const Load &l) {
     if (levels) {
       const std::size_t at = l.level * nd.size() + l.node;
-      if (l.depth > 0.0 && (pushed_time_[at] != time_ || l.depth > pushed_[at]))
-        pushed_[at] = l.depth, pushed_time_[at] = time_;
+      if (l.depth > 0.0) { // the softest penalty of the node's contacts of this level and step
+        const bool first = pushed_time_[at] != time_;
+        pushed_penalty_[at] =
+            first ? l.penalty_step : std::max(pushed_penalty_[at], l.penalty_step);
+        if (first || l.depth > pushed_[at])
+          pushed_[at] = l.depth, pushed_time_[at] = time_;
+      }
     } else if (l.depth > 0.0 && l.depth > pushed_[l.node]) { // (a reaction is pushed at 0)
       if (pushed_[l.node] == 0.0)
         block_pushed_[k].push_back(l.node);
@@ -893,14 +901,21 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
   const ContactBoundaries &bd = boundaries_;
   const auto [A, k, B, k1, k2, w2, nx, ny, found_depth, h, mu, order] = f;
   // With levels, over the pair's window (the coarser body's), each side's impulse as a force over
-  // its own body's window; the penalty from the finer body's own step (Model::own_step), which
-  // changes far less often than the pair's window.
+  // its own body's window. The penalty of a contact that begins from half the finer body's own
+  // stable step (Model::own_step), at least the window: tied to the window alone, a pair across
+  // levels kicks the finer body every few of its steps with a penalty near the window's limit,
+  // which puts energy in (r-RESPA's resonances). A contact the node was in at its pairs' last step
+  // within the window keeps its penalty step, softened to the window if that grew, and stiffened
+  // only to kept_softer times a beginning contact's (after a fall of the base step, when a body
+  // at rest wakes): stiffened under load at depth d the penalty k puts (k' - k) d^2 / 2 in, and a
+  // penalty that follows the bodies' steps (shorter as they are pressed, longer when let go)
+  // stiffens under load and softens after, a ratchet.
   const bool levels = !model.window.empty();
   double penalty_dt = dt;
   if (levels) {
     dt = k1 == no_node ? model.window[A] : std::max(model.window[A], model.window[B]);
-    penalty_dt = std::max(dt, k1 == no_node ? model.own_step[A]
-                                            : std::min(model.own_step[A], model.own_step[B]));
+    penalty_dt =
+        0.5 * (k1 == no_node ? model.own_step[A] : std::min(model.own_step[A], model.own_step[B]));
   }
   double depth = found_depth;
   const Nodes &nd = model.nodes;
@@ -922,10 +937,13 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
   // (with levels, the deepest the node was pushed at by the pairs of each level at their last
   // step within the pair's window: its own last step's depth, whichever pairs were computed since)
   const std::uint8_t level = pairLevel(model, A, B);
-  double pushed = levels ? 0.0 : pushed_[p];
+  // (and the softest penalty it was pushed with then: its contact's, kept)
+  double pushed = levels ? 0.0 : pushed_[p], kept = 0.0;
   for (std::size_t l = 0; levels && l < pushed_levels_; ++l)
     if (const std::size_t at = l * nd.size() + p; pushed_time_[at] >= time_ - dt * (1.0 + 1e-9))
-      pushed = std::max(pushed, pushed_[at]);
+      pushed = std::max(pushed, pushed_[at]), kept = std::max(kept, pushed_penalty_[at]);
+  if (levels)
+    penalty_dt = std::max(dt, kept > 0.0 ? std::min(kept, kept_softer * penalty_dt) : penalty_dt);
   const double reach = approachReach(pushed, h, vn, dt);
   if (depth > reach)
     hits.sudden.emplace_back(p, depth - reach), depth = reach;
@@ -940,7 +958,7 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
                friction_y = -f_c.ft * f_c.ty;
   const double scale_a = levels ? dt / model.window[A] : 1.0;
   hits.loads[block_[A]].push_back({p, A, scale_a * fx, scale_a * fy, scale_a * friction_x,
-                                   scale_a * friction_y, depth, order, level});
+                                   scale_a * friction_y, depth, order, level, penalty_dt});
   if (k1 != no_node) {
     std::vector<Load> &loads = hits.loads[block_[B]];
     const double scale_b = levels ? dt / model.window[B] : 1.0;

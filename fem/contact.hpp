@@ -146,7 +146,8 @@ private:
     std::uint32_t node, body;
     double fx, fy, friction_x, friction_y, depth;
     std::uint64_t order;
-    std::uint8_t level = 0; // with levels: its pair's (the coarser body's)
+    std::uint8_t level = 0;    // with levels: its pair's (the coarser body's)
+    double penalty_step = 0.0; // with levels: the step its penalty was taken from (hit)
   };
   // A contact: boundary node k (index into the boundary nodes) of body A, pushed out along
   // (nx, ny) by `depth` from the segment k1-k2 of body B (at weight w2 from k1) or from a wall
@@ -235,8 +236,11 @@ private:
   // deepest of the node's contacts in the last step its pairs of level l were computed, and in
   // pushed_time_ when; a pair takes the deepest within its window (hit), so its own last step's
   // whatever finer pairs pushed the node since.
+  // With levels, beside each such depth the step its penalty was taken from (hit: a contact keeps
+  // it while it lasts).
   std::vector<double> pushed_;
   std::vector<double> pushed_time_;
+  std::vector<double> pushed_penalty_;
   std::size_t pushed_levels_ = 1;
   double time_ = 0.0;
   ContactStatistics stats_;

@@ -104,10 +104,10 @@ struct Model {
   std::vector<double> window;
   // Per due body: its level (a pair of bodies is computed at the steps of the coarser one's).
   std::vector<std::uint8_t> level;
-  // Per due body: the step of its own level (2^level base steps within its own stable step), which
-  // sets the stiffness of its contacts (a pair's penalty takes the finer body's, at least the
-  // pair's window): a penalty tied to the pair's window would stiffen fourfold or more each time
-  // a body moves down a level and push the overlap apart.
+  // Per due body: its own stable step (safety times the shortest of its elements' steps at its
+  // last update, at most 2^max_level base steps), which sets the stiffness of the contacts it
+  // begins: a pair's penalty takes half the finer body's, at least the pair's window (tied to the
+  // window alone the penalty of a pair across levels kicks the finer body too hard; Contact::hit).
   std::vector<double> own_step;
 
   // A body that was at rest takes part in the time loop again (contact calls this).

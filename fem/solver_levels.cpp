@@ -303,8 +303,9 @@ void Solver::stepLevels() {
     const bool due = m_.at_rest[b] || level_[b] <= top;
     m_.due[b] = due;
     if (due)
-      m_.window[b] = tau[level_[b]], m_.own_step[b] = own_steps[own_level_[b]],
-      m_.level[b] = level_[b];
+      m_.window[b] = tau[level_[b]], m_.level[b] = level_[b],
+      m_.own_step[b] =
+          std::min(own_steps[s_.max_level], s_.safety * step_scale_ * body_step_min_[b]);
   }
   { // the due bodies' external forces cleared; the others keep theirs for their next half-kick
     std::size_t kept = 0;

@@ -632,3 +632,51 @@ TEST(Levels, NodeBetweenPairsOnTwoLevelsIsNotSuddenlyDeep) {
   EXPECT_GT(in_both, 10u);
   EXPECT_EQ(contact.statistics().sudden, 0u);
 }
+
+// The penalty of a contact with levels, driven by hand: a block pressed 0.2 um into a bar, both
+// still (no damping), at a window of 10 ns. A contact that begins takes its penalty step from half
+// the finer body's own step, at least the window; while it lasts it keeps it: not stiffened when
+// the bodies' own steps fall by 2 (stiffened under load at depth d, a penalty k puts
+// (k' - k) d^2 / 2 in, and own steps that shorten as the bodies are pressed and lengthen when let
+// go would ratchet energy in: the quickstart scene with elastic grains, contact energy -3.5 J/m
+// against +6.0 at a single rate), stiffened to twice a beginning contact's step when they fall
+// further, softened at once to a window that grew. The force on the block goes as 1 / step^2.
+TEST(Levels, ContactKeepsItsPenaltyWhileItLasts) {
+  TestMesh mesh;
+  mesh.addRectangle(-1e-3, -0.1e-3, 2e-3, 0.2e-3, 5, 1);         // bar, 0.4 x 0.2 mm cells
+  mesh.addRectangle(0.05e-3, 0.0998e-3, 0.25e-3, 0.25e-3, 4, 4); // block, 0.2 um into it
+  fem::Model model = mesh.model(test::oneMaterial("quartz"));
+  for (std::size_t b = 0; b < 2; ++b)
+    model.wake(b);
+  const double h = 1e-8;
+  model.due.assign(2, 1);
+  model.level = {0, 0};
+  model.window = {h, h};
+  fem::Nodes &nd = model.nodes;
+  const fem::Body &block = model.bodies[1];
+  fem::Contact contact(model, {});
+  int step = 0;
+  auto push = [&](double own_step, double window) { // the block's normal force [N/m]
+    model.own_step = {own_step, own_step};
+    model.window = {window, window};
+    nd.clearExternal();
+    contact.addForces(model, ++step * h, h);
+    double fy = 0.0;
+    for (std::size_t n = block.node_begin; n < block.node_end; ++n)
+      fy += nd.external[n].fy;
+    return fy;
+  };
+  const double begun = push(4 * h, h); // penalty step 2 h
+  ASSERT_GT(begun, 0.0);
+  EXPECT_DOUBLE_EQ(push(2 * h, h), begun);                        // kept (a new contact's: h)
+  EXPECT_NEAR(push(h / 4, h), 4.0 * begun, 1e-9 * begun);         // stiffened to the window, h
+  EXPECT_NEAR(push(h / 4, 2 * h), begun, 1e-9 * begun);           // softened to the window, 2 h
+  for (std::size_t n = block.node_begin; n < block.node_end; ++n) // let go for two steps
+    nd.y[n] += 10e-6;
+  EXPECT_EQ(push(4 * h, h), 0.0);
+  EXPECT_EQ(push(4 * h, h), 0.0);
+  for (std::size_t n = block.node_begin; n < block.node_end; ++n)
+    nd.y[n] -= 10e-6;
+  EXPECT_NEAR(push(h, h), 4.0 * begun, 1e-9 * begun); // begun anew: the window, h
+  EXPECT_EQ(contact.statistics().sudden, 0u);
+}
