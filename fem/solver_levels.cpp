@@ -296,16 +296,13 @@ void Solver::stepLevels() {
   updateActivity();
   kickAndDriftLevels(top, tau); // v += tau'/2 f / m + J / 2m; x += tau' v (due bodies)
   Nodes &nd = m_.nodes;
-  double own_steps[8];
-  for (int l = 0; l <= s_.max_level; ++l)
-    own_steps[l] = std::ldexp(dt, l);
+  const double longest_step = std::ldexp(dt, s_.max_level); // a body's own step at most
   for (std::size_t b = 0; b < m_.bodies.size(); ++b) {
     const bool due = m_.at_rest[b] || level_[b] <= top;
     m_.due[b] = due;
     if (due)
       m_.window[b] = tau[level_[b]], m_.level[b] = level_[b],
-      m_.own_step[b] =
-          std::min(own_steps[s_.max_level], s_.safety * step_scale_ * body_step_min_[b]);
+      m_.own_step[b] = std::min(longest_step, s_.safety * step_scale_ * body_step_min_[b]);
   }
   { // the due bodies' external forces cleared; the others keep theirs for their next half-kick
     std::size_t kept = 0;
