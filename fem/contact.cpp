@@ -1050,6 +1050,15 @@ Contact::State Contact::state(const Model &model) const {
         st.allowance.push_back(allowance[2 * k]), st.rate.push_back(allowance[2 * k + 1]);
   st.pushed.assign(pushed.begin(), pushed.end());
   st.pushed_depth = pushed_depth;
+  if (!pushed_time_.empty()) { // with levels (one process)
+    st.pushed_levels = pushed_levels_;
+    for (std::size_t at = 0; at < pushed_time_.size(); ++at)
+      if (pushed_time_[at] != -HUGE_VAL) {
+        st.level_pushed.push_back(at), st.level_pushed_depth.push_back(pushed_[at]);
+        st.level_pushed_time.push_back(pushed_time_[at]);
+        st.level_pushed_penalty.push_back(pushed_penalty_[at]);
+      }
+  }
   st.statistics = statisticsOfAll();
   return st;
 }
@@ -1061,7 +1070,10 @@ void Contact::restore(const Model &model, const State &st) {
       st.listed.size() != n_bodies || st.boxes.size() != 4 * n_bodies ||
       st.points.size() != 2 * boundaries_.points.size() || st.pairs.size() % 2 != 0 ||
       st.allowance.size() != st.allowed.size() || st.rate.size() != st.allowed.size() ||
-      st.pushed_depth.size() != st.pushed.size())
+      st.pushed_depth.size() != st.pushed.size() ||
+      st.level_pushed_depth.size() != st.level_pushed.size() ||
+      st.level_pushed_time.size() != st.level_pushed.size() ||
+      st.level_pushed_penalty.size() != st.level_pushed.size() || st.pushed_levels > 8)
     throw std::invalid_argument("contact state: sizes not of this model");
   for (const auto *nodes : {&st.allowed, &st.pushed})
     for (std::uint32_t p : *nodes)
@@ -1082,10 +1094,21 @@ void Contact::restore(const Model &model, const State &st) {
   for (std::size_t k = 0; k < st.allowed.size(); ++k)
     allowed.push_back({st.allowed[k], st.rate[k]});
   allowances_.restore(allowed, st.allowance);
-  // (a checkpoint is of a run without levels: one depth per node)
-  pushed_.assign(model.nodes.size(), 0.0);
-  pushed_time_.clear();
-  pushed_levels_ = 1;
+  // one depth per node, or with levels one per level of pair and node
+  const std::size_t n_nodes = model.nodes.size();
+  pushed_levels_ = std::max<std::size_t>(st.pushed_levels, 1);
+  pushed_.assign(pushed_levels_ * n_nodes, 0.0);
+  pushed_time_.clear(), pushed_penalty_.clear();
+  if (st.pushed_levels > 0) {
+    pushed_time_.assign(pushed_.size(), -HUGE_VAL), pushed_penalty_.assign(pushed_.size(), 0.0);
+    for (std::size_t k = 0; k < st.level_pushed.size(); ++k) {
+      const std::uint64_t at = st.level_pushed[k];
+      if (at >= pushed_.size())
+        throw std::invalid_argument("contact state: a pushed depth not of this model");
+      pushed_[at] = st.level_pushed_depth[k], pushed_time_[at] = st.level_pushed_time[k];
+      pushed_penalty_[at] = st.level_pushed_penalty[k];
+    }
+  }
   for (auto &nodes : block_pushed_)
     nodes.clear();
   for (std::size_t k = 0; k < st.pushed.size(); ++k) {

@@ -259,6 +259,11 @@ public:
     std::vector<double> allowance, rate; // their allowance [m] and its release per step [m]
     std::vector<std::uint32_t> pushed;   // the nodes pushed in the last step
     std::vector<double> pushed_depth;    // and at what depth [m]
+    // with levels, the depths per level of pair instead (pushed_): their levels (0: without
+    // levels), and each one ever pushed: its place l n + node, depth [m], time [s], penalty step
+    std::uint64_t pushed_levels = 0;
+    std::vector<std::uint64_t> level_pushed;
+    std::vector<double> level_pushed_depth, level_pushed_time, level_pushed_penalty;
     ContactStatistics statistics;
   };
   // (With the work shared every process calls it: the nodes' pushed depths and allowances come

@@ -1506,25 +1506,20 @@ void Solver::sumShares(const std::vector<double> &all) const {
 }
 
 Solver::State Solver::state() const {
-  State st{time_,
-           dt_,
-           next_dt_,
-           shortest_allowed_,
-           first_dt_,
-           erode_below_,
-           scale_below_,
-           shortest_step_,
-           steps_,
-           eroded_elements_,
-           collapsed_elements_,
-           energy(),
-           {},
-           {}};
+  State st;
+  st.time = time_, st.dt = dt_, st.next_dt = next_dt_, st.shortest_allowed = shortest_allowed_;
+  st.first_dt = first_dt_, st.erode_below = erode_below_, st.scale_below = scale_below_;
+  st.shortest_step = shortest_step_;
+  st.steps = steps_, st.eroded_elements = eroded_elements_;
+  st.collapsed_elements = collapsed_elements_;
+  st.energy = energy();
   std::vector<std::pair<std::uint32_t, double>> added(added_mass_.begin(), added_mass_.end());
   std::sort(added.begin(), added.end());
   for (auto [e, mass] : added)
     st.scaled_elements.push_back(e), st.scaled_mass.push_back(mass);
   st.energy_shares = checkpoint_shares_;
+  if (levels())
+    st.levels = levelsState();
   if (comm_.size() > 1 && partitioned_) {
     st.owner = owner_;
     st.partition_ranks = comm_.size();
@@ -1568,6 +1563,8 @@ void Solver::restore(const State &st) {
     partitioned_ = true;
     last_achieved_ = st.partition_achieved, last_total_ = st.partition_total;
   }
+  if (levels())
+    restoreLevels(st.levels);
   at_rest_seen_.clear(); // the chunks laid out anew: eroded elements leave them
   updateActivity(!same_partition);
 }

@@ -254,10 +254,25 @@ public:
     std::vector<int> owner;
     int partition_ranks = 0;
     double partition_achieved = 0, partition_total = 0;
+    // With levels (max_level > 0; empty without): per body its level, own level, shortest element
+    // step, kinetic and internal energy at its last update, and the model's due, window, level and
+    // own_step (Model); per level the start of its window; per element its step in its last pass;
+    // per part its level, own level, shortest step and weight, per part node its force (x, y); per
+    // body in parts, level 1 to max_level and node the window's start (x, then y); the element
+    // updates so far, computed and at a single rate.
+    struct Levels {
+      std::vector<std::uint8_t> level, own_level, due, model_level;
+      std::vector<double> step_min, kinetic, internal, window, own_step, level_start,
+          element_step;
+      std::vector<std::uint8_t> part_level, part_own_level;
+      std::vector<double> part_step_min, part_weight, part_force, window_start;
+      double element_steps = 0, single_rate_element_steps = 0;
+    } levels;
   };
   State state() const;
   // Continues from `state` once the model's state was restored (nodes, elements, boundaries,
-  // bodies at rest): the work ranges and the nodes' inverse masses are taken anew.
+  // bodies at rest): the work ranges and the nodes' inverse masses are taken anew. Throws
+  // std::invalid_argument when its levels are not of this model and these settings.
   void restore(const State &state);
 
 private:
@@ -349,6 +364,8 @@ private:
                       bool second_half, double &vx, double &vy, KickSums &sums) const;
   void chooseLevels(int top);
   void startLevels();
+  State::Levels levelsState() const;
+  void restoreLevels(const State::Levels &st);
   void bodySums(std::size_t unit_begin, std::size_t unit_end);
   void addKinetic(std::size_t node, double change);
   void startParts();

@@ -49,6 +49,70 @@ void Solver::startLevels() {
   startParts();
 }
 
+// The levels' state for a checkpoint (State::Levels), and back.
+Solver::State::Levels Solver::levelsState() const {
+  State::Levels st;
+  st.level = level_, st.own_level = own_level_, st.due = m_.due, st.model_level = m_.level;
+  st.step_min = body_step_min_, st.kinetic = body_kinetic_, st.internal = body_internal_;
+  st.window = m_.window, st.own_step = m_.own_step, st.level_start = level_start_;
+  st.element_step = level_step_;
+  st.part_level = part_level_, st.part_own_level = part_own_level_;
+  st.part_step_min = part_step_min_, st.part_weight = part_weight_;
+  for (const NodeForce &f : part_force_)
+    st.part_force.insert(st.part_force.end(), {f.x, f.y});
+  for (std::size_t i = 0; i < parted_bodies_.size(); ++i)
+    for (int l = 1; l <= s_.max_level; ++l)
+      for (const auto *start : {&window_x_[i][static_cast<std::size_t>(l)],
+                                &window_y_[i][static_cast<std::size_t>(l)]})
+        st.window_start.insert(st.window_start.end(), start->begin(), start->end());
+  st.element_steps = element_steps_;
+  st.single_rate_element_steps = single_rate_element_steps_;
+  return st;
+}
+
+void Solver::restoreLevels(const State::Levels &st) {
+  const std::size_t n = m_.bodies.size(), parts = parts_.size();
+  std::size_t window_values = 0;
+  for (std::uint32_t b : parted_bodies_)
+    window_values += 2 * static_cast<std::size_t>(s_.max_level) *
+                     (m_.bodies[b].node_end - m_.bodies[b].node_begin);
+  auto levelsBelow = [&](const std::vector<std::uint8_t> &v) {
+    return std::all_of(v.begin(), v.end(), [&](std::uint8_t l) { return l <= s_.max_level; });
+  };
+  const bool sized =
+      st.level.size() == n && st.own_level.size() == n && st.due.size() == n &&
+      st.model_level.size() == n && st.step_min.size() == n && st.kinetic.size() == n &&
+      st.internal.size() == n && st.window.size() == n && st.own_step.size() == n &&
+      st.level_start.size() == level_start_.size() &&
+      st.element_step.size() == m_.elements.size() && st.part_level.size() == parts &&
+      st.part_own_level.size() == parts && st.part_step_min.size() == parts &&
+      st.part_weight.size() == parts && st.part_force.size() == 2 * part_force_.size() &&
+      st.window_start.size() == window_values;
+  if (!sized || !levelsBelow(st.level) || !levelsBelow(st.own_level) ||
+      !levelsBelow(st.model_level) || !levelsBelow(st.part_level) ||
+      !levelsBelow(st.part_own_level))
+    throw std::invalid_argument("levels' state not of this model with max_level " +
+                                std::to_string(s_.max_level));
+  level_ = st.level, own_level_ = st.own_level, m_.due = st.due, m_.level = st.model_level;
+  body_step_min_ = st.step_min, body_kinetic_ = st.kinetic, body_internal_ = st.internal;
+  m_.window = st.window, m_.own_step = st.own_step, level_start_ = st.level_start;
+  level_step_ = st.element_step;
+  part_level_ = st.part_level, part_own_level_ = st.part_own_level;
+  part_step_min_ = st.part_step_min, part_weight_ = st.part_weight;
+  for (std::size_t j = 0; j < part_force_.size(); ++j)
+    part_force_[j] = {st.part_force[2 * j], st.part_force[2 * j + 1]};
+  const double *start = st.window_start.data();
+  for (std::size_t i = 0; i < parted_bodies_.size(); ++i)
+    for (int l = 1; l <= s_.max_level; ++l)
+      for (auto *to : {&window_x_[i][static_cast<std::size_t>(l)],
+                       &window_y_[i][static_cast<std::size_t>(l)]}) {
+        std::copy(start, start + to->size(), to->begin());
+        start += to->size();
+      }
+  element_steps_ = st.element_steps;
+  single_rate_element_steps_ = st.single_rate_element_steps;
+}
+
 // The bodies of at least parts_from elements step in parts of part_elements consecutive elements
 // (the projectile: its elements are ordered from the tip, so that a part is a slab across it).
 void Solver::startParts() {

@@ -11,8 +11,13 @@
 //     energy_shares (with several ranks: each rank's share of the energies, 9 a rank), owner
 //     (with several ranks: each body's rank; attributes ranks, and achieved, total: the
 //     partition's imbalance and load when made)}
+//   /solver/levels (with run.max_level > 0; attributes element_steps, single_rate_element_steps):
+//     {level, own_level, due, model_level, part_level, part_own_level (uint8), step_min, kinetic,
+//     internal, window, own_step, level_start, element_step, part_step_min, part_weight,
+//     part_force, window_start} (fem::Solver::State::Levels)
 //   /contact/{pairs, travel, travel_searched, listed, boxes, points, allowed, allowance, rate,
-//     pushed, pushed_depth, statistics (its bytes)}, attribute search_due
+//     pushed, pushed_depth, statistics (its bytes)}, attribute search_due; with levels
+//     /contact/levels (attribute pushed_levels): {pushed, depth, time, penalty_step}
 //   /series/{time, dt, step, values (samples x columns)}, attribute columns (names, one a line)
 //   /frames: attribute next, {times}
 //   /loop: attributes element_steps, seconds, solver_seconds
@@ -214,6 +219,50 @@ constexpr EnergyNumbers energy_numbers[] = {{&fem::Energy::kinetic, "energy_kine
                                             {&fem::Energy::initial, "energy_initial"},
                                             {&fem::Energy::balance_error, "balance_error"}};
 
+// The levels' arrays (multiple time stepping), by name (/solver/levels/NAME).
+using Levels = fem::Solver::State::Levels;
+const std::pair<const char *, std::vector<std::uint8_t> Levels::*> level_bytes[] = {
+    {"level", &Levels::level},
+    {"own_level", &Levels::own_level},
+    {"due", &Levels::due},
+    {"model_level", &Levels::model_level},
+    {"part_level", &Levels::part_level},
+    {"part_own_level", &Levels::part_own_level}};
+const std::pair<const char *, std::vector<double> Levels::*> level_values[] = {
+    {"step_min", &Levels::step_min},
+    {"kinetic", &Levels::kinetic},
+    {"internal", &Levels::internal},
+    {"window", &Levels::window},
+    {"own_step", &Levels::own_step},
+    {"level_start", &Levels::level_start},
+    {"element_step", &Levels::element_step},
+    {"part_step_min", &Levels::part_step_min},
+    {"part_weight", &Levels::part_weight},
+    {"part_force", &Levels::part_force},
+    {"window_start", &Levels::window_start}};
+
+void writeLevels(H5File &h5, const Levels &st) {
+  h5.createGroup("/solver/levels");
+  for (auto [name, array] : level_bytes)
+    h5.write(std::string("/solver/levels/") + name, st.*array);
+  for (auto [name, array] : level_values)
+    h5.write(std::string("/solver/levels/") + name, st.*array);
+  h5.attribute("/solver/levels", "element_steps", st.element_steps);
+  h5.attribute("/solver/levels", "single_rate_element_steps", st.single_rate_element_steps);
+}
+
+Levels readLevels(const H5File &h5) {
+  Levels st;
+  for (auto [name, array] : level_bytes)
+    st.*array = h5.read<std::uint8_t>(std::string("/solver/levels/") + name);
+  for (auto [name, array] : level_values)
+    st.*array = h5.read<double>(std::string("/solver/levels/") + name);
+  st.element_steps = h5.readAttribute<double>("/solver/levels", "element_steps");
+  st.single_rate_element_steps =
+      h5.readAttribute<double>("/solver/levels", "single_rate_element_steps");
+  return st;
+}
+
 void writeSolver(H5File &h5, const fem::Solver::State &st) {
   h5.createGroup("/solver");
   for (auto [field, name] : solver_numbers)
@@ -227,6 +276,8 @@ void writeSolver(H5File &h5, const fem::Solver::State &st) {
   h5.write("/solver/scaled_mass", st.scaled_mass);
   if (!st.energy_shares.empty())
     h5.write("/solver/energy_shares", st.energy_shares);
+  if (!st.levels.level.empty())
+    writeLevels(h5, st.levels);
   if (!st.owner.empty()) {
     h5.write("/solver/owner", std::vector<std::int32_t>(st.owner.begin(), st.owner.end()));
     h5.attribute("/solver/owner", "ranks", st.partition_ranks);
@@ -248,6 +299,8 @@ fem::Solver::State readSolver(const H5File &h5) {
   st.scaled_mass = readSized<double>(h5, "/solver/scaled_mass", st.scaled_elements.size());
   if (h5.exists("/solver/energy_shares"))
     st.energy_shares = h5.read<double>("/solver/energy_shares");
+  if (h5.exists("/solver/levels"))
+    st.levels = readLevels(h5);
   if (h5.exists("/solver/owner")) {
     const std::vector<std::int32_t> owner = h5.read<std::int32_t>("/solver/owner");
     st.owner.assign(owner.begin(), owner.end());
@@ -272,6 +325,14 @@ void writeContact(H5File &h5, const fem::Contact::State &st) {
   h5.write("/contact/rate", st.rate);
   h5.write("/contact/pushed", st.pushed);
   h5.write("/contact/pushed_depth", st.pushed_depth);
+  if (st.pushed_levels > 0) {
+    h5.createGroup("/contact/levels");
+    h5.attribute("/contact/levels", "pushed_levels", st.pushed_levels);
+    h5.write("/contact/levels/pushed", st.level_pushed);
+    h5.write("/contact/levels/depth", st.level_pushed_depth);
+    h5.write("/contact/levels/time", st.level_pushed_time);
+    h5.write("/contact/levels/penalty_step", st.level_pushed_penalty);
+  }
   h5.write("/contact/statistics", bytesOf(st.statistics));
 }
 
@@ -289,6 +350,13 @@ fem::Contact::State readContact(const H5File &h5) {
   st.rate = h5.read<double>("/contact/rate");
   st.pushed = h5.read<std::uint32_t>("/contact/pushed");
   st.pushed_depth = h5.read<double>("/contact/pushed_depth");
+  if (h5.exists("/contact/levels")) {
+    st.pushed_levels = h5.readAttribute<std::uint64_t>("/contact/levels", "pushed_levels");
+    st.level_pushed = h5.read<std::uint64_t>("/contact/levels/pushed");
+    st.level_pushed_depth = h5.read<double>("/contact/levels/depth");
+    st.level_pushed_time = h5.read<double>("/contact/levels/time");
+    st.level_pushed_penalty = h5.read<double>("/contact/levels/penalty_step");
+  }
   st.statistics = fromBytes<fem::ContactStatistics>(h5, "/contact/statistics");
   return st;
 }

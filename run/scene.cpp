@@ -435,10 +435,10 @@ std::string knownIn(const std::string &table) {
 void checkTogether(const Scene &s) {
   const TargetSpec &t = s.target;
   auto bad = [&](const std::string &what) { throw InputError(s.path + ": " + what); };
-  if (s.run.max_level > 0 && (s.run.checkpoints() || s.run.representation != Representation::fe))
+  if (s.run.max_level > 0 && s.run.representation != Representation::fe)
     bad("run.max_level = " + std::to_string(s.run.max_level) +
-        " (multiple time stepping) takes neither checkpoints nor DEM grains (representation "
-        "\"fe\" only); allowed: max_level = 0 with them");
+        " (multiple time stepping) takes no DEM grains (representation \"fe\" only); allowed: "
+        "max_level = 0 with them");
   if (t.width < 4 * t.diameter_max || t.height < 4 * t.diameter_max)
     bad("target.width and target.height must be at least 4 grain diameters (" +
         show(4 * t.diameter_max) + " m); they are " + show(t.width) + " and " + show(t.height));

@@ -92,6 +92,39 @@ TEST(Checkpoint, ErodingRunResumesByteIdentical) {
   EXPECT_TRUE(test::sameBytes(dir / "whole/run.h5", dir / "stopped/run.h5"));
 }
 
+// With multiple time stepping (run.max_level = 2, level gap 1) and a projectile in parts (3 um
+// mesh: about 4,000 elements, 8 parts) that erodes (steel at 2000 m/s, plastic strain 0.3), a run
+// stopped within a cycle of levels (after step 203: 203 is no multiple of 4, the coarse bodies are
+// between their steps) and continued on the other thread count writes the same run.h5, and its
+// summary the same element updates, as the run not stopped; and one of its checkpoints refused for
+// another max_level.
+TEST(Checkpoint, RunAtLevelsResumesByteIdentical) {
+  ScratchDir dir("checkpoint-levels");
+  std::string text = test::tinyScene("velocity = 2000.0\nframe_interval = 2e-8\n"
+                                     "checkpoint_time = 5e-9\nmax_level = 2\nlevel_gap = 1\n") +
+                     "[materials.projectile]\npreset = \"steel\"\nerosion_strain = 0.3\n";
+  text.replace(text.find("end_time = 2e-8"), 15, "end_time = 5e-8");
+  text.replace(text.find("[projectile]\n"), 13, "[projectile]\nmesh_size = 3e-6\n");
+  test::writeFile(dir / "scene.toml", text);
+  const auto whole = test::runScene(dir / "scene.toml", dir / "whole", 1);
+  ASSERT_EQ(whole.code, 0) << whole.output;
+  const auto summary = nlohmann::json::parse(test::readFile(dir / "whole/summary.json"));
+  ASSERT_GT(summary["eroded_elements"].get<int>(), 10);
+  const auto &levels = summary["multiple_time_stepping"];
+  ASSERT_EQ(levels["bodies_in_parts"], 1);
+  ASSERT_LT(levels["element_update_share"].get<double>(), 0.97); // levels at work (0.93)
+  const auto stopped = test::runStoppedAt(dir / "scene.toml", dir / "stopped", 203, 2);
+  ASSERT_EQ(stopped.code, 128 + SIGTERM) << stopped.output;
+  EXPECT_EQ(checkpointStep(dir / "stopped"), 203u);
+  const auto resumed = test::resume(dir / "stopped", 1);
+  ASSERT_EQ(resumed.code, 0) << resumed.output;
+  EXPECT_TRUE(test::sameBytes(dir / "whole/run.h5", dir / "stopped/run.h5"));
+  const auto after = nlohmann::json::parse(test::readFile(dir / "stopped/summary.json"));
+  EXPECT_EQ(after["multiple_time_stepping"]["element_updates"], levels["element_updates"]);
+  EXPECT_EQ(after["multiple_time_stepping"]["single_rate_element_updates"],
+            levels["single_rate_element_updates"]);
+}
+
 // A run does not depend on its checkpoints: none (no keys), one every step by the clock, one every
 // 0.2 ns of simulated time (every few steps) give the same run.h5 but for the keys in the scene it
 // records (test::sameRun).
