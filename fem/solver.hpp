@@ -262,8 +262,7 @@ public:
     // updates so far, computed and at a single rate.
     struct Levels {
       std::vector<std::uint8_t> level, own_level, due, model_level;
-      std::vector<double> step_min, kinetic, internal, window, own_step, level_start,
-          element_step;
+      std::vector<double> step_min, kinetic, internal, window, own_step, level_start, element_step;
       std::vector<std::uint8_t> part_level, part_own_level;
       std::vector<double> part_step_min, part_weight, part_force, window_start;
       double element_steps = 0, single_rate_element_steps = 0;

@@ -62,8 +62,8 @@ Solver::State::Levels Solver::levelsState() const {
     st.part_force.insert(st.part_force.end(), {f.x, f.y});
   for (std::size_t i = 0; i < parted_bodies_.size(); ++i)
     for (int l = 1; l <= s_.max_level; ++l)
-      for (const auto *start : {&window_x_[i][static_cast<std::size_t>(l)],
-                                &window_y_[i][static_cast<std::size_t>(l)]})
+      for (const auto *start :
+           {&window_x_[i][static_cast<std::size_t>(l)], &window_y_[i][static_cast<std::size_t>(l)]})
         st.window_start.insert(st.window_start.end(), start->begin(), start->end());
   st.element_steps = element_steps_;
   st.single_rate_element_steps = single_rate_element_steps_;
@@ -79,15 +79,15 @@ void Solver::restoreLevels(const State::Levels &st) {
   auto levelsBelow = [&](const std::vector<std::uint8_t> &v) {
     return std::all_of(v.begin(), v.end(), [&](std::uint8_t l) { return l <= s_.max_level; });
   };
-  const bool sized =
-      st.level.size() == n && st.own_level.size() == n && st.due.size() == n &&
-      st.model_level.size() == n && st.step_min.size() == n && st.kinetic.size() == n &&
-      st.internal.size() == n && st.window.size() == n && st.own_step.size() == n &&
-      st.level_start.size() == level_start_.size() &&
-      st.element_step.size() == m_.elements.size() && st.part_level.size() == parts &&
-      st.part_own_level.size() == parts && st.part_step_min.size() == parts &&
-      st.part_weight.size() == parts && st.part_force.size() == 2 * part_force_.size() &&
-      st.window_start.size() == window_values;
+  const bool sized = st.level.size() == n && st.own_level.size() == n && st.due.size() == n &&
+                     st.model_level.size() == n && st.step_min.size() == n &&
+                     st.kinetic.size() == n && st.internal.size() == n && st.window.size() == n &&
+                     st.own_step.size() == n && st.level_start.size() == level_start_.size() &&
+                     st.element_step.size() == m_.elements.size() &&
+                     st.part_level.size() == parts && st.part_own_level.size() == parts &&
+                     st.part_step_min.size() == parts && st.part_weight.size() == parts &&
+                     st.part_force.size() == 2 * part_force_.size() &&
+                     st.window_start.size() == window_values;
   if (!sized || !levelsBelow(st.level) || !levelsBelow(st.own_level) ||
       !levelsBelow(st.model_level) || !levelsBelow(st.part_level) ||
       !levelsBelow(st.part_own_level))

@@ -229,16 +229,11 @@ const std::pair<const char *, std::vector<std::uint8_t> Levels::*> level_bytes[]
     {"part_level", &Levels::part_level},
     {"part_own_level", &Levels::part_own_level}};
 const std::pair<const char *, std::vector<double> Levels::*> level_values[] = {
-    {"step_min", &Levels::step_min},
-    {"kinetic", &Levels::kinetic},
-    {"internal", &Levels::internal},
-    {"window", &Levels::window},
-    {"own_step", &Levels::own_step},
-    {"level_start", &Levels::level_start},
-    {"element_step", &Levels::element_step},
-    {"part_step_min", &Levels::part_step_min},
-    {"part_weight", &Levels::part_weight},
-    {"part_force", &Levels::part_force},
+    {"step_min", &Levels::step_min},         {"kinetic", &Levels::kinetic},
+    {"internal", &Levels::internal},         {"window", &Levels::window},
+    {"own_step", &Levels::own_step},         {"level_start", &Levels::level_start},
+    {"element_step", &Levels::element_step}, {"part_step_min", &Levels::part_step_min},
+    {"part_weight", &Levels::part_weight},   {"part_force", &Levels::part_force},
     {"window_start", &Levels::window_start}};
 
 void writeLevels(H5File &h5, const Levels &st) {
