@@ -28,6 +28,16 @@ std::string scene() {
   return text.replace(text.find("end_time = 2e-8"), 15, "end_time = 4e-8");
 }
 
+// The tiny scene with a projectile that erodes (steel at 2000 m/s, erosion at a plastic strain of
+// 0.3), frames every 20 ns and a checkpoint every 5 ns, to `end_time`, with `run_keys` in [run].
+std::string erodingScene(const std::string &run_keys, const std::string &end_time) {
+  std::string text = test::tinyScene("velocity = 2000.0\nframe_interval = 2e-8\n"
+                                     "checkpoint_time = 5e-9\n" +
+                                     run_keys) +
+                     "[materials.projectile]\npreset = \"steel\"\nerosion_strain = 0.3\n";
+  return text.replace(text.find("end_time = 2e-8"), 15, "end_time = " + end_time);
+}
+
 std::uint64_t checkpointStep(const std::string &out) {
   return H5File::open(out + "/checkpoint/state.h5").readAttribute<std::uint64_t>("/", "step");
 }
@@ -73,10 +83,7 @@ TEST(Checkpoint, StoppedAndResumedFeRunIsByteIdentical) {
 // step 200 and continued: the same run.h5.
 TEST(Checkpoint, ErodingRunResumesByteIdentical) {
   ScratchDir dir("checkpoint-erosion");
-  std::string text = test::tinyScene("velocity = 2000.0\nframe_interval = 2e-8\n"
-                                     "checkpoint_time = 5e-9\n") +
-                     "[materials.projectile]\npreset = \"steel\"\nerosion_strain = 0.3\n";
-  text.replace(text.find("end_time = 2e-8"), 15, "end_time = 6e-8");
+  const std::string text = erodingScene("", "6e-8");
   test::writeFile(dir / "scene.toml", text);
   const auto whole = test::runScene(dir / "scene.toml", dir / "whole", 1);
   ASSERT_EQ(whole.code, 0) << whole.output;
@@ -100,10 +107,7 @@ TEST(Checkpoint, ErodingRunResumesByteIdentical) {
 // another max_level.
 TEST(Checkpoint, RunAtLevelsResumesByteIdentical) {
   ScratchDir dir("checkpoint-levels");
-  std::string text = test::tinyScene("velocity = 2000.0\nframe_interval = 2e-8\n"
-                                     "checkpoint_time = 5e-9\nmax_level = 2\nlevel_gap = 1\n") +
-                     "[materials.projectile]\npreset = \"steel\"\nerosion_strain = 0.3\n";
-  text.replace(text.find("end_time = 2e-8"), 15, "end_time = 5e-8");
+  std::string text = erodingScene("max_level = 2\nlevel_gap = 1\n", "5e-8");
   text.replace(text.find("[projectile]\n"), 13, "[projectile]\nmesh_size = 3e-6\n");
   test::writeFile(dir / "scene.toml", text);
   const auto whole = test::runScene(dir / "scene.toml", dir / "whole", 1);
