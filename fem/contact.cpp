@@ -1073,7 +1073,8 @@ void Contact::restore(const Model &model, const State &st) {
       st.pushed_depth.size() != st.pushed.size() ||
       st.level_pushed_depth.size() != st.level_pushed.size() ||
       st.level_pushed_time.size() != st.level_pushed.size() ||
-      st.level_pushed_penalty.size() != st.level_pushed.size() || st.pushed_levels > 8)
+      st.level_pushed_penalty.size() != st.level_pushed.size() ||
+      st.pushed_levels > 8) // (levels 0 to 7: SolverSettings::max_level <= 7)
     throw std::invalid_argument("contact state: sizes not of this model");
   for (const auto *nodes : {&st.allowed, &st.pushed})
     for (std::uint32_t p : *nodes)
