@@ -5,17 +5,16 @@
 #include "fake_dem.hpp"
 #include "liggghts_dem.hpp"
 #include "meshes.hpp"
+#include "run.hpp"
 #include "solver.hpp"
 
 #include <gtest/gtest.h>
 #include <mpi.h>
 
 #include <cmath>
-#include <filesystem>
 #include <fstream>
 
 using namespace mesopen;
-namespace fs = std::filesystem;
 
 namespace {
 
@@ -25,9 +24,8 @@ const std::string script = MESOPEN_SOURCE_DIR "/liggghts-inputs/dem.in";
 // in a 2 x 2 mm box around the origin.
 std::string oneDisk(double x, double y, double r, double vx = 0.0, double vy = 0.0,
                     double omega = 0.0) {
-  const fs::path dir = fs::temp_directory_path() / "mesopen-liggghts-test";
-  fs::create_directories(dir);
-  const std::string path = (dir / "one.data").string();
+  static const test::ScratchDir dir("liggghts-dem"); // the process's own: tests run side by side
+  const std::string path = dir / "one.data";
   std::ofstream out(path);
   out.precision(17);
   out << "one disk\n\n1 atoms\n2 atom types\n\n-1e-3 1e-3 xlo xhi\n-1e-3 1e-3 ylo yhi\n"

@@ -3,6 +3,7 @@
 // those of coupling::pairCollision, for the calibrated quartz law (docs/coupling.md) at the
 // calibration's speeds, and for a strongly damped law, where the force limit changes them.
 #include "liggghts_dem.hpp"
+#include "run.hpp"
 #include "spring_dashpot.hpp"
 
 #include <gtest/gtest.h>
@@ -10,12 +11,10 @@
 
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <string>
 
 using namespace mesopen;
-namespace fs = std::filesystem;
 
 namespace {
 
@@ -23,11 +22,11 @@ const std::string script = MESOPEN_SOURCE_DIR "/liggghts-inputs/dem.in";
 const coupling::GrainContactLaw &quartz = coupling::quartz_grains;
 
 // A data file of two disks of the calibration's diameter and density on the x axis, 10 nm apart,
-// meeting at relative speed v (+v/2 and -v/2), in a 2 x 2 mm box around the origin.
+// meeting at relative speed v (+v/2 and -v/2), in a 2 x 2 mm box around the origin. The file is
+// the process's own: CTest runs this program's tests side by side.
 std::string twoDisks(double v) {
-  const fs::path dir = fs::temp_directory_path() / "mesopen-liggghts-test";
-  fs::create_directories(dir);
-  const std::string path = (dir / "pair.data").string();
+  static const test::ScratchDir dir("liggghts-pair");
+  const std::string path = dir / "pair.data";
   const double r = 0.5 * quartz.diameter, x = r + 5e-9;
   std::ofstream out(path);
   out.precision(17);

@@ -2,6 +2,7 @@
 // settle and stay in their box.
 #include "generator.hpp"
 #include "liggghts_dem.hpp"
+#include "run.hpp"
 #include "writers.hpp"
 
 #include <gtest/gtest.h>
@@ -9,10 +10,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 
 using namespace mesopen;
-namespace fs = std::filesystem;
 
 // A 0.6 x 0.4 mm target of the baseline's grains (42-78 um, 30 % porosity) as disks, under a
 // gravity of 1e6 m/s^2 (so that it settles within 0.1 ms), walls on the box's sides and bottom,
@@ -24,9 +23,8 @@ TEST(Liggghts, DemTargetSettlesInItsBox) {
   spec.width = 0.6e-3, spec.height = 0.4e-3, spec.mesh = MeshKind::none, spec.seed = 3;
   GeneratorReport report;
   const Target target = generateTarget(spec, report);
-  const fs::path dir = fs::temp_directory_path() / "mesopen-liggghts-settle";
-  fs::create_directories(dir);
-  const std::string data = (dir / "target.data").string();
+  const test::ScratchDir dir("liggghts-settle");
+  const std::string data = dir / "target.data";
   writeLiggghtsData(data, target, targetDisks(target));
   const double g = 1e6, kn = 1e10;
   coupling::LiggghtsDem dem(MESOPEN_SOURCE_DIR "/liggghts-inputs/dem.in",
