@@ -428,7 +428,7 @@ PartsImpact partsImpact(int max_level, int threads) {
   fem::Model model = mesh.model(test::oneMaterial("quartz"));
   fem::setBodyVelocity(model, 0, 0.0, 200.0);
   fem::Contact contact(model, {});
-  fem::Solver solver(model, {.max_level = max_level});
+  fem::Solver solver(model, {.max_level = max_level, .level_gap = 0});
   solver.addForceProvider(&contact);
   solver.endAt(1.5e-6);
   PartsImpact r;
@@ -558,7 +558,7 @@ PassingBlock passingBlock(int max_level) {
     model.nodes.vy[a] = 20.0 * (2.0 * model.nodes.y[a] / 45.3e-3 - 1.0);
   fem::setBodyVelocity(model, 1, 0.0, 500.0);
   fem::Contact contact(model, {});
-  fem::Solver solver(model, {.max_level = max_level});
+  fem::Solver solver(model, {.max_level = max_level, .level_gap = 0});
   solver.addForceProvider(&contact);
   solver.endAt(5e-6);
   PassingBlock r;
