@@ -254,7 +254,7 @@ void Contact::Hits::clear() {
   sudden.clear();
   for (auto &block : loads)
     block.clear();
-  count = deep = 0;
+  count = deep = beneath_folds = 0;
   depth = 0.0;
 }
 
@@ -293,7 +293,7 @@ void Contact::addHits(Model &model) {
   for (const Hits &hits : run_hits_) {
     for (auto [p, excess] : hits.sudden)
       allowances_.allow(p, excess);
-    stats_.sudden += hits.sudden.size();
+    stats_.sudden += hits.sudden.size(), stats_.beneath_folds += hits.beneath_folds;
   }
   stats_.contacts = contacts;
   stats_.depth = deepest;
@@ -593,16 +593,18 @@ ContactStatistics Contact::statisticsOfAll() const {
       static_cast<std::int64_t>(s.deep), static_cast<std::int64_t>(s.refreshed),
       static_cast<std::int64_t>(s.searches), static_cast<std::int64_t>(s.pair_steps),
       static_cast<std::int64_t>(s.sides), static_cast<std::int64_t>(s.skipped),
-      static_cast<std::int64_t>(s.partial), static_cast<std::int64_t>(s.sudden)});
+      static_cast<std::int64_t>(s.partial), static_cast<std::int64_t>(s.sudden),
+      static_cast<std::int64_t>(s.beneath_folds)});
   const std::vector<double> depths =
       processes_->allGather(std::vector<double>{s.depth, s.max_depth, s.seconds});
   ContactStatistics all;
-  for (std::size_t at = 0; at < counts.size(); at += 10) {
+  for (std::size_t at = 0; at < counts.size(); at += 11) {
     all.pairs += counts[at], all.contacts += counts[at + 1], all.deep += counts[at + 2];
     all.refreshed += counts[at + 3];
     all.searches = std::max(all.searches, static_cast<std::size_t>(counts[at + 4]));
     all.pair_steps += counts[at + 5], all.sides += counts[at + 6], all.skipped += counts[at + 7];
     all.partial += counts[at + 8], all.sudden += counts[at + 9];
+    all.beneath_folds += counts[at + 10];
   }
   for (std::size_t at = 0; at < depths.size(); at += 3) {
     all.depth = std::max(all.depth, depths[at]);
@@ -811,8 +813,23 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
     auto outside = [&] { until = std::min(until, travel + std::min(std::sqrt(c.distance), edge)); };
     const Near &found = *searched;
     if (depth < 0.0) { // in front of the closest segment or vertex
-      outside();
-      continue;
+      // Just in front of it (clear of it: a node on B's boundary has no sure side by the
+      // crossing count), yet behind another segment about as close and inside B by the crossing
+      // count: B's boundary is folded over itself there (a flap of an eroding tip pressed into
+      // the body beneath, which has no contact with itself), the closest segment the fold's. The
+      // node is in contact with the closest segment it lies behind, beneath the fold; taken for
+      // the closest, the fold would let it sink into B unseen.
+      const bool near_fold = touching * h < -depth && -depth < check_depth * h;
+      const narrow::Closest beneath =
+          near_fold ? narrow::closestBehind(found, px, py, -depth + check_depth * h)
+                    : narrow::Closest{};
+      if (beneath.segment == no_node || !bd.inside(B, px, py)) {
+        outside();
+        continue;
+      }
+      c = beneath, depth = -c.g, w2 = -1.0;
+      nx = found.nx[c.segment], ny = found.ny[c.segment];
+      ++hits.beneath_folds;
     }
     if (depth <= touching * h || (depth > check_depth * h && !bd.inside(B, px, py))) {
       // touching only; or deeper than a few percent of an element, where a dented grain can put

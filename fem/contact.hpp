@@ -90,6 +90,7 @@ struct ContactStatistics {
   std::size_t sides = 0, skipped = 0;  // over the run: sides of overlapping pairs, skipped as clear
   std::size_t partial = 0;             // over the run: sides whose hot nodes alone were looked at
   std::size_t sudden = 0;              // over the run: contacts found deeper than a step's approach
+  std::size_t beneath_folds = 0; // over the run: contacts beneath a fold of a boundary (touch)
   std::size_t halo_nodes = 0; // over the run: other processes' boundary nodes received (halo)
   double seconds = 0.0;       // wall time spent in contact, over the run
 };
@@ -167,7 +168,7 @@ private:
     std::vector<std::vector<Load>> loads; // per block of bodies
     // the nodes (model indices) found suddenly deep, and by how much (see hit)
     std::vector<std::pair<std::uint32_t, double>> sudden;
-    std::size_t count = 0, deep = 0;
+    std::size_t count = 0, deep = 0, beneath_folds = 0;
     double depth = 0.0;
     void clear();
   };

@@ -266,6 +266,22 @@ MESOPEN_INLINE At atVertex(const Near &near, const Point *points, const std::uin
   return c.corner ? At::unknown : At::segment;
 }
 
+// The closest of the near segments that (px, py) lies behind, nearer than `within`, with its foot
+// on the segment's inside (segment no_node: none): where a body's boundary is folded over itself,
+// the segment beneath the fold (see Contact::touch).
+inline Closest closestBehind(const Near &near, double px, double py, double within) {
+  Closest c;
+  c.distance = within * within;
+  for (std::size_t i = 0; i < near.size; ++i) {
+    const double length = near.length[i];
+    const Segment::Foot f = near[i].foot(px, py);
+    if (near.in(i) && f.g < 0.0 && f.t > end_tie * length && f.t < (1.0 - end_tie) * length &&
+        f.distance < c.distance)
+      c = {static_cast<std::uint32_t>(i), f.distance, f.g, f.t, false};
+  }
+  return c;
+}
+
 // Whether (px, py) lies inside the polygon of the segments given by their ends (indices into
 // `points`): the number of segments a ray in +x crosses is odd.
 inline bool inside(const Point *points, const std::uint32_t *ends, const std::uint32_t *ends_end,

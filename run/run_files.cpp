@@ -318,6 +318,7 @@ nlohmann::json runSummary(const Scene &scene, const RunAssembly &run, const Seri
                     {"deepest_penetration_over_element_size", c.max_depth},
                     {"deep_node_steps", c.deep},
                     {"sudden_contacts", c.sudden},
+                    {"contacts_beneath_folds", c.beneath_folds},
                     {"last_step_pairs", c.pairs},
                     {"pair_searches", c.searches},
                     {"pair_sides_skipped_as_clear",

@@ -306,3 +306,43 @@ TEST(Contact, ListsHoldTheClosestSegmentOfANodeDeeperThanTheMargin) {
   EXPECT_GT(st.contacts, 0u);
   EXPECT_NEAR(st.depth, 0.5 / 1.2, 0.002);
 }
+
+// A body whose boundary is folded over itself (an eroding tip's flap pressed into the body
+// beneath; a body has no contact with itself): a bar of cells h wide, and in the same body a flap
+// (a triangle) whose lower face lies 0.03 h below the bar's upper face. A grain's two lower corner
+// nodes lie 0.04 h below that face: inside the bar, 0.01 h in front of the flap's lower face, the
+// closest segment. They are in contact with the bar's upper face, 0.04 h deep (found at once:
+// sudden). Taken for the closest, the flap's face would find them outside, and the grain would
+// sink into the bar unseen (as a grain's node did under a fold of run 1's eroding tip, 0.306 of
+// an element deep when the bar's face became its closest segment). Tolerance 0.002 as above.
+TEST(Contact, NodeBeneathAFoldOfTheBoundaryIsInContact) {
+  const double h = 10e-6;
+  for (const bool fold : {false, true}) {
+    TestMesh mesh;
+    mesh.addRectangle(0.1 * h, -0.04 * h, 0.8 * h, 0.3 * h, 1, 1, 0.0, 1); // the grain
+    mesh.addRectangle(-4.0 * h, -1.0 * h, 10.0 * h, 1.0 * h, 10, 1, 0.0, 2); // the bar
+    if (fold) { // the flap, a part of the bar's body
+      const auto first = static_cast<std::uint32_t>(mesh.x.size());
+      mesh.x.insert(mesh.x.end(), {0.05 * h, 0.95 * h, 0.5 * h});
+      mesh.y.insert(mesh.y.end(), {-0.03 * h, -0.03 * h, 0.6 * h});
+      mesh.tri.insert(mesh.tri.end(), {first, first + 1, first + 2});
+      mesh.node_offset.back() = mesh.x.size(), mesh.tri_offset.back() = mesh.tri.size() / 3;
+    }
+    fem::Model model = mesh.model(test::oneMaterial("quartz"));
+    fem::setBodyVelocity(model, 0, 0.0, -1.0); // closing slowly (bodies at rest are not computed)
+    fem::setBodyVelocity(model, 1, 0.0, 1.0);
+    fem::ContactSettings cs;
+    cs.friction = {0.0};
+    fem::Contact contact(model, cs);
+    fem::Solver solver(model, {});
+    solver.addForceProvider(&contact);
+    solver.step();
+    const fem::ContactStatistics &st = contact.statistics();
+    std::printf("grain nodes 0.04 h inside a bar%s: %zu contacts, deepest %.4f elements, %zu "
+                "beneath a fold\n",
+                fold ? " under a fold of it" : "", st.contacts, st.depth, st.beneath_folds);
+    EXPECT_EQ(st.contacts, 2u);
+    EXPECT_NEAR(st.depth, 0.04, 0.002);
+    EXPECT_EQ(st.beneath_folds, fold ? 2u : 0u);
+  }
+}
