@@ -91,8 +91,8 @@ struct ContactStatistics {
   std::size_t partial = 0;             // over the run: sides whose hot nodes alone were looked at
   std::size_t sudden = 0;              // over the run: contacts found deeper than a step's approach
   std::size_t beneath_folds = 0; // over the run: contacts beneath a fold of a boundary (touch)
-  std::size_t halo_nodes = 0; // over the run: other processes' boundary nodes received (halo)
-  double seconds = 0.0;       // wall time spent in contact, over the run
+  std::size_t halo_nodes = 0;    // over the run: other processes' boundary nodes received (halo)
+  double seconds = 0.0;          // wall time spent in contact, over the run
 };
 
 class Contact final : public ForceProvider {

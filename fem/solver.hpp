@@ -65,7 +65,7 @@ struct SolverSettings {
   // steps, its penalty softer by the square of the windows' ratio: most of the grains beside a
   // grain with one thin element step at the coarser level, but contacts go deeper
   // (docs/solver.md, "The level gap").
-  int level_gap = 0;
+  int level_gap = 1;
 };
 
 // Energies per metre of depth [J/m]. Internal includes the plastic and viscous work done.

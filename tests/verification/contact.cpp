@@ -319,7 +319,7 @@ TEST(Contact, NodeBeneathAFoldOfTheBoundaryIsInContact) {
   const double h = 10e-6;
   for (const bool fold : {false, true}) {
     TestMesh mesh;
-    mesh.addRectangle(0.1 * h, -0.04 * h, 0.8 * h, 0.3 * h, 1, 1, 0.0, 1); // the grain
+    mesh.addRectangle(0.1 * h, -0.04 * h, 0.8 * h, 0.3 * h, 1, 1, 0.0, 1);   // the grain
     mesh.addRectangle(-4.0 * h, -1.0 * h, 10.0 * h, 1.0 * h, 10, 1, 0.0, 2); // the bar
     if (fold) { // the flap, a part of the bar's body
       const auto first = static_cast<std::uint32_t>(mesh.x.size());

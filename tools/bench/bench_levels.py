@@ -2,7 +2,7 @@
 beside the same scene with levels, timed side by side and compared seed by seed.
 
     python3 tools/bench/bench_levels.py [--mesopen build/bin/mesopen] [--out build/bench]
-        [--scene examples/thesis/run-06.toml] [--level 2] [--gap 0] [--threads 2] [--runs 3]
+        [--scene examples/thesis/run-06.toml] [--level 2] [--gap 1] [--threads 2] [--runs 3]
         [--seeds 1,1001,2001,3001,4001] [--baseline OTHER_MESOPEN]
 
 Timing: the first seed at max_level 0 and at --level, alternately, --runs times each (the machine
@@ -73,7 +73,7 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "build", "bench"))
     ap.add_argument("--scene", default=os.path.join(ROOT, "examples", "thesis", "run-06.toml"))
     ap.add_argument("--level", type=int, default=2)
-    ap.add_argument("--gap", type=int, default=0, help="run.level_gap of the runs with levels")
+    ap.add_argument("--gap", type=int, default=1, help="run.level_gap of the runs with levels")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--seeds", default="1,1001,2001,3001,4001")
