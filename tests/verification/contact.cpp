@@ -256,13 +256,8 @@ TEST(Contact, SuddenDeepOverlapOpensGently) {
 
 namespace {
 
-// A square grain of side 0.8 h (one cell) whose two lower corner nodes lie `inside` above the lower
-// face of a bar 10 h long (cells h wide) and `thickness` thick, closing at 2 m/s: the contacts
-// found in one step and the deepest (over the bar's element size, its longest edge).
-fem::ContactStatistics grainCornersInABar(double h, double inside, double thickness) {
-  TestMesh mesh;
-  mesh.addRectangle(0.0, 0.0, 0.8 * h, 0.8 * h, 1, 1, 0.0, 1);              // the grain
-  mesh.addRectangle(-4.1 * h, -inside, 10.0 * h, thickness, 10, 1, 0.0, 2); // the bar
+// Two bodies closing at 2 m/s, frictionless: the contact's figures after one step.
+fem::ContactStatistics closingStep(const TestMesh &mesh) {
   fem::Model model = mesh.model(test::oneMaterial("quartz"));
   fem::setBodyVelocity(model, 0, 0.0, -1.0); // closing slowly (bodies at rest are not computed)
   fem::setBodyVelocity(model, 1, 0.0, 1.0);
@@ -273,6 +268,16 @@ fem::ContactStatistics grainCornersInABar(double h, double inside, double thickn
   solver.addForceProvider(&contact);
   solver.step();
   return contact.statistics();
+}
+
+// A square grain of side 0.8 h (one cell) whose two lower corner nodes lie `inside` above the lower
+// face of a bar 10 h long (cells h wide) and `thickness` thick, closing at 2 m/s: the contacts
+// found in one step and the deepest (over the bar's element size, its longest edge).
+fem::ContactStatistics grainCornersInABar(double h, double inside, double thickness) {
+  TestMesh mesh;
+  mesh.addRectangle(0.0, 0.0, 0.8 * h, 0.8 * h, 1, 1, 0.0, 1);              // the grain
+  mesh.addRectangle(-4.1 * h, -inside, 10.0 * h, thickness, 10, 1, 0.0, 2); // the bar
+  return closingStep(mesh);
 }
 
 } // namespace
@@ -328,16 +333,7 @@ TEST(Contact, NodeBeneathAFoldOfTheBoundaryIsInContact) {
       mesh.tri.insert(mesh.tri.end(), {first, first + 1, first + 2});
       mesh.node_offset.back() = mesh.x.size(), mesh.tri_offset.back() = mesh.tri.size() / 3;
     }
-    fem::Model model = mesh.model(test::oneMaterial("quartz"));
-    fem::setBodyVelocity(model, 0, 0.0, -1.0); // closing slowly (bodies at rest are not computed)
-    fem::setBodyVelocity(model, 1, 0.0, 1.0);
-    fem::ContactSettings cs;
-    cs.friction = {0.0};
-    fem::Contact contact(model, cs);
-    fem::Solver solver(model, {});
-    solver.addForceProvider(&contact);
-    solver.step();
-    const fem::ContactStatistics &st = contact.statistics();
+    const fem::ContactStatistics st = closingStep(mesh);
     std::printf("grain nodes 0.04 h inside a bar%s: %zu contacts, deepest %.4f elements, %zu "
                 "beneath a fold\n",
                 fold ? " under a fold of it" : "", st.contacts, st.depth, st.beneath_folds);
