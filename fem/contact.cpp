@@ -812,7 +812,8 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
     // of the region the near segments cover (the segments beyond lie beyond it).
     auto outside = [&] { until = std::min(until, travel + std::min(std::sqrt(c.distance), edge)); };
     const Near &found = *searched;
-    if (depth < 0.0) { // in front of the closest segment or vertex
+    bool counted_inside = false; // inside B by the crossing count, already counted
+    if (depth < 0.0) {           // in front of the closest segment or vertex
       // Just in front of it (clear of it: a node on B's boundary has no sure side by the
       // crossing count), yet behind another segment about as close and inside B by the crossing
       // count: B's boundary is folded over itself there (a flap of an eroding tip pressed into
@@ -823,7 +824,7 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
       const narrow::Closest beneath =
           near_fold ? narrow::closestBehind(found, px, py, -depth + check_depth * h)
                     : narrow::Closest{};
-      if (beneath.segment == no_node || !bd.inside(B, px, py)) {
+      if (beneath.segment == no_node || !(counted_inside = bd.inside(B, px, py))) {
         outside();
         continue;
       }
@@ -831,7 +832,8 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
       nx = found.nx[c.segment], ny = found.ny[c.segment];
       ++hits.beneath_folds;
     }
-    if (depth <= touching * h || (depth > check_depth * h && !bd.inside(B, px, py))) {
+    if (depth <= touching * h ||
+        (depth > check_depth * h && !counted_inside && !bd.inside(B, px, py))) {
       // touching only; or deeper than a few percent of an element, where a dented grain can put
       // a node outside it behind one of its segments: the crossing count decides
       if (depth > check_depth * h)
