@@ -173,11 +173,69 @@ void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
   for (std::size_t c = 0; c < nc; ++c)
     kick(c, 0.5 * dt);
   applyReactions(model);
+  if (!model.due.empty())
+    measureForLevels(model, dt);
   exchanges_.record(Datum::reaction_force, window_ + 1);
   ++window_steps_;
   if (elapsed_ + 0.5 * dt >= length_) // the FE step nearest to the planned end
     endWindow();
   seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void FeDemCoupling::measureForLevels(const fem::Model &model, double dt) {
+  const std::size_t nc = now_.x.size();
+  double fastest_disk = 0.0, x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
+  for (std::size_t c = 0; c < nc; ++c) {
+    fastest_disk = std::max(fastest_disk, std::hypot(now_.vx[c], now_.vy[c]) +
+                                              std::abs(now_.omega[c]) * now_.radius[c]);
+    x0 = std::min(x0, now_.x[c]), x1 = std::max(x1, now_.x[c]);
+    y0 = std::min(y0, now_.y[c]), y1 = std::max(y1, now_.y[c]);
+  }
+  closing_speed_ = contact_.fastest(model) + fastest_disk;
+  level_dt_ = dt;
+  if (nc == 0)
+    return;
+  level_disks_.cover(x0, y0, x1 - x0, y1 - y0, std::max(2.0 * r_max_, 1e-12));
+  level_disks_.fillPoints(
+      nc, [&](std::size_t c) { return now_.x[c]; }, [&](std::size_t c) { return now_.y[c]; },
+      [&](std::size_t c) { return static_cast<std::uint32_t>(c); });
+}
+
+std::uint8_t FeDemCoupling::levelClearOfDisks(double x0, double y0, double x1, double y1,
+                                              std::uint8_t top) const {
+  if (top == 0 || now_.x.empty() || !std::isfinite(x0) || !(x0 <= x1 && y0 <= y1))
+    return top;
+  const double unit = 2.0 * level_dt_ * closing_speed_; // the reach of level l: 2^l unit
+  const double reach = r_max_ + std::ldexp(unit, top);
+  double gap = HUGE_VAL; // from the box to the nearest disk's surface
+  level_disks_.forEach(level_disks_.cells(x0 - reach, y0 - reach, x1 + reach, y1 + reach),
+                       [&](std::uint32_t c) {
+                         const double dx = std::max({x0 - now_.x[c], 0.0, now_.x[c] - x1});
+                         const double dy = std::max({y0 - now_.y[c], 0.0, now_.y[c] - y1});
+                         gap = std::min(gap, std::hypot(dx, dy) - now_.radius[c]);
+                       });
+  std::uint8_t level = 0;
+  while (level < top && std::ldexp(unit, level + 1) < gap)
+    ++level;
+  return level;
+}
+
+void FeDemCoupling::capLevels(const std::vector<std::uint8_t> &,
+                              std::vector<std::uint8_t> &cap) const {
+  const std::vector<std::uint32_t> &bodies = contact_.bodies();
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    const DiskContact::Region box = contact_.box(k);
+    std::uint8_t &c = cap[bodies[k]];
+    c = std::min(c, levelClearOfDisks(box.x0, box.y0, box.x1, box.y1, c));
+  }
+}
+
+void FeDemCoupling::capParts(const std::vector<std::uint8_t> &, std::uint32_t,
+                             const std::vector<double> &boxes,
+                             std::vector<std::uint8_t> &cap) const {
+  for (std::size_t p = 0; p < cap.size(); ++p)
+    cap[p] = std::min(cap[p], levelClearOfDisks(boxes[4 * p], boxes[4 * p + 1], boxes[4 * p + 2],
+                                                boxes[4 * p + 3], cap[p]));
 }
 
 // The DEM participant's step with the window's motion; the last FE forces on the disks are

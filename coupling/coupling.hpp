@@ -48,6 +48,16 @@ public:
   // boundary nodes to the processes whose near disks their boxes meet, and the reactions go back
   // to the nodes' owners.
   void shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) override;
+  // Multiple time stepping (one process): the FE-DEM contact is computed at the base step, so a
+  // body (or part) a disk may reach before its next step steps at level 0. It may take level l
+  // only while the gap between its box and every near disk exceeds 2^(l+1) dt v, v the fastest
+  // closing speed (the fastest FE boundary node's speed plus the fastest near disk's, its spin
+  // included): a disk cannot touch it within twice its window.
+  bool takesLevels() const override { return true; }
+  void capLevels(const std::vector<std::uint8_t> &reach,
+                 std::vector<std::uint8_t> &cap) const override;
+  void capParts(const std::vector<std::uint8_t> &own, std::uint32_t body,
+                const std::vector<double> &boxes, std::vector<std::uint8_t> &cap) const override;
   // Other processes' FE boundary nodes received, over the run.
   std::size_t haloNodes() const { return halo_nodes_; }
   const DiskContact &contact() const { return contact_; }
@@ -122,6 +132,15 @@ private:
   double fastest_of_all_ = 0.0; // the fastest boundary node over every process's bodies [m/s]
   DiskContact::Region region_of_all_{}; // the region every process's FE bodies cover
   std::size_t halo_nodes_ = 0;
+  // With levels (Model::due not empty): the near disks now in cells of the largest disk's
+  // diameter, the fastest closing speed [m/s] and the step [s] they were taken at (capLevels).
+  void measureForLevels(const fem::Model &model, double dt);
+  // The coarsest level up to `top` whose reach 2^(l+1) dt v stays short of every near disk from
+  // the box [x0, x1] x [y0, y1].
+  std::uint8_t levelClearOfDisks(double x0, double y0, double x1, double y1,
+                                 std::uint8_t top) const;
+  CellGrid<> level_disks_;
+  double closing_speed_ = 0.0, level_dt_ = 0.0;
 };
 
 } // namespace mesopen::coupling

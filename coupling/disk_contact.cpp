@@ -252,6 +252,7 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks, Par
     if (!looks(model, b))
       continue;
     const Box &box = boxes_[kb];
+    const bool due = model.due.empty() || model.due[b];
     const std::size_t n_edges = model.bodies[b].boundary.size() / 2;
     bool binned = false; // its segments, binned when a disk first comes near (many) or listed (few)
     disk_grid_.forEach(
@@ -280,6 +281,10 @@ void DiskContact::addForces(const fem::Model &model, const Particles &disks, Par
           const double found = r - c.distance; // c.distance < 0: the centre inside
           if (!(found > 0.0))
             return;
+          if (!due) { // its nodes stand still between its steps: found at its next step
+            ++stats_.not_due;
+            return;
+          }
           // relative velocity of the disk's contact point to the boundary point
           const double w1 = 1.0 - c.w, w2 = c.w;
           const double om = disks.omega[i];

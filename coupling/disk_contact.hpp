@@ -40,6 +40,9 @@ struct DiskContactStatistics {
   double deepest = 0.0;       // the largest overlap over the FE element size, over the run
   double work_on_disks = 0.0; // the forces' work on the disks [J/m], over the run
   std::size_t sudden = 0;     // over the run: contacts found deeper than a step's approach
+  // Over the run, with multiple time stepping: disks found touching an FE body between its steps
+  // (FeDemCoupling::capLevels keeps such bodies at level 0; not computed until the body steps).
+  std::size_t not_due = 0;
 };
 
 class DiskContact {

@@ -112,15 +112,17 @@ void writeRunAttributes(H5File &h5, const Scene &scene, const std::string &statu
 nlohmann::json demFigures(const RunAssembly &run, const parallel::World &world) {
   const coupling::FeDemCoupling &coupled = *run.coupled;
   const coupling::DiskContactStatistics &c = coupled.contact().statistics();
-  return {{"disks", std::llround(world.sum(static_cast<double>(run.dem->particles().size())))},
-          {"fe_dem_contacts_last_step", std::llround(world.sum(static_cast<double>(c.contacts)))},
-          {"deepest_fe_dem_overlap_over_element_size", world.max(c.deepest)},
-          {"sudden_fe_dem_contacts", std::llround(world.sum(static_cast<double>(c.sudden)))},
-          {"work_on_disks", world.sum(c.work_on_disks)},
-          {"disks_kinetic_energy", world.sum(coupled.disks().kineticEnergy())},
-          {"windows", coupled.windows()},
-          {"window", coupled.window()},
-          {"seconds", coupled.seconds()}};
+  return {
+      {"disks", std::llround(world.sum(static_cast<double>(run.dem->particles().size())))},
+      {"fe_dem_contacts_last_step", std::llround(world.sum(static_cast<double>(c.contacts)))},
+      {"deepest_fe_dem_overlap_over_element_size", world.max(c.deepest)},
+      {"sudden_fe_dem_contacts", std::llround(world.sum(static_cast<double>(c.sudden)))},
+      {"fe_dem_contacts_between_steps", std::llround(world.sum(static_cast<double>(c.not_due)))},
+      {"work_on_disks", world.sum(c.work_on_disks)},
+      {"disks_kinetic_energy", world.sum(coupled.disks().kineticEnergy())},
+      {"windows", coupled.windows()},
+      {"window", coupled.window()},
+      {"seconds", coupled.seconds()}};
 }
 
 void writeLevels(H5File &h5, const fem::LevelCensus &census) {

@@ -326,7 +326,8 @@ const std::vector<Key> &keys() {
                 "multiple time stepping by body: the largest level, a body stepping every "
                 "2^level base steps (the shortest body's step) within its own stable step and "
                 "at most level_gap levels coarser than the bodies it may meet, a contact pair "
-                "when both its bodies step (docs/solver.md, one process); 0: every body every "
+                "when both its bodies step, a body a disk may reach within its window every "
+                "step (docs/solver.md; fe, dem and hybrid, one process); 0: every body every "
                 "step"),
         integer("run", "level_gap", r, &R::level_gap, 0, 3,
                 "multiple time stepping: the most levels a body steps coarser than the own level "
@@ -435,10 +436,6 @@ std::string knownIn(const std::string &table) {
 void checkTogether(const Scene &s) {
   const TargetSpec &t = s.target;
   auto bad = [&](const std::string &what) { throw InputError(s.path + ": " + what); };
-  if (s.run.max_level > 0 && s.run.representation != Representation::fe)
-    bad("run.max_level = " + std::to_string(s.run.max_level) +
-        " (multiple time stepping) takes no DEM grains (representation \"fe\" only); allowed: "
-        "max_level = 0 with them");
   if (t.width < 4 * t.diameter_max || t.height < 4 * t.diameter_max)
     bad("target.width and target.height must be at least 4 grain diameters (" +
         show(4 * t.diameter_max) + " m); they are " + show(t.width) + " and " + show(t.height));

@@ -1,5 +1,6 @@
 // FE-DEM coupling without LIGGGHTS (the fake DEM participant): the exchanged forces balance, a
-// disk hitting an FE block conserves momentum, and every declared exchange happens each window.
+// disk hitting an FE block conserves momentum, every declared exchange happens each window, and
+// with levels a body falls to the base step before a disk touches it.
 #include "coupling.hpp"
 #include "coupled.hpp"
 #include "fake_dem.hpp"
@@ -9,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <omp.h>
 
 using namespace mesopen;
 using test::TestMesh;
@@ -270,4 +272,92 @@ TEST(Coupling, DiskMovedToAnotherProcessKeepsItsContactHistory) {
   EXPECT_EQ(other.statistics().sudden, 0u);
   EXPECT_GT(fresh.statistics().sudden, 0u);
   EXPECT_LT(lost, 0.5 * staying);
+}
+
+namespace {
+// A coarse block (cells of 20 um) a disk hits at 100 m/s, obliquely and spinning, beside a fine
+// block far away (cells of 2.5 um) that sets the base step: with levels (max_level 2) the coarse
+// block steps every fourth base step until the disk comes near.
+struct LevelsHit {
+  std::array<double, 3> disk{}; // vx, vy, omega after the hit
+  double worst_momentum = 0.0;  // over every base step [kg m/s per m]
+  double element_steps = 0.0, single_rate = 0.0;
+  int coarse_level_before = -1;   // the coarse block's level when the disk was still far
+  int coarse_level_at_touch = -1; // its level at the first step the disk touched it
+  std::size_t touching_steps = 0, not_due = 0;
+  double deepest = 0.0, energy_ratio = 0.0;
+};
+
+LevelsHit levelsHit(int max_level, int threads) {
+  omp_set_num_threads(threads);
+  TestMesh mesh;
+  mesh.addRectangle(0.0, 0.0, 100e-6, 60e-6, 5, 3, 0.1, 3);
+  mesh.addRectangle(300e-6, 0.0, 10e-6, 5e-6, 4, 2, 0.1, 5);
+  fem::Model model = mesh.model(test::oneMaterial("quartz"));
+  fem::setBodyVelocity(model, 0, 0.0, 0.0); // awake
+  fem::setBodyVelocity(model, 1, 0.0, 0.0);
+  coupling::FakeDem dem(disks({{40e-6, 72.5e-6, 20.0, -100.0, 3e5, 10e-6}}), {});
+  coupling::FeDemCoupling coupling(model, dem, {.friction = {0.3, 0.3}}, 0.0);
+  fem::Solver solver(model, {.max_level = max_level});
+  solver.addForceProvider(&coupling);
+  const double e0 = coupling.disks().kineticEnergy();
+  const auto p0 = test::totalMomentum(model, coupling.disks());
+  LevelsHit hit;
+  while (solver.time() < 0.4e-6) {
+    solver.step();
+    const auto p = test::totalMomentum(model, coupling.disks());
+    hit.worst_momentum =
+        std::max({hit.worst_momentum, std::abs(p[0] - p0[0]), std::abs(p[1] - p0[1])});
+    const int level = model.level.empty() ? 0 : model.level[0];
+    if (coupling.contact().statistics().contacts > 0) {
+      if (hit.touching_steps++ == 0)
+        hit.coarse_level_at_touch = level;
+    } else if (hit.touching_steps == 0 && solver.steps() == 40) {
+      hit.coarse_level_before = level;
+    }
+  }
+  const coupling::Particles d = coupling.disks();
+  hit.disk = {d.vx[0], d.vy[0], d.omega[0]};
+  hit.element_steps = solver.elementSteps(), hit.single_rate = solver.singleRateElementSteps();
+  hit.not_due = coupling.contact().statistics().not_due;
+  hit.deepest = coupling.contact().statistics().deepest;
+  hit.energy_ratio = (d.kineticEnergy() + solver.energy().kinetic + solver.energy().internal) / e0;
+  return hit;
+}
+} // namespace
+
+// Multiple time stepping with disks: the coarse block steps at level 2 while the disk is far, and
+// falls to level 0 before the disk touches it (FeDemCoupling::capLevels), so that no disk is ever
+// found touching it between its steps (the FE-DEM contact is computed at the base step). Momentum
+// kept to round-off at every base step (1e-12 of m v, as DiskHittingABlockConservesMomentum); the
+// disk bounces, energy only lost; the disk leaves as at a single rate to 1e-3 of its speed (the
+// block's vibration before the hit is integrated over longer steps); the run is the same for one
+// and two threads.
+TEST(Coupling, LevelsFallBeforeADiskArrives) {
+  const LevelsHit single = levelsHit(0, 1);
+  const LevelsHit levels = levelsHit(2, 1);
+  const double scale = 2650.0 * M_PI * 10e-6 * 10e-6 * 100.0;
+  std::printf("disk on a coarse block with levels: level %d when far, %d at the touch, %zu steps "
+              "touching, %zu between its steps, element updates %.3f of single rate, momentum "
+              "%.2e of m v, deepest %.4f elements (single rate %.4f), energy after / before "
+              "%.4f (%.4f), disk leaves at (%.4f, %.4f) m/s against (%.4f, %.4f)\n",
+              levels.coarse_level_before, levels.coarse_level_at_touch, levels.touching_steps,
+              levels.not_due, levels.element_steps / levels.single_rate,
+              levels.worst_momentum / scale, levels.deepest, single.deepest, levels.energy_ratio,
+              single.energy_ratio, levels.disk[0], levels.disk[1], single.disk[0], single.disk[1]);
+  EXPECT_EQ(single.element_steps, single.single_rate);
+  EXPECT_EQ(levels.coarse_level_before, 2);
+  EXPECT_EQ(levels.coarse_level_at_touch, 0);
+  EXPECT_GT(levels.touching_steps, 4u);
+  EXPECT_EQ(levels.not_due, 0u);
+  EXPECT_LT(levels.element_steps, 0.6 * levels.single_rate);
+  EXPECT_LT(levels.worst_momentum, 1e-12 * scale);
+  EXPECT_GT(levels.disk[1], 0.0); // bounced
+  EXPECT_LT(levels.energy_ratio, 1.0);
+  EXPECT_LT(levels.deepest, 1.5 * single.deepest);
+  for (int k = 0; k < 2; ++k)
+    EXPECT_NEAR(levels.disk[k], single.disk[k], 1e-3 * 100.0) << k;
+  const LevelsHit two = levelsHit(2, 2);
+  EXPECT_EQ(two.disk, levels.disk);
+  omp_set_num_threads(omp_get_num_procs());
 }
