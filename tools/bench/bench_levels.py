@@ -15,8 +15,12 @@ each setting (a run is the same on any thread count, so one run per seed and set
 and per measure the single rate's mean and seed-to-seed range beside the levels' mean and their
 largest difference seed by seed. The measures are those of the convergence study
 (tools/studies/convergence.py: time to the end depth, speed there, peak |H|, lateral displacement,
-tilt) and from summary.json the plastic work, the energy balance error and the deepest contact.
-Frames are off. Writes OUT/bench_levels.json (atomically).
+tilt) and from summary.json the plastic work, the energy balance error and the deepest contact,
+and with disks the work on them, the deepest FE-DEM overlap and the disks found touching an FE
+body between its steps.
+Frames are off. Writes OUT/bench_levels.json (atomically) for the default scene, and
+OUT/bench_levels-NAME.json for another (NAME the scene file's stem, e.g. baseline-hybrid: the same
+measures for a hybrid target, whose FE bodies near disks step at the base step).
 """
 import argparse
 import json
@@ -41,6 +45,14 @@ SUMMARY = {
     "deepest_contact": ("deepest contact / element", "", 1.0,
                         lambda s: s["contact"]["deepest_penetration_over_element_size"]),
 }
+# with disks (dem and hybrid), from summary.json's dem table
+SUMMARY_DEM = {
+    "work_on_disks": ("work on the disks", "J/m", 1.0, lambda s: s["dem"]["work_on_disks"]),
+    "deepest_fe_dem": ("deepest FE-DEM overlap / element", "", 1.0,
+                       lambda s: s["dem"]["deepest_fe_dem_overlap_over_element_size"]),
+    "between_steps": ("disks touching between steps", "", 1.0,
+                      lambda s: s["dem"].get("fe_dem_contacts_between_steps", 0)),
+}
 
 
 def with_target_key(scene_text, key, value):
@@ -62,6 +74,9 @@ def run(mesopen, text, tmp, threads):
     figures = measures(os.path.join(out, "run.h5"))
     for key, (_, _, _, get) in SUMMARY.items():
         figures[key] = get(s)
+    if "dem" in s:
+        for key, (_, _, _, get) in SUMMARY_DEM.items():
+            figures[key] = get(s)
     mts = s.get("multiple_time_stepping", {})
     return {"loop_seconds": s["loop_seconds"], "steps": s["steps"], "status": s["status"],
             "element_update_share": mts.get("element_update_share", 1.0), "figures": figures}
@@ -143,6 +158,8 @@ def main():
     table = {}
     labels = {k: (v[0], v[1], v[2]) for k, v in MEASURES.items()}
     labels.update({k: (v[0], v[1], v[2]) for k, v in SUMMARY.items()})
+    if "work_on_disks" in results[0][seeds[0]]["figures"]:
+        labels.update({k: (v[0], v[1], v[2]) for k, v in SUMMARY_DEM.items()})
     for key, (label, unit, scale) in labels.items():
         single = [results[0][s]["figures"][key] * scale for s in seeds]
         multi = [results[1][s]["figures"][key] * scale for s in seeds]
@@ -165,7 +182,10 @@ def main():
               "status": {"single_rate": [results[0][s]["status"] for s in seeds],
                          "levels": [results[1][s]["status"] for s in seeds]},
               "measures": table}
-    path = os.path.join(args.out, "bench_levels.json")
+    stem = os.path.splitext(os.path.basename(args.scene))[0]
+    default = os.path.join(ROOT, "examples", "thesis", "run-06.toml")
+    name = "bench_levels" if os.path.abspath(args.scene) == default else f"bench_levels-{stem}"
+    path = os.path.join(args.out, name + ".json")
     with open(path + ".tmp", "w") as f:
         json.dump(result, f, indent=1)
     os.replace(path + ".tmp", path)
