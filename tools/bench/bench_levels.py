@@ -45,6 +45,8 @@ SUMMARY = {
     "deepest_contact": ("deepest contact / element", "", 1.0,
                         lambda s: s["contact"]["deepest_penetration_over_element_size"]),
 }
+DEFAULT_SCENE = os.path.join(ROOT, "examples", "thesis", "run-06.toml")
+
 # with disks (dem and hybrid), from summary.json's dem table
 SUMMARY_DEM = {
     "work_on_disks": ("work on the disks", "J/m", 1.0, lambda s: s["dem"]["work_on_disks"]),
@@ -86,7 +88,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--mesopen", default=os.path.join(ROOT, "build", "bin", "mesopen"))
     ap.add_argument("--out", default=os.path.join(ROOT, "build", "bench"))
-    ap.add_argument("--scene", default=os.path.join(ROOT, "examples", "thesis", "run-06.toml"))
+    ap.add_argument("--scene", default=DEFAULT_SCENE)
     ap.add_argument("--level", type=int, default=2)
     ap.add_argument("--gap", type=int, default=1, help="run.level_gap of the runs with levels")
     ap.add_argument("--threads", type=int, default=2)
@@ -183,8 +185,7 @@ def main():
                          "levels": [results[1][s]["status"] for s in seeds]},
               "measures": table}
     stem = os.path.splitext(os.path.basename(args.scene))[0]
-    default = os.path.join(ROOT, "examples", "thesis", "run-06.toml")
-    name = "bench_levels" if os.path.abspath(args.scene) == default else f"bench_levels-{stem}"
+    name = "bench_levels" if os.path.abspath(args.scene) == DEFAULT_SCENE else f"bench_levels-{stem}"
     path = os.path.join(args.out, name + ".json")
     with open(path + ".tmp", "w") as f:
         json.dump(result, f, indent=1)
