@@ -140,7 +140,10 @@ void Contact::addForces(Model &model, double time, double dt) {
   auto own = [&](std::size_t b) { return mine(b); };
   pairs_.measure(model, boundaries_, own);
   double farthest = pairs_.farthest(boundaries_, own);
-  if (shared())
+  // (with the work shared, the largest over the processes decides; none is asked when the pairs
+  // are to be found anew anyway, or the last step's reduction bounds it below what needs a search)
+  const double bound = std::exchange(travel_bound_, HUGE_VAL);
+  if (shared() && !pairs_.searchNeeded(0.0) && pairs_.searchNeeded(bound))
     farthest = processes_->max({farthest})[0];
   const bool anew = pairs_.searchNeeded(farthest);
   if (shared())
@@ -154,6 +157,21 @@ void Contact::addForces(Model &model, double time, double dt) {
   addHits(model);
   stats_.max_depth = std::max(stats_.max_depth, stats_.depth);
   stats_.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Each moving body of this process has travelled by at most its body's drift more at the next
+// step's measure (ContactBoundaries::measure adds its farthest node's move), and the bodies that
+// woke in this step move from there: the farthest of them since the last search, plus the drift
+// with room for the rounding of the positions and the sums.
+double Contact::stepFigure(const Model &model, double drift) const {
+  if (!shared() || !model.due.empty())
+    return -HUGE_VAL;
+  const std::vector<double> &searched = pairs_.travelSearched();
+  double most = 0.0;
+  for (std::size_t b = 0; b < model.bodies.size(); ++b)
+    if (!model.at_rest[b] && mine(b) && boundaries_.hasNodes(b))
+      most = std::max(most, boundaries_.travel[b] - searched[b]);
+  return most + 1.001 * drift + 1e-9 * pairs_.searchMargin();
 }
 
 // The narrow phase over the runs of pairs, each with its lists and its hits: taken run by run, the
@@ -1084,6 +1102,7 @@ Contact::State Contact::state(const Model &model) const {
 
 void Contact::restore(const Model &model, const State &st) {
   boundaries_.take(model);
+  travel_bound_ = HUGE_VAL;
   const std::size_t n_bodies = model.bodies.size();
   if (st.travel.size() != n_bodies || st.travel_searched.size() != n_bodies ||
       st.listed.size() != n_bodies || st.boxes.size() != 4 * n_bodies ||

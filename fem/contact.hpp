@@ -122,6 +122,11 @@ public:
   void shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) override;
   void bodiesMoving(const Model &model, const std::vector<std::uint32_t> &bodies,
                     const std::vector<int> &new_owner) override;
+  // The farthest this process's moving bodies may have travelled since the last search for pairs
+  // at the next step (after a drift of at most `drift`): when the largest over the processes
+  // cannot call for a search, the next step asks no process whether to search.
+  double stepFigure(const Model &model, double drift) const override;
+  void stepReduced(double largest) override { travel_bound_ = largest; }
   // The last step's contacts between bodies (the walls' left out; with the work shared, this
   // process's), in pair order: a boundary node
   // of `node_body` pushed out of `segment_body` through the segment between two of its nodes
@@ -244,6 +249,9 @@ private:
   std::vector<double> pushed_penalty_;
   std::size_t pushed_levels_ = 1;
   double time_ = 0.0;
+  // From the last step's reduction: a bound on the largest travel since the last search of the
+  // moving bodies at this step (stepFigure); HUGE_VAL: none.
+  double travel_bound_ = HUGE_VAL;
   ContactStatistics stats_;
 
 public:

@@ -856,11 +856,31 @@ void Solver::forces(double dt, bool kick) {
     }
   }
   kick_sums_.clear();
-  const std::vector<double> all = comm_.max(
-      {-dt_min, inverted >= 0 ? -static_cast<double>(inverted) : -HUGE_VAL, failing ? 1.0 : 0.0,
-       scaling ? 1.0 : 0.0, std::isfinite(energy_.kinetic) && std::isfinite(internal) ? 0.0 : 1.0});
+  // In the same reduction, at a step: the providers' figures for the next step (with the work
+  // shared) and the time loop's value.
+  std::vector<double> figures = {
+      -dt_min, inverted >= 0 ? -static_cast<double>(inverted) : -HUGE_VAL, failing ? 1.0 : 0.0,
+      scaling ? 1.0 : 0.0, std::isfinite(energy_.kinetic) && std::isfinite(internal) ? 0.0 : 1.0};
+  constexpr std::size_t first_provider = 5;
+  const bool provider_figures = kick && comm_.size() > 1;
+  if (provider_figures) {
+    const double drift = nextDriftBound();
+    for (const ForceProvider *provider : providers_)
+      figures.push_back(provider->stepFigure(m_, drift));
+  }
+  const std::size_t first_agreed = figures.size();
+  if (kick) {
+    figures.insert(figures.end(), agree_next_.begin(), agree_next_.end());
+    agree_next_.clear();
+  }
+  const std::vector<double> all = comm_.max(std::move(figures));
   dt_min = -all[0];
   failing_ = all[2] != 0.0, scaling_ = all[3] != 0.0, not_finite_ = all[4] != 0.0;
+  if (provider_figures)
+    for (std::size_t k = 0; k < providers_.size(); ++k)
+      providers_[k]->stepReduced(all[first_provider + k]);
+  if (kick)
+    agreed_.assign(all.begin() + static_cast<long>(first_agreed), all.end());
   // The first inverted element of any process, the lowest number whoever computed it (its area
   // from the process that did, gathered only then).
   if (all[1] > -HUGE_VAL) {
@@ -879,6 +899,26 @@ void Solver::forces(double dt, bool kick) {
   shortest_step_ = dt_min;
   if (measure_body_steps_)
     bodyStepsFromElements();
+}
+
+// How far any node this process moves can go in the next step's drift, dt' |v + dt'/2 f / m| at
+// most (each component bounded by its magnitudes), from the state after this step's second
+// half-kick: the next step dt' is at most max_dt_growth times this one (nextStep; the end's equal
+// steps are shorter); mass scaling, which comes before it, only adds mass (slower nodes, smaller
+// kicks); a node whose velocity is imposed moves by dt' times it (its v now).
+double Solver::nextDriftBound() const {
+  const Nodes &nd = m_.nodes;
+  const double dt = std::max(1.0, s_.max_dt_growth) * dt_, half_dt = 0.5 * dt;
+  const long blocks = static_cast<long>(node_ranges_.size());
+  double most = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : most) if (blocks > 1)
+  for (long i = 0; i < blocks; ++i)
+    for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
+      const double ux = std::abs(nd.vx[a]) + half_dt * std::abs(nd.fx[a]) * inv_mass_[a];
+      const double uy = std::abs(nd.vy[a]) + half_dt * std::abs(nd.fy[a]) * inv_mass_[a];
+      most = std::max(most, ux * ux + uy * uy);
+    }
+  return dt * std::sqrt(most);
 }
 
 // Each active body's own step from the elements' exact steps of the pass (every process's, from

@@ -10,6 +10,7 @@
 #include "partitioner.hpp"
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <limits>
 #include <stdexcept>
@@ -108,6 +109,12 @@ public:
                          const std::vector<int> & /*owner*/) {}
   virtual void bodiesMoving(const Model &, const std::vector<std::uint32_t> & /*bodies*/,
                             const std::vector<int> & /*new_owner*/) {}
+  // With the work shared, a value of the provider's in the step's one reduction (Solver::forces,
+  // after the second half-kick; -HUGE_VAL: none), given `drift`, a bound on how far any node this
+  // process moves can go in the next step's drift; the largest over the processes comes back in
+  // stepReduced before the next step, so that the provider need not ask the others then.
+  virtual double stepFigure(const Model &, double /*drift*/) const { return -HUGE_VAL; }
+  virtual void stepReduced(double /*largest*/) {}
   // Multiple time stepping: whether it honours Model::due and Model::window, and, from each
   // body's `reach` (its own level plus the level gap: the coarsest level a body it may meet may
   // take), the least reach of the bodies each body may meet through it (`cap`, lowered only), so
@@ -176,6 +183,12 @@ public:
   std::size_t steps() const { return steps_; }
   // The processes that share the run (one: the serial communicator).
   const parallel::Communicator &processes() const { return comm_; }
+  // Values of the time loop's (a stop signal, an output failure, a checkpoint due) that go into
+  // the next step's one reduction, so that the processes agree on them without a reduction of
+  // their own (as many on every process); after that step, agreedInLastStep() holds the largest
+  // of each that any process gave (none until given).
+  void agreeInNextStep(std::vector<double> values) { agree_next_ = std::move(values); }
+  const std::vector<double> &agreedInLastStep() const { return agreed_; }
   double dt() const { return dt_; } // the stable step, which step() takes short of the end
   // The steps end exactly at `time`: within 20 stable steps of it the rest is taken in equal steps,
   // so that the step changes once and by a twentieth at most, unless the whole run is shorter than
@@ -332,6 +345,7 @@ private:
   void addKickSums(const std::vector<KickSums> &sums, double half_dt);
   void kickAndDrift(double dt);
   void forces(double dt, bool kick);
+  double nextDriftBound() const;
   void nodalVolumes(const Unit &unit, const UnitNodes &nodes);
   void unitPass(const Unit &unit, double dt, UnitScratch &scratch);
   void storeReferenceShapes();
@@ -434,6 +448,7 @@ private:
   // process's energies are no longer finite.
   std::array<double, 3> step_sums_{};
   bool failing_ = false, scaling_ = false, not_finite_ = false;
+  std::vector<double> agree_next_, agreed_; // the time loop's values in the step's reduction
   // Multiple time stepping (levels()): per body its level, the level its own step allows, its
   // shortest element step at its last update (before the safety factor), its kinetic and internal
   // energy then; per level l the time at the last step whose number is a multiple of 2^l; the

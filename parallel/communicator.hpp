@@ -44,7 +44,8 @@ public:
   virtual void collect(std::size_t count, const std::function<void(double *)> &pack,
                        const std::function<void(int, const double *)> &unpack) const = 0;
   // Values for some processes only: `to[r]` goes to process r (one list per process, this one's
-  // own included); returns the lists every process sent this one, by sender rank.
+  // own included); returns the lists every process sent this one, by sender rank. Each list, an
+  // empty one too, is a message with its length: no collective call, P - 1 messages each way.
   virtual std::vector<std::vector<std::int64_t>>
   exchange(std::vector<std::vector<std::int64_t>> to) const = 0;
   // The same when this process knows how many values each will send it (`sizes[r]` from process

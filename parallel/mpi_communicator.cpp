@@ -219,20 +219,53 @@ void MpiCommunicator::collect(std::size_t count, const std::function<void(double
   }
 }
 
+// Every other process gets a message from this one, an empty list too, and its length comes with
+// it (MPI_Mprobe): no collective call. A list of n values goes as n / 2^30 + 1 messages, all full
+// but the last (empty when n is a multiple), so the receiver knows where it ends.
 std::vector<std::vector<std::int64_t>>
 MpiCommunicator::exchange(std::vector<std::vector<std::int64_t>> to) const {
   if (to.size() != static_cast<std::size_t>(size_))
     throw std::invalid_argument("exchange: " + std::to_string(to.size()) + " lists for " +
                                 std::to_string(size_) + " processes");
+  const auto ranks = static_cast<std::size_t>(size_), me = static_cast<std::size_t>(rank_);
+  std::vector<std::vector<std::int64_t>> from(ranks);
+  from[me] = std::move(to[me]);
   if (size_ == 1)
-    return to;
-  const auto ranks = static_cast<std::size_t>(size_);
-  std::vector<std::int64_t> send_sizes(ranks), receive_sizes(ranks);
-  for (std::size_t r = 0; r < ranks; ++r)
-    send_sizes[r] = static_cast<std::int64_t>(to[r].size());
-  MPI_Alltoall(send_sizes.data(), 1, MPI_INT64_T, receive_sizes.data(), 1, MPI_INT64_T, comm_);
-  detail::countReceived(static_cast<std::int64_t>(sizeof(std::int64_t)) * (size_ - 1));
-  return exchange(std::move(to), receive_sizes);
+    return from;
+  constexpr std::int64_t piece = std::int64_t{1} << 30;
+  constexpr int tag = 2;
+  std::vector<MPI_Request> requests;
+  for (std::size_t r = 0; r < ranks; ++r) {
+    if (r == me)
+      continue;
+    const auto n = static_cast<std::int64_t>(to[r].size());
+    for (std::int64_t at = 0;; at += piece) {
+      const std::int64_t part = std::min(piece, n - at);
+      requests.emplace_back();
+      MPI_Isend(to[r].data() + at, static_cast<int>(part), MPI_INT64_T, static_cast<int>(r), tag,
+                comm_, &requests.back());
+      if (part < piece)
+        break;
+    }
+  }
+  std::int64_t received = 0;
+  for (std::size_t r = 0; r < ranks; ++r) {
+    if (r == me)
+      continue;
+    for (int count = static_cast<int>(piece); count == piece;) {
+      MPI_Message message;
+      MPI_Status status;
+      MPI_Mprobe(static_cast<int>(r), tag, comm_, &message, &status);
+      MPI_Get_count(&status, MPI_INT64_T, &count);
+      const std::size_t at = from[r].size();
+      from[r].resize(at + static_cast<std::size_t>(count));
+      MPI_Mrecv(from[r].data() + at, count, MPI_INT64_T, &message, MPI_STATUS_IGNORE);
+      received += count;
+    }
+  }
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  detail::countMessages(static_cast<std::int64_t>(sizeof(std::int64_t)) * received);
+  return from;
 }
 
 std::vector<std::vector<std::int64_t>>

@@ -521,22 +521,20 @@ void Checkpoints::openJournal() {
   h5_->record(journal_.get());
 }
 
-void Checkpoints::afterStep(const LoopResult &loop) {
+void Checkpoints::afterStep(const LoopResult &loop, bool late) {
   const fem::Solver &solver = *run_.solver;
   if (stop_at_ > 0 && solver.steps() == stop_at_)
     setStopSignal(SIGTERM);
   if (!on_)
     return;
-  bool due = next_time_ > 0.0 && solver.time() >= next_time_;
-  if (scene_.run.checkpoint_interval > 0.0) {
-    // the clock of rank 0 decides, for every rank
-    double late = secondsSince(last_wall_) >= scene_.run.checkpoint_interval ? 1.0 : 0.0;
-    if (world_.size > 1)
-      late = world_.max(world_.rank == 0 ? late : 0.0);
-    due = due || late > 0.0;
-  }
+  const bool due = late || (next_time_ > 0.0 && solver.time() >= next_time_);
   if (due && !(run_.coupled && run_.coupled->windowOpen()))
     write(loop);
+}
+
+bool Checkpoints::lateByClock() const {
+  return on_ && world_.rank == 0 && scene_.run.checkpoint_interval > 0.0 &&
+         secondsSince(last_wall_) >= scene_.run.checkpoint_interval;
 }
 
 bool Checkpoints::stopBySignal(const LoopResult &loop, int signal) {

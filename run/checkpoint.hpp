@@ -84,8 +84,12 @@ public:
   std::uint64_t written() const { return number_; } // the last checkpoint's number
   double seconds() const { return seconds_; }       // spent writing them in this process
 
-  // After a step that did not end the run: a checkpoint when one is due.
-  void afterStep(const LoopResult &loop);
+  // After a step that did not end the run: a checkpoint when one is due, by the simulated time or,
+  // with `late` (every process's alike: the clock of rank 0, lateByClock), by the wall clock.
+  void afterStep(const LoopResult &loop, bool late);
+  // Rank 0's wall clock calls for a checkpoint (run.checkpoint_interval since the last); false
+  // on the other ranks.
+  bool lateByClock() const;
   // Whether the stop signal every rank agreed on (0: none; the time loop's agreement after each
   // step) lets the run stop after this step: its checkpoint written, when checkpoints are on (with
   // disks false within a window: the loop steps on to its end).

@@ -163,43 +163,59 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
       result.end = "max_steps";
     return !result.end.empty();
   };
-  // The output of a step (series, frames, checkpoints: the first process writes the files), its
-  // failure known to every process, which all end at that step: the others would otherwise wait
-  // for the failed one in the next step's exchanges. In the same reduction the processes agree on
-  // a stop signal (the largest any caught; the next turn of the loop stops on it).
+  // The output of a step (frames, checkpoints: the first process writes the files), its failure
+  // known to every process, which all end together: the others would otherwise wait for the
+  // failed one in the next step's exchanges. The processes agree on it, on a stop signal (the
+  // largest any caught; the loop stops on it) and on whether rank 0's clock calls for a checkpoint
+  // in the next step's one reduction (Solver::agreeInNextStep; `now`: in one of their own, before
+  // the loop and after its last step).
+  const parallel::Communicator &processes = solver.processes();
+  const bool shared = processes.size() > 1;
+  constexpr double failed = 65536.0; // above every signal number
   int agreed_signal = 0;
-  auto together = [&](const auto &output) {
-    std::string failure;
+  bool agreed_late = false; // (with several processes) a checkpoint by the clock, agreed on
+  std::string failure;      // this process's output failure, until the processes agree on it
+  auto agree = [&](const std::vector<double> &worst) {
+    if (worst.empty()) // (the first step carries nothing)
+      return;
+    if (worst.at(0) >= failed && failure.empty())
+      failure = "another process failed (its message is in mpirun's output); stopped at step " +
+                std::to_string(solver.steps());
+    agreed_signal = static_cast<int>(std::fmod(worst[0], failed));
+    if (agreed_signal != 0)
+      setStopSignal(agreed_signal);
+    agreed_late = worst.at(1) > 0.0;
+    if (!failure.empty())
+      throw std::runtime_error(failure);
+  };
+  auto together = [&](const auto &output, bool now) {
     try {
       output();
     } catch (const std::exception &e) {
       failure = e.what();
     }
-    const parallel::Communicator &processes = solver.processes();
-    agreed_signal = stopSignal();
-    if (processes.size() > 1) {
-      constexpr double failed = 65536.0; // above every signal number
-      const double worst =
-          -processes.min(-((failure.empty() ? 0.0 : failed) + static_cast<double>(agreed_signal)));
-      if (worst >= failed && failure.empty())
-        failure = "another process failed at step " + std::to_string(solver.steps()) +
-                  " (its message is in mpirun's output)";
-      agreed_signal = static_cast<int>(std::fmod(worst, failed));
-      if (agreed_signal != 0)
-        setStopSignal(agreed_signal);
-    }
-    if (!failure.empty())
-      throw std::runtime_error(failure);
+    // (the clock read after the output: a checkpoint it wrote set it back)
+    std::vector<double> mine = {(failure.empty() ? 0.0 : failed) +
+                                    static_cast<double>(stopSignal()),
+                                shared && checkpoints.lateByClock() ? 1.0 : 0.0};
+    if (!shared)
+      agree(mine);
+    else if (now)
+      agree(processes.max(std::move(mine)));
+    else
+      solver.agreeInNextStep(std::move(mine));
   };
   const parallel::Traffic loop_start = parallel::traffic();
   try {
     // (a run continued from a checkpoint has its first sample and frame, and had not ended)
-    together([&] {
-      if (!checkpoints.resumed()) {
-        series.sample(model, solver);
-        frames.offer(model, solver, true);
-      }
-    });
+    together(
+        [&] {
+          if (!checkpoints.resumed()) {
+            series.sample(model, solver);
+            frames.offer(model, solver, true);
+          }
+        },
+        true);
     // the frames of the loop and the wall time they take, for the time left (Progress)
     const std::size_t frames_before = frames.size();
     const double output_before = frames.seconds();
@@ -223,6 +239,8 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
       result.max_step_bytes = std::max(result.max_step_bytes, step_bytes);
       result.step_operations += traffic_after.operations - traffic_before.operations;
       ++result.counted_steps;
+      if (shared)
+        agree(solver.agreedInLastStep());
       if (!(solver.time() > before)) {
         char text[200];
         std::snprintf(text, sizeof text,
@@ -239,17 +257,21 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
                                : std::vector<std::pair<std::uint32_t, std::uint32_t>>{},
                        contact ? contact->lastContacts()
                                : std::vector<fem::Contact::BodyContact>{});
-      together([&] {
-        const bool due = solver.steps() % every == 0;
-        if (due)
-          series.sample(model, solver);
-        last = ended(due);
-        if (last && !due)
-          series.sample(model, solver);
-        frames.offer(model, solver, last);
-        if (!last)
-          checkpoints.afterStep(result);
-      });
+      // (the series, in memory, is every process's: all end at the same step; the files are
+      // written in `together`)
+      const bool due = solver.steps() % every == 0;
+      if (due)
+        series.sample(model, solver);
+      last = ended(due);
+      if (last && !due)
+        series.sample(model, solver);
+      together(
+          [&] {
+            frames.offer(model, solver, last);
+            if (!last)
+              checkpoints.afterStep(result, shared ? agreed_late : checkpoints.lateByClock());
+          },
+          last);
       if (progress.due())
         progress.update(solver, series.last("projectile/depth"), -series.last("projectile/vy"),
                         frames.size() - frames_before, frames.seconds() - output_before);

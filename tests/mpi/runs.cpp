@@ -296,7 +296,7 @@ TEST(Mpi, OneTwoAndFourRanksAgreeWhileRebalancing) {
                 p["bytes_received_per_step"][rank].get<double>());
       pairs += p["contact_pairs_per_step"][rank].get<double>();
       EXPECT_LT(p["contact_pairs_per_step"][rank].get<double>(), pairs_alone) << rank;
-      EXPECT_LE(p["collectives_per_step"][rank].get<double>(), 3.5) << rank;
+      EXPECT_LE(p["collectives_per_step"][rank].get<double>(), 1.5) << rank;
       EXPECT_GT(p["peak_memory_bytes"][rank].get<double>(), 0.0);
     }
     EXPECT_GE(pairs, pairs_alone);
@@ -473,8 +473,8 @@ TEST(Mpi, OutputFailureAfterTheLoopEndsEveryRankWithDisks) {
 }
 
 // A stop signal caught by one process only (MESOPEN_STOP_AT_STEP=40 on rank 1, as a SIGTERM after
-// step 40) stops every process at that step: the ranks agree on it in the reduction that ends each
-// step (a process stopping alone would leave the others waiting: mpirun killed at 120 s, 124).
+// step 40) stops every process at one step, the next: the ranks agree on it in that step's one
+// reduction (a process stopping alone would leave the others waiting: mpirun killed at 120 s, 124).
 // The checkpoint written there continues, on two ranks, to the same run as one never stopped.
 TEST(Mpi, StopOnOneRankStopsEveryRankAtOneStep) {
   ScratchDir dir("mpi-stop-one-rank");
@@ -490,7 +490,7 @@ TEST(Mpi, StopOnOneRankStopsEveryRankAtOneStep) {
       << "124: a process went on alone";
   const auto stopped = nlohmann::json::parse(test::readFile(dir / "stopped/summary.json"));
   EXPECT_EQ(stopped["status"], "interrupted");
-  EXPECT_EQ(stopped["steps"], 40);
+  EXPECT_EQ(stopped["steps"], 41);
   EXPECT_EQ(exitCode(mpirun + MESOPEN_BINARY + " run --resume " + (dir / "stopped")), 0);
   EXPECT_EQ(
       exitCode(mpirun + MESOPEN_BINARY + " run " + (dir / "scene.toml") + " -o " + (dir / "whole")),
