@@ -825,8 +825,8 @@ void Solver::forces(double dt, bool kick) {
   // and the second half's constraints at its nodes (applyConstraints); the processes' shares of
   // the energies are summed only when asked (sumEnergy). The step's figures every process needs,
   // in one reduction (the largest of each): the shortest element step, the first inverted
-  // element, whether elements failed or asked for mass (erode and scaleMasses gather theirs only
-  // then), whether the energies are no longer finite.
+  // element, the most elements that failed or asked for mass on a process (erode and scaleMasses
+  // gather theirs only then, as many from each), whether the energies are no longer finite.
   const long n = static_cast<long>(chunks_.size());
   double dt_min = std::numeric_limits<double>::infinity();
   std::int64_t inverted = -1;
@@ -835,13 +835,15 @@ void Solver::forces(double dt, bool kick) {
     dt_min = std::min(dt_min, sums_[i].dt_min);
   }
   double internal = 0.0, plastic = 0.0, viscous = 0.0;
-  bool failing = false, scaling = false;
+  std::size_t failing = 0, scaling = 0; // this process's elements that failed, that ask for mass
   for (std::size_t i = 0; i < chunks_.size(); ++i) {
     internal += sums_[i].internal;
     plastic += sums_[i].plastic;
     viscous += sums_[i].viscous;
-    failing = failing || sums_[i].eroding;
-    scaling = scaling || !sums_[i].scaled.empty();
+    if (sums_[i].eroding)
+      for (std::size_t e = chunks_[i].begin; e < chunks_[i].end; ++e)
+        failing += failed_[e] != 0;
+    scaling += sums_[i].scaled.size();
   }
   step_sums_ = {internal, plastic, viscous};
   if (kick) {
@@ -859,8 +861,9 @@ void Solver::forces(double dt, bool kick) {
   // In the same reduction, at a step: the providers' figures for the next step (with the work
   // shared) and the time loop's value.
   std::vector<double> figures = {
-      -dt_min, inverted >= 0 ? -static_cast<double>(inverted) : -HUGE_VAL, failing ? 1.0 : 0.0,
-      scaling ? 1.0 : 0.0, std::isfinite(energy_.kinetic) && std::isfinite(internal) ? 0.0 : 1.0};
+      -dt_min, inverted >= 0 ? -static_cast<double>(inverted) : -HUGE_VAL,
+      static_cast<double>(failing), static_cast<double>(scaling),
+      std::isfinite(energy_.kinetic) && std::isfinite(internal) ? 0.0 : 1.0};
   constexpr std::size_t first_provider = 5;
   const bool provider_figures = kick && comm_.size() > 1;
   if (provider_figures) {
@@ -875,7 +878,9 @@ void Solver::forces(double dt, bool kick) {
   }
   const std::vector<double> all = comm_.max(std::move(figures));
   dt_min = -all[0];
-  failing_ = all[2] != 0.0, scaling_ = all[3] != 0.0, not_finite_ = all[4] != 0.0;
+  most_failing_ = static_cast<std::size_t>(all[2]),
+  most_scaling_ = static_cast<std::size_t>(all[3]);
+  not_finite_ = all[4] != 0.0;
   if (provider_figures)
     for (std::size_t k = 0; k < providers_.size(); ++k)
       providers_[k]->stepReduced(all[first_provider + k]);
@@ -1365,8 +1370,25 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
 // (erodeElements): their internal energy is booked as eroded, the element chunks are laid out
 // anew and the providers take the new boundaries. Their forces leave f(n+1), which the next
 // half-kick uses; the step to come was taken without them (elementPass).
+// `values` padded with -1 to `count`, as every process gives to an all-gather of equal parts
+// (equalParts); with one process as they are.
+std::vector<double> Solver::padTo(std::vector<double> values, std::size_t count) const {
+  if (comm_.size() == 1)
+    return values;
+  if (values.size() > count)
+    throw std::logic_error("padTo: " + std::to_string(values.size()) + " values, more than the " +
+                           std::to_string(count) + " the step's reduction said");
+  values.resize(count, -1.0);
+  return values;
+}
+
+std::vector<std::int64_t> Solver::equalParts(std::size_t count) const {
+  return std::vector<std::int64_t>(static_cast<std::size_t>(comm_.size()),
+                                   static_cast<std::int64_t>(count));
+}
+
 void Solver::erode() {
-  if (!failing_) // no element of any process failed in this step's pass
+  if (most_failing_ == 0) // no element of any process failed in this step's pass
     return;
   std::vector<std::uint32_t> failed;
   std::vector<std::uint8_t> kind;
@@ -1378,23 +1400,27 @@ void Solver::erode() {
           failed_[e] = 0, failed.push_back(static_cast<std::uint32_t>(e));
         }
   Elements &el = m_.elements;
-  { // every process's failed elements, with their state, in element order
+  { // every process's failed elements, with their state, in element order: per element its
+    // number and kind (exact as doubles), then its state, in one all-gather of as many values
+    // from each process (the most any has, from the step's reduction; -1: none)
     const auto state = elementState();
-    std::vector<std::int64_t> mine_failed;
-    std::vector<double> mine_state;
+    const std::size_t values = 2 + state.size();
+    std::vector<double> mine;
     for (std::size_t j = 0; j < failed.size(); ++j) {
-      mine_failed.insert(mine_failed.end(), {failed[j], kind[j]});
+      mine.insert(mine.end(), {static_cast<double>(failed[j]), static_cast<double>(kind[j])});
       for (auto *f : state)
-        mine_state.push_back((*f)[failed[j]]);
+        mine.push_back((*f)[failed[j]]);
     }
-    const std::vector<std::int64_t> all = comm_.allGather(std::move(mine_failed));
-    const std::vector<double> all_state = comm_.allGather(std::move(mine_state));
+    const std::vector<double> all = comm_.allGather(padTo(std::move(mine), most_failing_ * values),
+                                                    equalParts(most_failing_ * values));
     std::vector<std::pair<std::uint32_t, std::uint8_t>> every;
-    for (std::size_t k = 0, j = 0; k < all.size(); k += 2, j += state.size()) {
+    for (std::size_t k = 0; k < all.size(); k += values) {
+      if (all[k] < 0.0)
+        continue;
       const auto e = static_cast<std::uint32_t>(all[k]);
       every.emplace_back(e, static_cast<std::uint8_t>(all[k + 1]));
       for (std::size_t f = 0; f < state.size(); ++f)
-        (*state[f])[e] = all_state[j + f];
+        (*state[f])[e] = all[k + 2 + f];
     }
     std::sort(every.begin(), every.end());
     failed.clear(), kind.clear();
@@ -1447,21 +1473,22 @@ void Solver::erode() {
 // constraint is kept); the change of the leapfrog kinetic energy 1/2 m (|v|^2 - |dv|^2), dv the
 // half-kick dt/2 f / m, is booked as mass_scaling.
 void Solver::scaleMasses(double half_dt) {
-  if (!(scale_below_ > 0.0) || !scaling_) // off, or no element asked (every process knows)
+  if (!(scale_below_ > 0.0) || most_scaling_ == 0) // off, or no element asked (every process knows)
     return;
   std::vector<std::pair<std::uint32_t, double>> scaled;
   for (std::size_t i = 0; i < chunks_.size(); ++i)
     scaled.insert(scaled.end(), sums_[i].scaled.begin(), sums_[i].scaled.end());
-  { // every process's, in element order
-    std::vector<std::int64_t> elements;
-    std::vector<double> masses;
+  { // every process's, in element order: number (exact as a double) and mass, in one all-gather
+    // of as many from each process (the most any has, from the step's reduction; -1: none)
+    std::vector<double> mine;
     for (auto [e, mass] : scaled)
-      elements.push_back(e), masses.push_back(mass);
-    const std::vector<std::int64_t> all = comm_.allGather(std::move(elements));
-    const std::vector<double> all_masses = comm_.allGather(std::move(masses));
+      mine.insert(mine.end(), {static_cast<double>(e), mass});
+    const std::vector<double> all =
+        comm_.allGather(padTo(std::move(mine), 2 * most_scaling_), equalParts(2 * most_scaling_));
     scaled.clear();
-    for (std::size_t k = 0; k < all.size(); ++k)
-      scaled.emplace_back(static_cast<std::uint32_t>(all[k]), all_masses[k]);
+    for (std::size_t k = 0; k < all.size(); k += 2)
+      if (all[k] >= 0.0)
+        scaled.emplace_back(static_cast<std::uint32_t>(all[k]), all[k + 1]);
     std::sort(scaled.begin(), scaled.end());
   }
   if (scaled.empty())

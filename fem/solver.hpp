@@ -352,6 +352,8 @@ private:
   void elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, ChunkSums &sums);
   void applyConstraints(double half_dt, bool second_half, std::vector<double> *late = nullptr);
   void erode();
+  std::vector<double> padTo(std::vector<double> values, std::size_t count) const;
+  std::vector<std::int64_t> equalParts(std::size_t count) const;
   void scaleMasses(double half_dt);
   double stepToTake(bool &last) const;
   void nextStep(double stable, std::size_t rise_interval);
@@ -444,10 +446,11 @@ private:
   // Work of this step: constraints and gravity; providers' forces; their frictional part.
   double kick_work_ = 0.0, provider_work_ = 0.0, friction_work_ = 0.0;
   // This process's last element pass (forces): its internal energy, plastic and viscous work; and
-  // from the step's reduction whether any process's elements failed or asked for mass, or any
-  // process's energies are no longer finite.
+  // from the step's reduction the most elements that failed or asked for mass on a process, and
+  // whether any process's energies are no longer finite.
   std::array<double, 3> step_sums_{};
-  bool failing_ = false, scaling_ = false, not_finite_ = false;
+  std::size_t most_failing_ = 0, most_scaling_ = 0; // the most on any process (0: none)
+  bool not_finite_ = false;
   std::vector<double> agree_next_, agreed_; // the time loop's values in the step's reduction
   // Multiple time stepping (levels()): per body its level, the level its own step allows, its
   // shortest element step at its last update (before the safety factor), its kinetic and internal

@@ -483,12 +483,14 @@ void Solver::forcesLevels(int top, const double *tau) {
   const std::size_t chunks_end = units_end > 0 ? units_[units_end - 1].chunk_end : 0;
   double plastic = 0.0, viscous = 0.0;
   long inverted = -1;
-  failing_ = scaling_ = false;
+  most_failing_ = most_scaling_ = 0; // (one process: its own)
   for (std::size_t i = 0; i < chunks_end; ++i) {
     plastic += sums_[i].plastic;
     viscous += sums_[i].viscous;
-    failing_ = failing_ || sums_[i].eroding;
-    scaling_ = scaling_ || !sums_[i].scaled.empty();
+    if (sums_[i].eroding)
+      for (std::size_t e = chunks_[i].begin; e < chunks_[i].end; ++e)
+        most_failing_ += failed_[e] != 0;
+    most_scaling_ += sums_[i].scaled.size();
     if (inverted < 0)
       inverted = sums_[i].inverted;
     if (chunks_[i].level <= top)

@@ -500,3 +500,31 @@ TEST(Mpi, StopOnOneRankStopsEveryRankAtOneStep) {
                            (dir / "whole/run.h5");
   EXPECT_EQ(std::system(same.c_str()), 0) << same;
 }
+
+// Checkpoints by the wall clock (run.checkpoint_interval) on two ranks: rank 0's clock decides,
+// and the ranks agree on it in the next step's one reduction, so both write each checkpoint at
+// the same step (a rank writing alone would wait for the other in its gathers: 124). Due every
+// step, one comes after every step but the last, as on one rank, and the run is the one without
+// them.
+TEST(Mpi, CheckpointsByTheClockComeAtOneStepOnEveryRank) {
+  ScratchDir dir("mpi-clock-checkpoints");
+  const std::string base =
+      "[target]\nwidth = 1.0e-3\nheight = 0.5e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
+      "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 1e-7\nmax_steps = 40\n"
+      "frame_interval = 0\nvtk = false\n";
+  std::ofstream(dir / "clock.toml") << base << "checkpoint_interval = 1e-9\n";
+  std::ofstream(dir / "none.toml") << base;
+  const std::string mpirun = "timeout 120 mpirun --allow-run-as-root --oversubscribe -np 2 ";
+  for (const char *name : {"clock", "none"})
+    ASSERT_EQ(exitCode(mpirun + MESOPEN_BINARY + " run " + (dir / (std::string(name) + ".toml")) +
+                       " -o " + (dir / name)),
+              0)
+        << name << " (124: a rank waited for the other)";
+  const nlohmann::json clock = summaryOf(dir / "clock");
+  EXPECT_EQ(clock["steps"], 40);
+  EXPECT_EQ(clock["checkpoints"]["written"], 39); // after steps 1 to 39
+  const std::string same = "/usr/bin/python3 " + std::string(MESOPEN_SOURCE_DIR) +
+                           "/tests/support/same_run.py " + (dir / "clock/run.h5") + " " +
+                           (dir / "none/run.h5");
+  EXPECT_EQ(std::system(same.c_str()), 0) << same;
+}

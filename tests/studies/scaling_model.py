@@ -44,13 +44,16 @@ def main():
           "today's bytes at 4 ranks")
     close(today4["compute_s"], 124306 / 4 * 30e-9 + 82395 / 4 * 20e-9 + 3089 / 4 * 500e-9,
           "today's compute at 4 ranks")
-    close(today4["comm_s"], (3 / 50 + 3 + 9) * 1e-6 + today4["bytes_received"] / 10e9 +
-          3 * 2 * 2 * 1e-6,
+    close(today4["comm_s"], (3 / 50 + 3 + 6) * 1e-6 + today4["bytes_received"] / 10e9 +
+          2 * 2 * 1e-6,
           "today's communication at 4 ranks")
     close(rows[4]["spatial"]["halo_nodes"] / rows[16]["spatial"]["halo_nodes"], 2.0,
           "the halo from 4 to 16 ranks")
-    if not rows[16]["spatial"]["efficiency"] > rows[16]["today"]["efficiency"]:
-        sys.exit("scaling_model: the spatial design is not the better at 16 ranks")
+    # (at 16 ranks today's design is the faster on run 6: the spatial one moves its halo's nodes
+    # too; it communicates less and holds a sixteenth of the model)
+    for key in ("comm_s", "memory_bytes"):
+        if not rows[16]["spatial"][key] < rows[16]["today"][key]:
+            sys.exit("scaling_model: the spatial design's %s is not the smaller at 16 ranks" % key)
     for args, key in ((["--ranks", "0"], "--ranks"), (["--latency", "inf"], "--latency"),
                       (["--json", os.path.join(work, "no", "such.json")], "--json")):
         bad = subprocess.run([sys.executable, TOOL] + args, stdout=subprocess.DEVNULL,

@@ -9,9 +9,8 @@ Two designs of the FE decomposition (docs/solver.md, "A scaling model"):
            all-gather) at each search for pairs (every `search_every` steps) and between them of
            the bodies its pairs hold, the halo nodes' position and velocity (32 bytes) from the
            ranks it shares pairs with (messages whose sizes every rank knows) and the reactions on
-           its nodes (16 bytes; messages, after an all-to-all of their sizes); three reductions
-           (the largest travel, the step's figures, and after the step the ranks agree on a
-           failure or a stop);
+           its nodes (16 bytes), in a message from every other rank (each carries the bodies its
+           contacts woke, which every rank must know); one reduction for the step;
   spatial  a rank owns the bodies of its region (a near-square block of the moving region, as
            recursive coordinate bisection gives) and holds a halo, the other ranks' bodies within
            the contact margin: each step it receives the halo nodes' position and velocity
@@ -23,9 +22,9 @@ and c_p per pair of bodies searched (the contact); the defaults are run 6's
 (examples/baseline.toml to one length on one thread: 126.1 s, 2.18e9 element updates, the element
 pass 51 % of the time, the node loops 20 %, the contact 25.7 s over 5.4e7 pair-steps). A message
 costs `latency + bytes / bandwidth`; a reduction 2 log2(P) latencies; today's design's
-all-gather of the boxes P - 1 latencies (a ring) at a search, its all-to-all of the reactions'
-sizes P - 1, its messages (the boxes, the halo, the reactions) one latency per neighbour each (at
-most 8), and its three reductions. The scene scales as run 6: moving elements the share
+all-gather of the boxes P - 1 latencies (a ring) at a search, its messages of the reactions P - 1,
+those of the boxes and the halo one latency per neighbour each (at most 8), and its reduction.
+The scene scales as run 6: moving elements the share
 `active` of all, nodes and pairs per moving element as in run 6, the halo a band `band` wide around
 each block of the moving region at run 6's node density. Memory per rank: bytes per element (run
 6's peak over its elements) times the elements it holds.
@@ -80,8 +79,8 @@ def today(a, s, p, serial):
     # halo nodes' state and reactions; the boxes of the bodies they belong to; all boxes at a search
     received = ((48.0 + 40.0 * bodies_per_node) * halo +
                 40.0 * bodies * (p - 1) / p / a.search_every)
-    comm = (((p - 1) / a.search_every + (p - 1) + 3 * min(8, p - 1)) * a.latency +
-            received / a.bandwidth + 3 * 2 * math.log2(p) * a.latency)
+    comm = (((p - 1) / a.search_every + (p - 1) + 2 * min(8, p - 1)) * a.latency +
+            received / a.bandwidth + 2 * math.log2(p) * a.latency)
     compute = s["moving"] / p * a.c_e + s["nodes"] / p * a.c_n + s["pairs"] / p * a.c_p
     return figures(p, compute, comm, received, halo, s["bytes_per_element"] * a.elements, serial)
 
