@@ -197,8 +197,9 @@ public:
   // (in pieces of at most 2^30 bytes), received one process after the other.
   void collect(std::size_t count, const std::function<void(double *)> &pack,
                const std::function<void(int, const double *)> &unpack) const override;
-  // The lists' sizes first (MPI_Alltoall, 64-bit), then each list that is not empty as a message
-  // of its own to its process only (in pieces of at most 2^30 values: MPI counts are int).
+  // Each list, an empty one too, as a message to its process, whose length the receiver takes
+  // from it (MPI_Mprobe): no collective call. In pieces of 2^30 values (MPI counts are int), all
+  // full but the last, which may be empty.
   std::vector<std::vector<std::int64_t>>
   exchange(std::vector<std::vector<std::int64_t>> to) const override;
   // The messages alone. A message of another size than `sizes` says is a bug of the caller: a
