@@ -132,7 +132,10 @@ void receiveBytes(void *data, std::int64_t bytes, int from, MPI_Comm comm, std::
 
 } // namespace detail
 
-MpiCommunicator::MpiCommunicator(MPI_Comm comm) {
+MpiCommunicator::MpiCommunicator(MPI_Comm comm, std::int64_t piece) : piece_(piece) {
+  if (piece < 1 || piece > INT_MAX)
+    throw std::invalid_argument("MpiCommunicator: a message of " + std::to_string(piece) +
+                                " values; allowed 1 to " + std::to_string(INT_MAX));
   MPI_Comm_dup(comm, &comm_);
   MPI_Comm_rank(comm_, &rank_);
   MPI_Comm_size(comm_, &size_);
@@ -220,7 +223,7 @@ void MpiCommunicator::collect(std::size_t count, const std::function<void(double
 }
 
 // Every other process gets a message from this one, an empty list too, and its length comes with
-// it (MPI_Mprobe): no collective call. A list of n values goes as n / 2^30 + 1 messages, all full
+// it (MPI_Mprobe): no collective call. A list of n values goes as n / piece + 1 messages, all full
 // but the last (empty when n is a multiple), so the receiver knows where it ends.
 std::vector<std::vector<std::int64_t>>
 MpiCommunicator::exchange(std::vector<std::vector<std::int64_t>> to) const {
@@ -232,7 +235,7 @@ MpiCommunicator::exchange(std::vector<std::vector<std::int64_t>> to) const {
   from[me] = std::move(to[me]);
   if (size_ == 1)
     return from;
-  constexpr std::int64_t piece = std::int64_t{1} << 30;
+  const std::int64_t piece = piece_;
   constexpr int tag = 2;
   std::vector<MPI_Request> requests;
   for (std::size_t r = 0; r < ranks; ++r) {
@@ -281,7 +284,7 @@ MpiCommunicator::exchange(std::vector<std::vector<std::int64_t>> to,
   from[me] = std::move(to[me]);
   if (size_ == 1)
     return from;
-  constexpr std::int64_t piece = std::int64_t{1} << 30;
+  const std::int64_t piece = piece_;
   constexpr int tag = 1;
   std::vector<MPI_Request> requests;
   std::int64_t received = 0;

@@ -175,7 +175,9 @@ template <class T> T allReduce(T value, MPI_Op op, MPI_Comm comm) {
 // never meet those of a library that shares the processes (LIGGGHTS).
 class MpiCommunicator final : public Communicator {
 public:
-  explicit MpiCommunicator(MPI_Comm comm = MPI_COMM_WORLD);
+  // `piece`: the most values of an exchange's message (MPI counts are int); smaller in tests.
+  explicit MpiCommunicator(MPI_Comm comm = MPI_COMM_WORLD,
+                           std::int64_t piece = std::int64_t{1} << 30);
   ~MpiCommunicator() override;
   MpiCommunicator(const MpiCommunicator &) = delete;
   MpiCommunicator &operator=(const MpiCommunicator &) = delete;
@@ -198,8 +200,8 @@ public:
   void collect(std::size_t count, const std::function<void(double *)> &pack,
                const std::function<void(int, const double *)> &unpack) const override;
   // Each list, an empty one too, as a message to its process, whose length the receiver takes
-  // from it (MPI_Mprobe): no collective call. In pieces of 2^30 values (MPI counts are int), all
-  // full but the last, which may be empty.
+  // from it (MPI_Mprobe): no collective call. In pieces of `piece` values, all full but the last,
+  // which may be empty.
   std::vector<std::vector<std::int64_t>>
   exchange(std::vector<std::vector<std::int64_t>> to) const override;
   // The messages alone. A message of another size than `sizes` says is a bug of the caller: a
@@ -211,6 +213,7 @@ public:
 private:
   MPI_Comm comm_;
   int rank_ = 0, size_ = 1;
+  std::int64_t piece_;
 };
 
 } // namespace mesopen::parallel

@@ -160,6 +160,36 @@ int main(int argc, char **argv) {
                       }
                       return ok;
                     });
+    // the same in messages of at most 3 values: lists of 0 to 7 values, exact multiples of 3
+    // among them (a last, empty message ends those), with the sizes known and not
+    const MpiCommunicator small(MPI_COMM_WORLD, 3);
+    auto length = [](int s, int q) { return (7 * s + 3 * q) % 8; };
+    std::int64_t in_pieces = 0;
+    std::vector<std::int64_t> lengths(static_cast<std::size_t>(size));
+    for (int s = 0; s < size; ++s) {
+      lengths[static_cast<std::size_t>(s)] = length(s, rank);
+      if (s != rank)
+        in_pieces += length(s, rank);
+    }
+    for (const bool known : {false, true})
+      expectTraffic(std::string("exchange of 0 to 7 integers in messages of 3") +
+                        (known ? ", the sizes known" : ""),
+                    8 * in_pieces, 0, [&] {
+                      std::vector<std::vector<std::int64_t>> to(static_cast<std::size_t>(size));
+                      for (int q = 0; q < size; ++q)
+                        for (int k = 0; k < length(rank, q); ++k)
+                          to[static_cast<std::size_t>(q)].push_back(1000 * rank + 10 * q + k);
+                      const auto from = known ? small.exchange(std::move(to), lengths)
+                                              : small.exchange(std::move(to));
+                      bool ok = static_cast<int>(from.size()) == size;
+                      for (int s = 0; ok && s < size; ++s) {
+                        const auto &list = from[static_cast<std::size_t>(s)];
+                        ok = static_cast<int>(list.size()) == length(s, rank);
+                        for (std::size_t k = 0; ok && k < list.size(); ++k)
+                          ok = list[k] == 1000 * s + 10 * rank + static_cast<std::int64_t>(k);
+                      }
+                      return ok;
+                    });
   }
   // The coupling's and the partitioner's operations.
   expectTraffic("all-gather of 5 items of 24 bytes", 24 * 5 * others + sizes, 2, [&] {
