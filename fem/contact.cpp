@@ -163,15 +163,28 @@ void Contact::addForces(Model &model, double time, double dt) {
 // step's measure (ContactBoundaries::measure adds its farthest node's move), and the bodies that
 // woke in this step move from there: the farthest of them since the last search, plus the drift
 // with room for the rounding of the positions and the sums.
-double Contact::stepFigure(const Model &model, double drift) const {
-  if (!shared() || !model.due.empty())
-    return -HUGE_VAL;
+void Contact::stepFigures(const Model &model, double drift, std::vector<double> &figures) const {
   const std::vector<double> &searched = pairs_.travelSearched();
   double most = 0.0;
   for (std::size_t b = 0; b < model.bodies.size(); ++b)
     if (!model.at_rest[b] && mine(b) && boundaries_.hasNodes(b))
       most = std::max(most, boundaries_.travel[b] - searched[b]);
-  return most + 1.001 * drift + 1e-9 * pairs_.searchMargin();
+  figures.insert(figures.end(), {most + 1.001 * drift + 1e-9 * pairs_.searchMargin(),
+                                 static_cast<double>(woken_.size())});
+}
+
+void Contact::stepReduced(Model &model, const double *largest) {
+  travel_bound_ = largest[0];
+  if (const auto most = static_cast<std::size_t>(largest[1]); most > 0) {
+    woken_.resize(most, -1); // (as many from every process)
+    const std::vector<std::int64_t> all = processes_->allGather(
+        std::move(woken_), std::vector<std::int64_t>(static_cast<std::size_t>(processes_->size()),
+                                                     static_cast<std::int64_t>(most)));
+    for (const std::int64_t b : all)
+      if (b >= 0)
+        model.wake(static_cast<std::size_t>(b));
+  }
+  woken_.clear();
 }
 
 // The narrow phase over the runs of pairs, each with its lists and its hits: taken run by run, the
@@ -369,21 +382,24 @@ void Contact::addBlock(Model &model, std::size_t k) {
     add(received[next]);
 }
 
-// With the work shared: the loads on other processes' nodes go to their owners, and the bodies at
-// rest this process's contacts loaded to every process, which all wake them; the loads this
-// process receives wait in block_received_, by block of bodies, in the order of their contacts.
-// A message: the number of bodies woken, the bodies, then per load its order, node, fx, fy and
-// frictional part (the doubles' bits).
+// With the work shared: the loads on other processes' nodes go to their owners, the processes
+// whose bodies share an overlapping pair with this one's (partners_, exchangeHalo; no other can
+// have a contact with its nodes), as a message to each of them; the loads this process receives
+// wait in block_received_, by block of bodies, in the order of their contacts. A message: per
+// load its order, node, fx, fy and frictional part (the doubles' bits). A body at rest that is
+// loaded wakes at its owner (addBlock), at the others after the step's reduction (stepReduced).
 void Contact::sendLoads(Model &model) {
   const int me = processes_->rank();
   const auto ranks = static_cast<std::size_t>(processes_->size());
-  std::vector<std::int64_t> woken;
+  woken_.clear();
   for (const Hits &hits : run_hits_)
     for (const auto &loads : hits.loads)
       for (const Load &l : loads)
-        if (model.at_rest[l.body] && (woken.empty() || woken.back() != l.body))
-          woken.push_back(l.body);
-  std::vector<std::vector<std::int64_t>> to = messagesWaking(woken, me, ranks);
+        if (model.at_rest[l.body] && (woken_.empty() || woken_.back() != l.body))
+          woken_.push_back(l.body);
+  std::sort(woken_.begin(), woken_.end());
+  woken_.erase(std::unique(woken_.begin(), woken_.end()), woken_.end());
+  std::vector<std::vector<std::int64_t>> to(ranks);
   for (const Hits &hits : run_hits_)
     for (const auto &loads : hits.loads)
       for (const Load &l : loads)
@@ -393,15 +409,15 @@ void Contact::sendLoads(Model &model) {
               {static_cast<std::int64_t>(l.order), l.node, std::bit_cast<std::int64_t>(l.fx),
                std::bit_cast<std::int64_t>(l.fy), std::bit_cast<std::int64_t>(l.friction_x),
                std::bit_cast<std::int64_t>(l.friction_y)});
-  const std::vector<std::vector<std::int64_t>> from = processes_->exchange(std::move(to));
-  wakeOwn(model, woken);
+  const std::vector<std::vector<std::int64_t>> from =
+      processes_->exchangeWith(std::move(to), partners_);
   for (auto &loads : block_received_)
     loads.clear();
   for (std::size_t r = 0; r < ranks; ++r) {
     if (static_cast<int>(r) == me)
       continue;
     const std::vector<std::int64_t> &message = from[r];
-    for (std::size_t i = wakeNamed(model, message); i + 6 <= message.size(); i += 6) {
+    for (std::size_t i = 0; i + 6 <= message.size(); i += 6) {
       const auto node = static_cast<std::uint32_t>(message[i + 1]);
       const std::uint32_t body = model.nodes.body[node];
       block_received_[block_[body]].push_back(
@@ -485,6 +501,7 @@ void Contact::exchangeHalo(Model &model) {
   Nodes &nd = model.nodes;
   const int me = processes_->rank();
   BodiesTo sends, receives; // (the boxes of both bodies of such a pair are current at both)
+  partners_.clear();
   for (const Pair &pair : pairs_.pairs()) {
     const int owner_a = (*owner_)[pair.a], owner_b = (*owner_)[pair.b];
     if (owner_a == owner_b || (owner_a != me && owner_b != me) ||
@@ -494,7 +511,10 @@ void Contact::exchangeHalo(Model &model) {
       sends.emplace_back(owner_b, pair.a), receives.emplace_back(owner_b, pair.b);
     else
       sends.emplace_back(owner_a, pair.b), receives.emplace_back(owner_a, pair.a);
+    partners_.push_back(owner_a == me ? owner_b : owner_a);
   }
+  std::sort(partners_.begin(), partners_.end());
+  partners_.erase(std::unique(partners_.begin(), partners_.end()), partners_.end());
   sendBodies(
       std::move(sends), std::move(receives),
       [&](std::uint32_t b) { return 4 * (bd.node_begin[b + 1] - bd.node_begin[b]); },

@@ -122,11 +122,14 @@ public:
   void shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) override;
   void bodiesMoving(const Model &model, const std::vector<std::uint32_t> &bodies,
                     const std::vector<int> &new_owner) override;
-  // The farthest this process's moving bodies may have travelled since the last search for pairs
-  // at the next step (after a drift of at most `drift`): when the largest over the processes
-  // cannot call for a search, the next step asks no process whether to search.
-  double stepFigure(const Model &model, double drift) const override;
-  void stepReduced(double largest) override { travel_bound_ = largest; }
+  // Two figures: the farthest this process's moving bodies may have travelled since the last
+  // search for pairs at the next step (after a drift of at most `drift`): when the largest over
+  // the processes cannot call for a search, the next step asks no process whether to search; and
+  // the number of bodies at rest this process's contacts loaded in the step (each woke at its
+  // owner, with the loads): with any, every process's are all-gathered, and every process wakes
+  // them all.
+  void stepFigures(const Model &model, double drift, std::vector<double> &figures) const override;
+  void stepReduced(Model &model, const double *largest) override;
   // The last step's contacts between bodies (the walls' left out; with the work shared, this
   // process's), in pair order: a boundary node
   // of `node_body` pushed out of `segment_body` through the segment between two of its nodes
@@ -252,6 +255,10 @@ private:
   // From the last step's reduction: a bound on the largest travel since the last search of the
   // moving bodies at this step (stepFigure); HUGE_VAL: none.
   double travel_bound_ = HUGE_VAL;
+  // With the work shared: the processes this one exchanges halo nodes and loads with in this step
+  // (ascending), and the bodies at rest its contacts loaded (sendLoads, to stepReduced).
+  std::vector<int> partners_;
+  std::vector<std::int64_t> woken_;
   ContactStatistics stats_;
 
 public:

@@ -161,6 +161,7 @@ Solver::Solver(Model &model, SolverSettings settings, const parallel::Communicat
       m_.wake(el.body[e]);
   m_.nodes.clearExternal();
   updateActivity();
+  step_elements_ = active_elements_;
   failed_.assign(el.size(), 0);
   storeReferenceShapes();
   internalForces(0.0);
@@ -268,13 +269,18 @@ void Solver::step() {
   m_.nodes.clearExternal();
   for (auto *provider : providers_) // external forces at x(n+1): contact, coupling
     provider->addForces(m_, time_ + dt, dt);
-  updateActivity(); // bodies the providers woke take part
+  // Bodies the providers woke take part. With several processes a body the contact woke is known
+  // to move at its owner now, at the others after the step's reduction (forces): the load is
+  // balanced at the end of the step, when every process knows the same bodies to move.
+  const bool shared = comm_.size() > 1;
+  updateActivity(!shared);
+  forces(dt, true); // stresses at n+1, f(n+1), the next stable step, and unit by unit
+                    // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m, the imposed velocities at n+1
+  step_elements_ = active_elements_;
   for (std::size_t r = 0; r < rank_elements_.size(); ++r) {
     rank_element_steps_[r] += static_cast<double>(rank_elements_[r]);
     rank_node_steps_[r] += static_cast<double>(rank_nodes_[r]);
   }
-  forces(dt, true);      // stresses at n+1, f(n+1), the next stable step, and unit by unit
-                         // v(n+1) = v(n+1/2) + dt/2 f(n+1) / m, the imposed velocities at n+1
   scaleMasses(0.5 * dt); // mass for the elements whose step fell below scale_below_
   time_ = last ? end_at_ : time_ + dt;
   ++steps_;
@@ -288,6 +294,8 @@ void Solver::step() {
   if (not_finite_)
     throw RunFailure(notFinite());
   erode(); // elements that failed in this step leave the model
+  if (shared)
+    updateActivity(true);
 }
 
 // The step to come from the one just taken (`stable`, before the end's equal steps) and the
@@ -333,29 +341,20 @@ std::string Solver::notFinite() const {
 // Work ranges over the bodies that move: element chunks of one material, node blocks. With levels,
 // level by level (each level's units and blocks together), a unit holding consecutive bodies.
 void Solver::updateActivity(bool may_partition) {
-  const std::size_t n_bodies = m_.bodies.size();
-  if (at_rest_seen_ == m_.at_rest && !rebalance_due_ && laid_levels_ == level_ &&
-      laid_part_levels_ == part_level_)
+  // (a change a call without may_partition saw is checked at the next call with it)
+  if (at_rest_seen_ == m_.at_rest && !(may_partition && (rebalance_due_ || load_check_due_)) &&
+      laid_levels_ == level_ && laid_part_levels_ == part_level_)
     return;
   at_rest_seen_ = m_.at_rest;
   laid_levels_ = level_;
   laid_part_levels_ = part_level_;
-  balanceLoad(std::exchange(rebalance_due_, false), may_partition);
+  balanceLoad(may_partition && std::exchange(rebalance_due_, false), may_partition);
+  load_check_due_ = !may_partition;
   chunks_.clear();
   units_.clear();
   unit_nodes_.clear();
   node_ranges_.clear();
-  active_elements_ = 0;
-  active_bodies_.clear();
-  std::fill(rank_nodes_.begin(), rank_nodes_.end(), 0);
-  for (std::size_t b = 0; b < n_bodies; ++b) {
-    const Body &body = m_.bodies[b];
-    if (m_.at_rest[b])
-      continue;
-    active_bodies_.push_back(static_cast<std::uint32_t>(b));
-    rank_nodes_[static_cast<std::size_t>(owner(b))] += body.node_end - body.node_begin;
-    active_elements_ += body.element_end - body.element_begin - body.eroded;
-  }
+  countActive();
   const bool by_body = levels();
   const int n_levels = s_.max_level + 1;
   level_units_.assign(n_levels + 1, 0);
@@ -549,8 +548,8 @@ void Solver::repartition(const std::vector<std::size_t> &load) {
     owner[b] = rank;
   }
   // The bodies that change owner and move carry their state to their new owner alone (a body at
-  // rest is the same on every process): its elements' state, its nodes' x(n+1), v(n+1/2) and this
-  // step's external forces (the new owner's element pass and half-kick).
+  // rest is the same on every process): its elements' state, its nodes' x(n+1), v(n+1), f(n+1)
+  // and external forces (the next step's half-kick and the work it does), at the end of a step.
   std::vector<std::uint32_t> moving;
   for (std::size_t b = 0; b < owner.size(); ++b)
     if (owner[b] != owner_[b]) {
@@ -565,7 +564,7 @@ void Solver::repartition(const std::vector<std::size_t> &load) {
       [&](std::size_t k) {
         const Body &body = m_.bodies[moving[k]];
         return fields.size() * (body.element_end - body.element_begin) +
-               8 * (body.node_end - body.node_begin);
+               10 * (body.node_end - body.node_begin);
       },
       [&](std::size_t k, double *out) {
         const Body &body = m_.bodies[moving[k]];
@@ -575,6 +574,7 @@ void Solver::repartition(const std::vector<std::size_t> &load) {
         for (std::size_t a = body.node_begin; a < body.node_end; ++a) {
           const Nodes::External &x = nd.external[a];
           *out++ = nd.x[a], *out++ = nd.y[a], *out++ = nd.vx[a], *out++ = nd.vy[a];
+          *out++ = nd.fx[a], *out++ = nd.fy[a];
           *out++ = x.fx, *out++ = x.fy, *out++ = x.friction_x, *out++ = x.friction_y;
         }
       },
@@ -583,11 +583,12 @@ void Solver::repartition(const std::vector<std::size_t> &load) {
         for (std::size_t e = body.element_begin; e < body.element_end; ++e)
           for (auto *f : fields)
             (*f)[e] = *in++;
-        for (std::size_t a = body.node_begin; a < body.node_end; ++a, in += 8) {
+        for (std::size_t a = body.node_begin; a < body.node_end; ++a, in += 10) {
           nd.x[a] = in[0], nd.y[a] = in[1];
           nd.vx[a] = in[2], nd.vy[a] = in[3];
-          nd.external[a] = {in[4], in[5], in[6], in[7]};
-          if (!nd.is_loaded[a] && (in[4] != 0.0 || in[5] != 0.0 || in[6] != 0.0 || in[7] != 0.0))
+          nd.fx[a] = in[4], nd.fy[a] = in[5];
+          nd.external[a] = {in[6], in[7], in[8], in[9]};
+          if (!nd.is_loaded[a] && (in[6] != 0.0 || in[7] != 0.0 || in[8] != 0.0 || in[9] != 0.0))
             nd.is_loaded[a] = 1, nd.loaded.push_back(static_cast<std::uint32_t>(a));
         }
       });
@@ -654,6 +655,24 @@ void Solver::shareAmongThreads() {
     for (std::size_t i = nodes.size(); i < level_blocks_[top + 1]; ++i)
       nodes.push_back(node_ranges_[i].end - node_ranges_[i].begin);
     due_thread_blocks_[top] = shares(nodes, 0);
+  }
+}
+
+// The bodies that move (active_bodies_), their elements and each rank's nodes and elements.
+void Solver::countActive() {
+  active_elements_ = 0;
+  active_bodies_.clear();
+  std::fill(rank_nodes_.begin(), rank_nodes_.end(), 0);
+  std::fill(rank_elements_.begin(), rank_elements_.end(), 0);
+  for (std::size_t b = 0; b < m_.bodies.size(); ++b) {
+    const Body &body = m_.bodies[b];
+    if (m_.at_rest[b])
+      continue;
+    const std::size_t elements = body.element_end - body.element_begin - body.eroded;
+    active_bodies_.push_back(static_cast<std::uint32_t>(b));
+    rank_nodes_[static_cast<std::size_t>(owner(b))] += body.node_end - body.node_begin;
+    rank_elements_[static_cast<std::size_t>(owner(b))] += elements;
+    active_elements_ += elements;
   }
 }
 
@@ -864,12 +883,14 @@ void Solver::forces(double dt, bool kick) {
       -dt_min, inverted >= 0 ? -static_cast<double>(inverted) : -HUGE_VAL,
       static_cast<double>(failing), static_cast<double>(scaling),
       std::isfinite(energy_.kinetic) && std::isfinite(internal) ? 0.0 : 1.0};
-  constexpr std::size_t first_provider = 5;
   const bool provider_figures = kick && comm_.size() > 1;
+  std::vector<std::size_t> provider_first; // where each provider's figures begin
   if (provider_figures) {
     const double drift = nextDriftBound();
-    for (const ForceProvider *provider : providers_)
-      figures.push_back(provider->stepFigure(m_, drift));
+    for (const ForceProvider *provider : providers_) {
+      provider_first.push_back(figures.size());
+      provider->stepFigures(m_, drift, figures);
+    }
   }
   const std::size_t first_agreed = figures.size();
   if (kick) {
@@ -881,9 +902,11 @@ void Solver::forces(double dt, bool kick) {
   most_failing_ = static_cast<std::size_t>(all[2]),
   most_scaling_ = static_cast<std::size_t>(all[3]);
   not_finite_ = all[4] != 0.0;
-  if (provider_figures)
+  if (provider_figures) { // (the bodies woken at other processes move here too from now on)
     for (std::size_t k = 0; k < providers_.size(); ++k)
-      providers_[k]->stepReduced(all[first_provider + k]);
+      providers_[k]->stepReduced(m_, all.data() + provider_first[k]);
+    countActive();
+  }
   if (kick)
     agreed_.assign(all.begin() + static_cast<long>(first_agreed), all.end());
   // The first inverted element of any process, the lowest number whoever computed it (its area
@@ -1637,6 +1660,8 @@ void Solver::restore(const State &st) {
     restoreLevels(st.levels);
   at_rest_seen_.clear(); // the chunks laid out anew: eroded elements leave them
   updateActivity(!same_partition);
+  step_elements_ = active_elements_;
+  load_check_due_ = false; // (the step before the checkpoint checked the load)
 }
 
 } // namespace mesopen::fem

@@ -109,12 +109,14 @@ public:
                          const std::vector<int> & /*owner*/) {}
   virtual void bodiesMoving(const Model &, const std::vector<std::uint32_t> & /*bodies*/,
                             const std::vector<int> & /*new_owner*/) {}
-  // With the work shared, a value of the provider's in the step's one reduction (Solver::forces,
-  // after the second half-kick; -HUGE_VAL: none), given `drift`, a bound on how far any node this
-  // process moves can go in the next step's drift; the largest over the processes comes back in
-  // stepReduced before the next step, so that the provider need not ask the others then.
-  virtual double stepFigure(const Model &, double /*drift*/) const { return -HUGE_VAL; }
-  virtual void stepReduced(double /*largest*/) {}
+  // With the work shared, the provider's values in the step's one reduction (Solver::forces, after
+  // the second half-kick), appended to `figures` (as many on every process), given `drift`, a
+  // bound on how far any node this process moves can go in the next step's drift; the largest of
+  // each over the processes comes back in stepReduced (every process calls it, in provider order:
+  // it may make collective calls), so that the provider need not ask the others itself.
+  virtual void stepFigures(const Model &, double /*drift*/,
+                           std::vector<double> & /*figures*/) const {}
+  virtual void stepReduced(Model &, const double * /*largest*/) {}
   // Multiple time stepping: whether it honours Model::due and Model::window, and, from each
   // body's `reach` (its own level plus the level gap: the coarsest level a body it may meet may
   // take), the least reach of the bodies each body may meet through it (`cap`, lowered only), so
@@ -203,7 +205,7 @@ public:
   const Energy &sumEnergy() const;
   void addForceProvider(ForceProvider *provider);
   // Elements updated in the last step (bodies at rest and eroded elements are skipped).
-  std::size_t activeElements() const { return active_elements_; }
+  std::size_t activeElements() const { return step_elements_; }
   // Over the run (this process's steps): the element updates computed, and those a single-rate
   // run would have computed (the active elements of every step); equal without levels.
   double elementSteps() const { return element_steps_; }
@@ -334,6 +336,7 @@ private:
   };
 
   void updateActivity(bool may_partition = true);
+  void countActive();
   void balanceLoad(bool forced, bool may_partition);
   void repartition(const std::vector<std::size_t> &load);
   void shareAmongThreads();
@@ -395,8 +398,10 @@ private:
   const parallel::Partitioner &partitioner_;
   // Who computes each body's elements: the partitioner's answer (all rank 0 with one process).
   std::vector<int> owner_;
-  bool partitioned_ = false;   // owner_ is a partition (it starts as body b on rank b mod size)
-  bool rebalance_due_ = false; // rebalance_every: at the next updateActivity
+  bool partitioned_ = false;    // owner_ is a partition (it starts as body b on rank b mod size)
+  bool rebalance_due_ = false;  // rebalance_every: at the next updateActivity that may partition
+  bool load_check_due_ = false; // the bodies that move changed since the last that may partition
+  std::size_t step_elements_ = 0; // the elements the last step updated (activeElements)
   // The last partition's imbalance (as balanceLoad measures it) and total active elements.
   double last_achieved_ = 0.0, last_total_ = 0.0;
   std::vector<std::size_t> rank_elements_; // each rank's active elements, as laid out

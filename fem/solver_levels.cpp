@@ -381,6 +381,7 @@ void Solver::stepLevels() {
     provider->addForces(m_, time_new, dt);
   updateActivity(); // bodies the providers woke take part (at level 0)
   single_rate_element_steps_ += static_cast<double>(active_elements_);
+  step_elements_ = active_elements_;
   forcesLevels(top, tau);
   applyConstraints(0.5 * dt, true); // bodies with imposed velocities are at level 0
   scaleMasses(0.5 * dt);

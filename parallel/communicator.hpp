@@ -48,6 +48,12 @@ public:
   // empty one too, is a message with its length: no collective call, P - 1 messages each way.
   virtual std::vector<std::vector<std::int64_t>>
   exchange(std::vector<std::vector<std::int64_t>> to) const = 0;
+  // The same with the processes `partners` alone (ascending, this one not among them; each
+  // partner has this one among its own): a message to and from each of them, an empty list too;
+  // the lists to the others must be empty, those from them are.
+  virtual std::vector<std::vector<std::int64_t>>
+  exchangeWith(std::vector<std::vector<std::int64_t>> to,
+               const std::vector<int> &partners) const = 0;
   // The same when this process knows how many values each will send it (`sizes[r]` from process
   // r, its own list's included): no sizes are exchanged first.
   virtual std::vector<std::vector<std::int64_t>>
@@ -81,6 +87,10 @@ public:
                const std::function<void(int, const double *)> &) const override {}
   std::vector<std::vector<std::int64_t>>
   exchange(std::vector<std::vector<std::int64_t>> to) const override {
+    return to;
+  }
+  std::vector<std::vector<std::int64_t>> exchangeWith(std::vector<std::vector<std::int64_t>> to,
+                                                      const std::vector<int> &) const override {
     return to;
   }
   std::vector<std::vector<std::int64_t>>

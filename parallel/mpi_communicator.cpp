@@ -222,15 +222,33 @@ void MpiCommunicator::collect(std::size_t count, const std::function<void(double
   }
 }
 
-// Every other process gets a message from this one, an empty list too, and its length comes with
-// it (MPI_Mprobe): no collective call. A list of n values goes as n / piece + 1 messages, all full
-// but the last (empty when n is a multiple), so the receiver knows where it ends.
+// Every other process (exchange) or every partner (exchangeWith) gets a message from this one, an
+// empty list too, and its length comes with it (MPI_Mprobe): no collective call. A list of n
+// values goes as n / piece + 1 messages, all full but the last (empty when n is a multiple), so
+// the receiver knows where it ends.
 std::vector<std::vector<std::int64_t>>
 MpiCommunicator::exchange(std::vector<std::vector<std::int64_t>> to) const {
+  std::vector<int> others;
+  for (int r = 0; r < size_; ++r)
+    if (r != rank_)
+      others.push_back(r);
+  return exchangeWith(std::move(to), others);
+}
+
+std::vector<std::vector<std::int64_t>>
+MpiCommunicator::exchangeWith(std::vector<std::vector<std::int64_t>> to,
+                              const std::vector<int> &partners) const {
   if (to.size() != static_cast<std::size_t>(size_))
     throw std::invalid_argument("exchange: " + std::to_string(to.size()) + " lists for " +
                                 std::to_string(size_) + " processes");
   const auto ranks = static_cast<std::size_t>(size_), me = static_cast<std::size_t>(rank_);
+  for (std::size_t r = 0, k = 0; r < ranks; ++r) {
+    const bool partner = k < partners.size() && partners[k] == static_cast<int>(r);
+    k += partner;
+    if (r != me && !partner && !to[r].empty())
+      throw std::logic_error("exchange: " + std::to_string(to[r].size()) + " values for process " +
+                             std::to_string(r) + ", not a partner");
+  }
   std::vector<std::vector<std::int64_t>> from(ranks);
   from[me] = std::move(to[me]);
   if (size_ == 1)
@@ -238,31 +256,28 @@ MpiCommunicator::exchange(std::vector<std::vector<std::int64_t>> to) const {
   const std::int64_t piece = piece_;
   constexpr int tag = 2;
   std::vector<MPI_Request> requests;
-  for (std::size_t r = 0; r < ranks; ++r) {
-    if (r == me)
-      continue;
-    const auto n = static_cast<std::int64_t>(to[r].size());
+  for (const int r : partners) {
+    const auto n = static_cast<std::int64_t>(to[static_cast<std::size_t>(r)].size());
     for (std::int64_t at = 0;; at += piece) {
       const std::int64_t part = std::min(piece, n - at);
       requests.emplace_back();
-      MPI_Isend(to[r].data() + at, static_cast<int>(part), MPI_INT64_T, static_cast<int>(r), tag,
-                comm_, &requests.back());
+      MPI_Isend(to[static_cast<std::size_t>(r)].data() + at, static_cast<int>(part), MPI_INT64_T, r,
+                tag, comm_, &requests.back());
       if (part < piece)
         break;
     }
   }
   std::int64_t received = 0;
-  for (std::size_t r = 0; r < ranks; ++r) {
-    if (r == me)
-      continue;
+  for (const int r : partners) {
+    std::vector<std::int64_t> &list = from[static_cast<std::size_t>(r)];
     for (int count = static_cast<int>(piece); count == piece;) {
       MPI_Message message;
       MPI_Status status;
-      MPI_Mprobe(static_cast<int>(r), tag, comm_, &message, &status);
+      MPI_Mprobe(r, tag, comm_, &message, &status);
       MPI_Get_count(&status, MPI_INT64_T, &count);
-      const std::size_t at = from[r].size();
-      from[r].resize(at + static_cast<std::size_t>(count));
-      MPI_Mrecv(from[r].data() + at, count, MPI_INT64_T, &message, MPI_STATUS_IGNORE);
+      const std::size_t at = list.size();
+      list.resize(at + static_cast<std::size_t>(count));
+      MPI_Mrecv(list.data() + at, count, MPI_INT64_T, &message, MPI_STATUS_IGNORE);
       received += count;
     }
   }

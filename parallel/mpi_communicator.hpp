@@ -204,6 +204,9 @@ public:
   // which may be empty.
   std::vector<std::vector<std::int64_t>>
   exchange(std::vector<std::vector<std::int64_t>> to) const override;
+  std::vector<std::vector<std::int64_t>>
+  exchangeWith(std::vector<std::vector<std::int64_t>> to,
+               const std::vector<int> &partners) const override;
   // The messages alone. A message of another size than `sizes` says is a bug of the caller: a
   // shorter one throws std::logic_error, a longer one is an MPI error.
   std::vector<std::vector<std::int64_t>>
