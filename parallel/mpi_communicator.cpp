@@ -10,12 +10,13 @@
 namespace mesopen::parallel {
 
 namespace {
-std::atomic<std::int64_t> received_bytes{0}, received_operations{0};
+std::atomic<std::int64_t> received_bytes{0}, received_operations{0}, received_messages{0};
 } // namespace
 
 Traffic traffic() {
   return {received_bytes.load(std::memory_order_relaxed),
-          received_operations.load(std::memory_order_relaxed)};
+          received_operations.load(std::memory_order_relaxed),
+          received_messages.load(std::memory_order_relaxed)};
 }
 
 namespace detail {
@@ -23,8 +24,9 @@ void countReceived(std::int64_t bytes) {
   received_bytes.fetch_add(bytes, std::memory_order_relaxed);
   received_operations.fetch_add(1, std::memory_order_relaxed);
 }
-void countMessages(std::int64_t bytes) {
+void countMessages(std::int64_t bytes, std::int64_t messages) {
   received_bytes.fetch_add(bytes, std::memory_order_relaxed);
+  received_messages.fetch_add(messages, std::memory_order_relaxed);
 }
 } // namespace detail
 
@@ -124,10 +126,11 @@ void sendBytes(const void *data, std::int64_t bytes, int to, MPI_Comm comm, std:
 
 void receiveBytes(void *data, std::int64_t bytes, int from, MPI_Comm comm, std::int64_t piece) {
   char *to = static_cast<char *>(data);
-  for (std::int64_t at = 0; at < bytes; at += piece)
+  std::int64_t messages = 0;
+  for (std::int64_t at = 0; at < bytes; at += piece, ++messages)
     MPI_Recv(to + at, static_cast<int>(std::min(piece, bytes - at)), MPI_BYTE, from, bytes_tag,
              comm, MPI_STATUS_IGNORE);
-  countMessages(bytes);
+  countMessages(bytes, messages);
 }
 
 } // namespace detail
@@ -267,10 +270,10 @@ MpiCommunicator::exchangeWith(std::vector<std::vector<std::int64_t>> to,
         break;
     }
   }
-  std::int64_t received = 0;
+  std::int64_t received = 0, messages = 0;
   for (const int r : partners) {
     std::vector<std::int64_t> &list = from[static_cast<std::size_t>(r)];
-    for (int count = static_cast<int>(piece); count == piece;) {
+    for (int count = static_cast<int>(piece); count == piece; ++messages) {
       MPI_Message message;
       MPI_Status status;
       MPI_Mprobe(r, tag, comm_, &message, &status);
@@ -282,7 +285,7 @@ MpiCommunicator::exchangeWith(std::vector<std::vector<std::int64_t>> to,
     }
   }
   MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
-  detail::countMessages(static_cast<std::int64_t>(sizeof(std::int64_t)) * received);
+  detail::countMessages(static_cast<std::int64_t>(sizeof(std::int64_t)) * received, messages);
   return from;
 }
 
@@ -314,6 +317,7 @@ MpiCommunicator::exchange(std::vector<std::vector<std::int64_t>> to,
     }
     received += sizes[r];
   }
+  const auto messages = static_cast<std::int64_t>(requests.size());
   for (std::size_t r = 0; r < ranks; ++r) {
     const auto n = static_cast<std::int64_t>(to[r].size());
     if (r == me || n == 0)
@@ -326,7 +330,7 @@ MpiCommunicator::exchange(std::vector<std::vector<std::int64_t>> to,
   }
   std::vector<MPI_Status> statuses(requests.size());
   MPI_Waitall(static_cast<int>(requests.size()), requests.data(), statuses.data());
-  detail::countMessages(static_cast<std::int64_t>(sizeof(std::int64_t)) * received);
+  detail::countMessages(static_cast<std::int64_t>(sizeof(std::int64_t)) * received, messages);
   // (a message longer than its receive is an MPI error already; a shorter one is caught here)
   std::size_t k = 0;
   for (std::size_t r = 0; r < ranks; ++r) {

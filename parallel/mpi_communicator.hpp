@@ -36,19 +36,20 @@ World world(bool needed);
 // root the others' parts at the root and nothing elsewhere, and the byte counts a gather of
 // unequal parts exchanges first (8 bytes from each other process) as well; a barrier counts
 // nothing; point-to-point messages count their payload. `operations` is the collective calls made
-// with more than one process (messages are not among them). Not counted:
+// with more than one process (messages are not among them), `messages` the point-to-point
+// messages received (an empty one too). Not counted:
 // MPI's own traffic (parts forwarded along a ring or tree, headers), and what Zoltan and LIGGGHTS
 // send on their own (a partition's cuts, the disks' decomposition).
 struct Traffic {
-  std::int64_t bytes = 0, operations = 0;
+  std::int64_t bytes = 0, operations = 0, messages = 0;
 };
 Traffic traffic();
 
 namespace detail {
 // One collective operation that delivered `bytes` from other processes (added to traffic()).
 void countReceived(std::int64_t bytes);
-// Point-to-point messages that delivered `bytes` (added to traffic(), no operation).
-void countMessages(std::int64_t bytes);
+// `messages` point-to-point messages that delivered `bytes` (added to traffic(), no operation).
+void countMessages(std::int64_t bytes, std::int64_t messages);
 // The MPI type of T, for the reductions.
 template <class T> MPI_Datatype mpiType() {
   if constexpr (std::is_same_v<T, double>)

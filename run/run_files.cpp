@@ -202,13 +202,14 @@ RankFigures rankFigures(const RunAssembly &run, const LoopResult &loop) {
                                        loop.other_bytes,
                                        pair_steps,
                                        peakMemoryBytes(),
-                                       halo};
+                                       halo,
+                                       loop.step_messages};
   const std::vector<std::int64_t> all = run.solver->processes().allGather(mine);
   RankFigures f;
   f.steps = loop.counted_steps;
   std::vector<std::int64_t> *const fields[] = {
       &f.step_bytes,         &f.max_step_bytes,    &f.step_operations, &f.other_bytes,
-      &f.contact_pair_steps, &f.peak_memory_bytes, &f.halo_node_steps};
+      &f.contact_pair_steps, &f.peak_memory_bytes, &f.halo_node_steps, &f.step_messages};
   for (std::size_t k = 0; k < all.size(); ++k)
     fields[k % mine.size()]->push_back(all[k]);
   if (run.contact)
@@ -239,6 +240,7 @@ nlohmann::json partitionSummary(const fem::PartitionReport &p, const RankFigures
           {"bytes_received_per_step", perStep(asDoubles(f.step_bytes), f.steps)},
           {"max_bytes_received_in_a_step", f.max_step_bytes},
           {"collectives_per_step", perStep(asDoubles(f.step_operations), f.steps)},
+          {"messages_per_step", perStep(asDoubles(f.step_messages), f.steps)},
           {"bytes_received_outside_steps_per_step", perStep(asDoubles(f.other_bytes), f.steps)},
           {"peak_memory_bytes", memory}};
 }

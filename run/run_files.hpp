@@ -51,7 +51,7 @@ nlohmann::json demFigures(const RunAssembly &run, const parallel::World &world);
 // together (fem::Contact::statisticsOfAll).
 struct RankFigures {
   std::size_t steps = 0;
-  std::vector<std::int64_t> step_bytes, max_step_bytes, step_operations, other_bytes,
+  std::vector<std::int64_t> step_bytes, max_step_bytes, step_operations, step_messages, other_bytes,
       contact_pair_steps, peak_memory_bytes, halo_node_steps;
   fem::ContactStatistics contact;
 };

@@ -238,6 +238,7 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
       result.step_bytes += step_bytes;
       result.max_step_bytes = std::max(result.max_step_bytes, step_bytes);
       result.step_operations += traffic_after.operations - traffic_before.operations;
+      result.step_messages += traffic_after.messages - traffic_before.messages;
       ++result.counted_steps;
       if (shared)
         agree(solver.agreedInLastStep());

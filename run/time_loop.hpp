@@ -87,7 +87,8 @@ struct LoopResult {
   // exchanges, the coupling's, a new partition's), the most within one step and the collective
   // operations within them; and in the loop outside the steps (the series, frames and checkpoints,
   // the flags of a signal or of a failure). Not kept in checkpoints.
-  std::int64_t step_bytes = 0, max_step_bytes = 0, step_operations = 0, other_bytes = 0;
+  std::int64_t step_bytes = 0, max_step_bytes = 0, step_operations = 0, step_messages = 0,
+               other_bytes = 0;
   std::size_t counted_steps = 0;
 };
 

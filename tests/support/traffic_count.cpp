@@ -19,18 +19,22 @@ namespace {
 int failures = 0, rank = 0, size = 1;
 
 // The counter's change across `operation` against the bytes and MPI calls expected.
+// (and `messages` point-to-point messages received, unless -1)
 template <class F>
 void expectTraffic(const std::string &what, std::int64_t bytes, std::int64_t operations,
-                   F &&operation) {
+                   F &&operation, std::int64_t messages = -1) {
   const Traffic before = traffic();
   const bool data_ok = operation();
   const Traffic after = traffic();
   const std::int64_t got = after.bytes - before.bytes, calls = after.operations - before.operations;
-  if (got != bytes || calls != operations || !data_ok) {
-    std::printf("rank %d of %d: %s: %lld bytes in %lld operations, expected %lld in %lld%s\n", rank,
-                size, what.c_str(), static_cast<long long>(got), static_cast<long long>(calls),
+  const std::int64_t received = after.messages - before.messages;
+  if (got != bytes || calls != operations || !data_ok || (messages >= 0 && received != messages)) {
+    std::printf("rank %d of %d: %s: %lld bytes in %lld operations and %lld messages, expected %lld "
+                "in %lld and %lld%s\n",
+                rank, size, what.c_str(), static_cast<long long>(got),
+                static_cast<long long>(calls), static_cast<long long>(received),
                 static_cast<long long>(bytes), static_cast<long long>(operations),
-                data_ok ? "" : "; the data gathered are wrong");
+                static_cast<long long>(messages), data_ok ? "" : "; the data gathered are wrong");
     ++failures;
   }
 }
@@ -164,32 +168,38 @@ int main(int argc, char **argv) {
     // among them (a last, empty message ends those), with the sizes known and not
     const MpiCommunicator small(MPI_COMM_WORLD, 3);
     auto length = [](int s, int q) { return (7 * s + 3 * q) % 8; };
-    std::int64_t in_pieces = 0;
+    std::int64_t in_pieces = 0, pieces_unknown = 0, pieces_known = 0;
     std::vector<std::int64_t> lengths(static_cast<std::size_t>(size));
     for (int s = 0; s < size; ++s) {
       lengths[static_cast<std::size_t>(s)] = length(s, rank);
-      if (s != rank)
+      if (s != rank) {
         in_pieces += length(s, rank);
+        pieces_unknown += length(s, rank) / 3 + 1; // (the last shorter than 3, maybe empty)
+        pieces_known += (length(s, rank) + 2) / 3;
+      }
     }
     for (const bool known : {false, true})
-      expectTraffic(std::string("exchange of 0 to 7 integers in messages of 3") +
-                        (known ? ", the sizes known" : ""),
-                    8 * in_pieces, 0, [&] {
-                      std::vector<std::vector<std::int64_t>> to(static_cast<std::size_t>(size));
-                      for (int q = 0; q < size; ++q)
-                        for (int k = 0; k < length(rank, q); ++k)
-                          to[static_cast<std::size_t>(q)].push_back(1000 * rank + 10 * q + k);
-                      const auto from = known ? small.exchange(std::move(to), lengths)
-                                              : small.exchange(std::move(to));
-                      bool ok = static_cast<int>(from.size()) == size;
-                      for (int s = 0; ok && s < size; ++s) {
-                        const auto &list = from[static_cast<std::size_t>(s)];
-                        ok = static_cast<int>(list.size()) == length(s, rank);
-                        for (std::size_t k = 0; ok && k < list.size(); ++k)
-                          ok = list[k] == 1000 * s + 10 * rank + static_cast<std::int64_t>(k);
-                      }
-                      return ok;
-                    });
+      expectTraffic(
+          std::string("exchange of 0 to 7 integers in messages of 3") +
+              (known ? ", the sizes known" : ""),
+          8 * in_pieces, 0,
+          [&] {
+            std::vector<std::vector<std::int64_t>> to(static_cast<std::size_t>(size));
+            for (int q = 0; q < size; ++q)
+              for (int k = 0; k < length(rank, q); ++k)
+                to[static_cast<std::size_t>(q)].push_back(1000 * rank + 10 * q + k);
+            const auto from =
+                known ? small.exchange(std::move(to), lengths) : small.exchange(std::move(to));
+            bool ok = static_cast<int>(from.size()) == size;
+            for (int s = 0; ok && s < size; ++s) {
+              const auto &list = from[static_cast<std::size_t>(s)];
+              ok = static_cast<int>(list.size()) == length(s, rank);
+              for (std::size_t k = 0; ok && k < list.size(); ++k)
+                ok = list[k] == 1000 * s + 10 * rank + static_cast<std::int64_t>(k);
+            }
+            return ok;
+          },
+          known ? pieces_known : pieces_unknown);
   }
   // The coupling's and the partitioner's operations.
   expectTraffic("all-gather of 5 items of 24 bytes", 24 * 5 * others + sizes, 2, [&] {

@@ -1,6 +1,6 @@
 """Benchmark of what sharing a run among MPI ranks costs each rank, per step: the bytes it receives
-from the others, the active elements it owns, its halo nodes, the pairs of bodies its contact
-searches, and its peak memory. The scene is the thesis's run 6 (examples/baseline.toml, every
+from the others (and the collective calls and messages that bring them), the active elements it
+owns, its halo nodes, the pairs of bodies its contact searches, and its peak memory. The scene is the thesis's run 6 (examples/baseline.toml, every
 grain meshed, or --representation dem or hybrid: grains as LIGGGHTS's disks, all or those away
 from the projectile's path) on a target --size-factor times as wide and as high (2: 14.152 x 7.076
 mm, 4 times the area), run for a fixed number of steps (run.max_steps) without frames, at each
@@ -92,6 +92,7 @@ def per_rank(summary):
             "max_bytes_received_in_a_step": p["max_bytes_received_in_a_step"][r],
             "bytes_received_outside_steps_per_step": p["bytes_received_outside_steps_per_step"][r],
             "collectives_per_step": p["collectives_per_step"][r],
+            "messages_per_step": p["messages_per_step"][r],
             "active_elements_owned_per_step": p["active_elements_per_step"][r],
             "active_nodes_owned_per_step": p["active_nodes_per_step"][r],
             "halo_nodes_per_step": p["halo_nodes_per_step"][r],
@@ -185,12 +186,14 @@ def main():
           "  them, so wall times do not measure the decomposition.\n"
           "  KB/step: bytes received from the other ranks within a step (a reduction counted as a\n"
           "    gather; KB = 1000 bytes), the mean over the steps; max: the most in one step;\n"
-          "    outside: in the time loop between steps (series, flags); calls: MPI collectives a step\n"
+          "    outside: in the time loop between steps (series, flags); calls: MPI collectives a step;\n"
+          "    msgs: point-to-point messages it received a step\n"
           "  elements: active elements owned (bodies at rest are skipped); nodes: the nodes it moves\n"
           "    (its moving bodies'); halo: nodes of moving bodies the rank does not own, whose\n"
           "    position and velocity it receives every step;\n"
           "    pairs: pairs of bodies its contact searched; MiB: peak memory (VmHWM, set-up included)")
     print(f"  {'np':>3} {'rank':>4} {'KB/step':>9} {'max':>7} {'outside':>8} {'calls':>6} "
+          f"{'msgs':>6} "
           f"{'elements':>9} {'nodes':>7} {'halo':>7} {'pairs':>6} {'MiB':>6}")
     for r in results:
         for row in r["per_rank"]:
@@ -198,7 +201,7 @@ def main():
             print(f"  {r['np']:>3} {row['rank']:>4} {row['bytes_received_per_step'] / 1e3:>9.1f} "
                   f"{row['max_bytes_received_in_a_step'] / 1e3:>7.1f} "
                   f"{row['bytes_received_outside_steps_per_step'] / 1e3:>8.2f} "
-                  f"{row['collectives_per_step']:>6.1f} "
+                  f"{row['collectives_per_step']:>6.2f} {row['messages_per_step']:>6.1f} "
                   f"{row['active_elements_owned_per_step']:>9.0f} "
                   f"{row['active_nodes_owned_per_step']:>7.0f} "
                   f"{row['halo_nodes_per_step']:>7.0f} {row['contact_pairs_per_step']:>6.0f} "

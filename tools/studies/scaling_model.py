@@ -9,8 +9,9 @@ Two designs of the FE decomposition (docs/solver.md, "A scaling model"):
            all-gather) at each search for pairs (every `search_every` steps) and between them of
            the bodies its pairs hold, the halo nodes' position and velocity (32 bytes) from the
            ranks it shares pairs with (messages whose sizes every rank knows) and the reactions on
-           its nodes (16 bytes), in a message from every other rank (each carries the bodies its
-           contacts woke, which every rank must know); one reduction for the step;
+           its nodes (16 bytes) from the same ranks; at the steps where contacts woke bodies at
+           rest (the share `woken`) an all-gather of them, as every rank must know them; one
+           reduction for the step;
   spatial  a rank owns the bodies of its region (a near-square block of the moving region, as
            recursive coordinate bisection gives) and holds a halo, the other ranks' bodies within
            the contact margin: each step it receives the halo nodes' position and velocity
@@ -22,8 +23,9 @@ and c_p per pair of bodies searched (the contact); the defaults are run 6's
 (examples/baseline.toml to one length on one thread: 126.1 s, 2.18e9 element updates, the element
 pass 51 % of the time, the node loops 20 %, the contact 25.7 s over 5.4e7 pair-steps). A message
 costs `latency + bytes / bandwidth`; a reduction 2 log2(P) latencies; today's design's
-all-gather of the boxes P - 1 latencies (a ring) at a search, its messages of the reactions P - 1,
-those of the boxes and the halo one latency per neighbour each (at most 8), and its reduction.
+all-gather of the boxes P - 1 latencies (a ring) at a search, that of the woken bodies P - 1 at
+their steps, its messages (the boxes, the halo, the reactions) one latency per neighbour each (at
+most 8), and its reduction.
 The scene scales as run 6: moving elements the share
 `active` of all, nodes and pairs per moving element as in run 6, the halo a band `band` wide around
 each block of the moving region at run 6's node density. Memory per rank: bytes per element (run
@@ -79,7 +81,7 @@ def today(a, s, p, serial):
     # halo nodes' state and reactions; the boxes of the bodies they belong to; all boxes at a search
     received = ((48.0 + 40.0 * bodies_per_node) * halo +
                 40.0 * bodies * (p - 1) / p / a.search_every)
-    comm = (((p - 1) / a.search_every + (p - 1) + 2 * min(8, p - 1)) * a.latency +
+    comm = (((p - 1) / a.search_every + (p - 1) * a.woken + 3 * min(8, p - 1)) * a.latency +
             received / a.bandwidth + 2 * math.log2(p) * a.latency)
     compute = s["moving"] / p * a.c_e + s["nodes"] / p * a.c_n + s["pairs"] / p * a.c_p
     return figures(p, compute, comm, received, halo, s["bytes_per_element"] * a.elements, serial)
@@ -130,6 +132,8 @@ def main():
     p.add_argument("--band", type=float, default=0.07, help="halo band width [mm]")
     p.add_argument("--search-every", dest="search_every", type=float,
                    default=RUN6["steps"] / RUN6["searches"], help="steps per search for pairs")
+    p.add_argument("--woken", type=float, default=0.15,
+                   help="share of the steps whose contacts wake bodies at rest")
     p.add_argument("--c-e", dest="c_e", type=float, default=29.6e-9, help="s per element update")
     p.add_argument("--c-n", dest="c_n", type=float, default=17.5e-9, help="s per node-step")
     p.add_argument("--c-p", dest="c_p", type=float, default=475e-9, help="s per pair-step")
@@ -141,12 +145,13 @@ def main():
         print("scaling_model.py: --ranks %s: comma-separated whole numbers expected" % a.ranks,
               file=sys.stderr)
         sys.exit(2)
-    for name in ("elements", "bandwidth", "latency", "active", "band", "search_every", "c_e", "c_n",
-                 "c_p"):
+    for name in ("elements", "bandwidth", "latency", "active", "woken", "band", "search_every",
+                 "c_e", "c_n", "c_p"):
         value = getattr(a, name)
-        if not (value > 0 and math.isfinite(value)) or (name == "active" and a.active > 1):
+        share = name in ("active", "woken")
+        if not (value > 0 and math.isfinite(value)) or (share and value > 1):
             print("scaling_model.py: --%s %g: allowed finite and > 0%s" % (
-                name.replace("_", "-"), value, " and <= 1" if name == "active" else ""),
+                name.replace("_", "-"), value, " and <= 1" if share else ""),
                 file=sys.stderr)
             sys.exit(2)
     if any(r < 1 for r in a.ranks):
