@@ -398,9 +398,9 @@ private:
   const parallel::Partitioner &partitioner_;
   // Who computes each body's elements: the partitioner's answer (all rank 0 with one process).
   std::vector<int> owner_;
-  bool partitioned_ = false;    // owner_ is a partition (it starts as body b on rank b mod size)
-  bool rebalance_due_ = false;  // rebalance_every: at the next updateActivity that may partition
-  bool load_check_due_ = false; // the bodies that move changed since the last that may partition
+  bool partitioned_ = false;      // owner_ is a partition (it starts as body b on rank b mod size)
+  bool rebalance_due_ = false;    // rebalance_every: at the next updateActivity that may partition
+  bool load_check_due_ = false;   // the bodies that move changed since the last that may partition
   std::size_t step_elements_ = 0; // the elements the last step updated (activeElements)
   // The last partition's imbalance (as balanceLoad measures it) and total active elements.
   double last_achieved_ = 0.0, last_total_ = 0.0;
