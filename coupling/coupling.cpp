@@ -311,26 +311,37 @@ void FeDemCoupling::exchangeBoundaries(fem::Model &model) {
   auto row = [&](double y) {
     return static_cast<int>(std::clamp(std::floor((y - r.y0) / ch), 0.0, ny - 1.0));
   };
-  std::vector<std::int64_t> marks(words, 0);
-  auto mark = [&](std::vector<std::int64_t> &m, int i, int j) {
-    const int c = j * nx + i;
-    m[static_cast<std::size_t>(c / 64)] |= std::int64_t{1} << (c % 64);
-  };
+  // (per process with the cells its near disks reach the blocks of 4 x 4 cells its bodies' boxes
+  // cover, so that every process knows who may send whom a body or a reaction: partners_)
+  const int bx = (nx + 3) / 4, by = (ny + 3) / 4, block_words = (bx * by + 63) / 64;
+  const int each = words + block_words;
+  std::vector<std::int64_t> marks(static_cast<std::size_t>(each), 0);
+  auto set = [](std::int64_t *m, int c) { m[c / 64] |= std::int64_t{1} << (c % 64); };
   for (std::size_t c = 0; bodies_there && c < now_.size(); ++c) {
     const double x = now_.x[c], y = now_.y[c];
     if (x + r_max_ < r.x0 || x - r_max_ > r.x1 || y + r_max_ < r.y0 || y - r_max_ > r.y1)
       continue; // (no FE body within its reach)
     for (int j = row(y - r_max_); j <= row(y + r_max_); ++j)
       for (int i = column(x - r_max_); i <= column(x + r_max_); ++i)
-        mark(marks, i, j);
+        set(marks.data(), j * nx + i);
   }
-  const std::vector<std::int64_t> all = processes_->allGather(
-      std::move(marks),
-      std::vector<std::int64_t>(static_cast<std::size_t>(processes_->size()), words));
+  const int me = processes_->rank();
+  const std::vector<std::uint32_t> &bodies = contact_.bodies();
+  for (std::size_t k = 0; bodies_there && k < bodies.size(); ++k) {
+    if ((*owner_)[bodies[k]] != me) // (a body at rest too: every process may load it)
+      continue;
+    const DiskContact::Region box = contact_.box(k);
+    for (int j = row(box.y0) / 4; j <= row(box.y1) / 4; ++j)
+      for (int i = column(box.x0) / 4; i <= column(box.x1) / 4; ++i)
+        set(marks.data() + words, j * bx + i);
+  }
+  const auto ranks = static_cast<std::size_t>(processes_->size());
+  const std::vector<std::int64_t> all =
+      processes_->allGather(std::move(marks), std::vector<std::int64_t>(ranks, each));
   auto marked = [&](std::size_t rank, const DiskContact::Region &box) {
     if (!bodies_there)
       return false;
-    const std::int64_t *m = &all[rank * words];
+    const std::int64_t *m = &all[rank * static_cast<std::size_t>(each)];
     for (int j = row(box.y0); j <= row(box.y1); ++j)
       for (int i = column(box.x0); i <= column(box.x1); ++i) {
         const int c = j * nx + i;
@@ -339,9 +350,31 @@ void FeDemCoupling::exchangeBoundaries(fem::Model &model) {
       }
     return false;
   };
-  const int me = processes_->rank();
-  std::vector<std::vector<std::int64_t>> to(static_cast<std::size_t>(processes_->size()));
-  const std::vector<std::uint32_t> &bodies = contact_.bodies();
+  // q may send r a body (a moving one) when one of q's bodies covers a block with a cell r's
+  // disks reach, and r send q reactions on it (on one at rest too, which every process holds)
+  std::vector<std::int64_t> reached(ranks * static_cast<std::size_t>(block_words), 0);
+  for (std::size_t q = 0; bodies_there && q < ranks; ++q)
+    for (int w = 0; w < words; ++w)
+      for (auto bits = static_cast<std::uint64_t>(
+               all[q * static_cast<std::size_t>(each) + static_cast<std::size_t>(w)]);
+           bits != 0; bits &= bits - 1) {
+        const int c = 64 * w + std::countr_zero(bits);
+        set(reached.data() + q * static_cast<std::size_t>(block_words),
+            c / nx / 4 * bx + c % nx / 4);
+      }
+  auto sends = [&](std::size_t q, std::size_t to_rank) {
+    for (int w = 0; w < block_words; ++w)
+      if (all[q * static_cast<std::size_t>(each) + static_cast<std::size_t>(words + w)] &
+          reached[to_rank * static_cast<std::size_t>(block_words) + static_cast<std::size_t>(w)])
+        return true;
+    return false;
+  };
+  partners_.clear();
+  const auto mine = static_cast<std::size_t>(me);
+  for (std::size_t q = 0; q < ranks; ++q)
+    if (q != mine && (sends(q, mine) || sends(mine, q)))
+      partners_.push_back(static_cast<int>(q));
+  std::vector<std::vector<std::int64_t>> to(ranks);
   for (std::size_t k = 0; k < bodies.size(); ++k) {
     const std::uint32_t b = bodies[k];
     if (model.at_rest[b] || (*owner_)[b] != me)
@@ -363,7 +396,8 @@ void FeDemCoupling::exchangeBoundaries(fem::Model &model) {
     }
   }
   std::vector<std::uint32_t> received;
-  for (const std::vector<std::int64_t> &message : processes_->exchange(std::move(to)))
+  for (const std::vector<std::int64_t> &message :
+       processes_->exchangeWith(std::move(to), partners_))
     for (std::size_t i = 0; i < message.size();) {
       const auto b = static_cast<std::uint32_t>(message[i++]);
       const auto &edges = model.bodies[b].boundary;
@@ -381,9 +415,10 @@ void FeDemCoupling::exchangeBoundaries(fem::Model &model) {
   contact_.measureBodies(model, received);
 }
 
-// The reactions into the FE nodes. With the FE bodies shared, each goes to its node's owner, who
-// adds every process's in rank order (as if every process's reactions were gathered), and the
-// bodies at rest they load are woken on every process.
+// The reactions into the FE nodes. With the FE bodies shared, each goes to its node's owner (a
+// partner: it sent this process the body), who adds every process's in rank order (as if every
+// process's reactions were gathered). A body at rest they load wakes at its owner with them, at
+// the others after the step's reduction (stepReduced).
 void FeDemCoupling::applyReactions(fem::Model &model) {
   if (!shared()) {
     DiskContact::apply(model, reactions_);
@@ -391,11 +426,13 @@ void FeDemCoupling::applyReactions(fem::Model &model) {
   }
   const int me = processes_->rank();
   const auto ranks = static_cast<std::size_t>(processes_->size());
-  std::vector<std::int64_t> woken;
+  woken_.clear();
   for (const Reaction &r : reactions_)
-    if (model.at_rest[r.body] && (woken.empty() || woken.back() != r.body))
-      woken.push_back(r.body);
-  std::vector<std::vector<std::int64_t>> to = fem::messagesWaking(woken, me, ranks);
+    if (model.at_rest[r.body] && (woken_.empty() || woken_.back() != r.body))
+      woken_.push_back(r.body);
+  std::sort(woken_.begin(), woken_.end());
+  woken_.erase(std::unique(woken_.begin(), woken_.end()), woken_.end());
+  std::vector<std::vector<std::int64_t>> to(ranks);
   std::vector<Reaction> own;
   for (const Reaction &r : reactions_)
     if (const int owner = (*owner_)[r.body]; owner == me)
@@ -405,8 +442,8 @@ void FeDemCoupling::applyReactions(fem::Model &model) {
           to[static_cast<std::size_t>(owner)].end(),
           {r.node, r.body, std::bit_cast<std::int64_t>(r.fx), std::bit_cast<std::int64_t>(r.fy),
            std::bit_cast<std::int64_t>(r.friction_x), std::bit_cast<std::int64_t>(r.friction_y)});
-  const std::vector<std::vector<std::int64_t>> from = processes_->exchange(std::move(to));
-  fem::wakeOwn(model, woken);
+  const std::vector<std::vector<std::int64_t>> from =
+      processes_->exchangeWith(std::move(to), partners_);
   std::vector<Reaction> received;
   for (std::size_t r = 0; r < ranks; ++r) {
     if (static_cast<int>(r) == me) {
@@ -415,13 +452,21 @@ void FeDemCoupling::applyReactions(fem::Model &model) {
     }
     const std::vector<std::int64_t> &message = from[r];
     received.clear();
-    for (std::size_t i = fem::wakeNamed(model, message); i + 6 <= message.size(); i += 6)
+    for (std::size_t i = 0; i + 6 <= message.size(); i += 6)
       received.push_back(
           {static_cast<std::uint32_t>(message[i]), static_cast<std::uint32_t>(message[i + 1]),
            std::bit_cast<double>(message[i + 2]), std::bit_cast<double>(message[i + 3]),
            std::bit_cast<double>(message[i + 4]), std::bit_cast<double>(message[i + 5])});
     DiskContact::apply(model, received);
   }
+}
+
+void FeDemCoupling::stepFigures(const fem::Model &, double, std::vector<double> &figures) const {
+  figures.push_back(static_cast<double>(woken_.size()));
+}
+
+void FeDemCoupling::stepReduced(fem::Model &model, const double *largest) {
+  fem::wakeEverywhere(model, *processes_, woken_, static_cast<std::size_t>(largest[0]));
 }
 
 Particles FeDemCoupling::disks() const {

@@ -46,8 +46,15 @@ public:
   // With the FE bodies shared among processes, each computes the FE-DEM contact of its own disks
   // (LIGGGHTS's decomposition) with the FE bodies that reach them: their owners send their
   // boundary nodes to the processes whose near disks their boxes meet, and the reactions go back
-  // to the nodes' owners.
+  // to the nodes' owners: messages between those processes alone, which every process knows from
+  // the cells every process's disks reach and its moving bodies cover (one all-gather).
   void shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) override;
+  // One figure: the number of bodies at rest this process's reactions loaded in the step (each
+  // woke at its owner, with the reactions); with any, every process's are all-gathered and every
+  // process wakes them all.
+  void stepFigures(const fem::Model &model, double drift,
+                   std::vector<double> &figures) const override;
+  void stepReduced(fem::Model &model, const double *largest) override;
   // Multiple time stepping (one process): the FE-DEM contact is computed at the base step, so a
   // body (or part) a disk may reach before its next step steps at level 0. It may take level l
   // only while the gap between its box and every near disk exceeds 2^(l+1) dt v, v the fastest
@@ -129,6 +136,10 @@ private:
   const parallel::Communicator *processes_ = nullptr;
   const std::vector<int> *owner_ = nullptr;
   std::vector<char> current_;
+  // The processes this one exchanges boundaries and reactions with in this step (ascending), and
+  // the bodies at rest its reactions loaded (applyReactions, to stepReduced).
+  std::vector<int> partners_;
+  std::vector<std::int64_t> woken_;
   double fastest_of_all_ = 0.0; // the fastest boundary node over every process's bodies [m/s]
   DiskContact::Region region_of_all_{}; // the region every process's FE bodies cover
   std::size_t halo_nodes_ = 0;

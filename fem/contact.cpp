@@ -175,16 +175,7 @@ void Contact::stepFigures(const Model &model, double drift, std::vector<double> 
 
 void Contact::stepReduced(Model &model, const double *largest) {
   travel_bound_ = largest[0];
-  if (const auto most = static_cast<std::size_t>(largest[1]); most > 0) {
-    woken_.resize(most, -1); // (as many from every process)
-    const std::vector<std::int64_t> all = processes_->allGather(
-        std::move(woken_), std::vector<std::int64_t>(static_cast<std::size_t>(processes_->size()),
-                                                     static_cast<std::int64_t>(most)));
-    for (const std::int64_t b : all)
-      if (b >= 0)
-        model.wake(static_cast<std::size_t>(b));
-  }
-  woken_.clear();
+  wakeEverywhere(model, *processes_, woken_, static_cast<std::size_t>(largest[1]));
 }
 
 // The narrow phase over the runs of pairs, each with its lists and its hits: taken run by run, the

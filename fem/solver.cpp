@@ -218,29 +218,18 @@ void Solver::addForceProvider(ForceProvider *provider) {
 // The steps that end a run at endAt's time: the last end_steps stable steps or less are made equal.
 constexpr double end_steps = 20.0;
 
-std::vector<std::vector<std::int64_t>> messagesWaking(std::vector<std::int64_t> &woken, int me,
-                                                      std::size_t processes) {
-  std::sort(woken.begin(), woken.end());
-  woken.erase(std::unique(woken.begin(), woken.end()), woken.end());
-  std::vector<std::vector<std::int64_t>> to(processes);
-  for (std::size_t r = 0; r < processes; ++r)
-    if (static_cast<int>(r) != me) {
-      to[r].push_back(static_cast<std::int64_t>(woken.size()));
-      to[r].insert(to[r].end(), woken.begin(), woken.end());
-    }
-  return to;
-}
-
-void wakeOwn(Model &model, const std::vector<std::int64_t> &woken) {
-  for (const std::int64_t b : woken)
-    model.wake(static_cast<std::size_t>(b));
-}
-
-std::size_t wakeNamed(Model &model, const std::vector<std::int64_t> &message) {
-  const auto n_woken = static_cast<std::size_t>(message.at(0));
-  for (std::size_t i = 1; i <= n_woken; ++i)
-    model.wake(static_cast<std::size_t>(message.at(i)));
-  return 1 + n_woken;
+void wakeEverywhere(Model &model, const parallel::Communicator &processes,
+                    std::vector<std::int64_t> &woken, std::size_t most) {
+  if (most > 0) {
+    woken.resize(most, -1); // (-1: none)
+    const std::vector<std::int64_t> all = processes.allGather(
+        std::move(woken), std::vector<std::int64_t>(static_cast<std::size_t>(processes.size()),
+                                                    static_cast<std::int64_t>(most)));
+    for (const std::int64_t b : all)
+      if (b >= 0)
+        model.wake(static_cast<std::size_t>(b));
+  }
+  woken.clear();
 }
 
 // The step to take from the stable one: within end_steps stable steps of endAt's time, the rest in

@@ -131,15 +131,13 @@ public:
                         std::vector<std::uint8_t> & /*cap*/) const {}
 };
 
-// With the work shared, a provider's messages to the other processes (Communicator::exchange, one
-// list per process) each begin with the bodies at rest its forces loaded (`woken`, sorted and
-// made unique here): their number, then the bodies. Every process wakes them: this one its own
-// (wakeOwn), the others those a message names (wakeNamed, which returns where the message's own
-// values begin).
-std::vector<std::vector<std::int64_t>> messagesWaking(std::vector<std::int64_t> &woken, int me,
-                                                      std::size_t processes);
-void wakeOwn(Model &model, const std::vector<std::int64_t> &woken);
-std::size_t wakeNamed(Model &model, const std::vector<std::int64_t> &message);
+// With the work shared, a provider's forces wake a body at rest at its owner, who receives them,
+// and at every other process after the step's reduction (ForceProvider::stepReduced): there each
+// process's `woken` (the bodies at rest its forces loaded, sorted and unique; `most`, the most any
+// process has, from the reduction) is all-gathered, as many from each, and every process wakes
+// them all. `woken` is left empty.
+void wakeEverywhere(Model &model, const parallel::Communicator &processes,
+                    std::vector<std::int64_t> &woken, std::size_t most);
 
 // A run that cannot go on (an inverted element, a step collapsed by a sliver); the message says
 // which element and when.
