@@ -27,6 +27,9 @@ struct World {
   double max(double value) const;
 };
 World world(bool needed);
+// A failure of this process alone, which the others would wait for in their next exchange: says
+// `why` on stderr and ends every process (MPI_Abort, exit code 1).
+[[noreturn]] void abortEveryProcess(const std::string &why);
 
 // What this process has received from the others through the operations of this file (the
 // solver's communicator, the coupling's gathers and reductions, the partitioner's reductions),

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 
 namespace mesopen {
@@ -205,6 +206,9 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
     else
       solver.agreeInNextStep(std::move(mine));
   };
+  // (a test's failure of one process in a step: MESOPEN_FAIL_AT_STEP=N, before step N)
+  const char *fail_text = std::getenv("MESOPEN_FAIL_AT_STEP");
+  const std::size_t fail_at = fail_text ? std::strtoull(fail_text, nullptr, 10) : 0;
   const parallel::Traffic loop_start = parallel::traffic();
   try {
     // (a run continued from a checkpoint has its first sample and frame, and had not ended)
@@ -232,7 +236,18 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
       const auto step_start = Clock::now();
       const double before = solver.time();
       const parallel::Traffic traffic_before = parallel::traffic();
-      solver.step();
+      try {
+        if (fail_at > 0 && solver.steps() + 1 == fail_at)
+          throw std::logic_error("a failure asked for by MESOPEN_FAIL_AT_STEP");
+        solver.step();
+      } catch (const fem::RunFailure &) {
+        throw; // (every process's: the step's reduction said so)
+      } catch (const std::exception &e) {
+        if (!shared)
+          throw;
+        // (this process's alone: the others would wait for it in the step's next exchange)
+        parallel::abortEveryProcess("step " + std::to_string(solver.steps() + 1) + ": " + e.what());
+      }
       const parallel::Traffic traffic_after = parallel::traffic();
       const std::int64_t step_bytes = traffic_after.bytes - traffic_before.bytes;
       result.step_bytes += step_bytes;

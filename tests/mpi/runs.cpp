@@ -155,10 +155,10 @@ void expectSameDisks(const std::string &a, const std::string &b, const std::stri
 
 // A script that runs mesopen with its arguments, rank 1 of mpirun stopping itself after `step`
 // (MESOPEN_STOP_AT_STEP, as a SIGTERM there).
-void writeStopScript(const std::string &path, int step) {
+void writeStopScript(const std::string &path, int step, const char *variable = "STOP_AT_STEP") {
   std::ofstream(path) << "#!/bin/sh\nif [ \"$OMPI_COMM_WORLD_RANK\" = 1 ]; then "
-                         "export MESOPEN_STOP_AT_STEP="
-                      << step << "; fi\nexec " << MESOPEN_BINARY << " \"$@\"\n";
+                         "export MESOPEN_"
+                      << variable << "=" << step << "; fi\nexec " << MESOPEN_BINARY << " \"$@\"\n";
   std::filesystem::permissions(path, std::filesystem::perms::owner_all);
 }
 
@@ -530,4 +530,24 @@ TEST(Mpi, CheckpointsByTheClockComeAtOneStepOnEveryRank) {
                            "/tests/support/same_run.py " + (dir / "clock/run.h5") + " " +
                            (dir / "none/run.h5");
   EXPECT_EQ(std::system(same.c_str()), 0) << same;
+}
+
+// A failure of one process alone within a step (MESOPEN_FAIL_AT_STEP=40 on rank 1, as a bug or an
+// exhausted memory would throw there) ends every process with exit code 1 and says where: the
+// other would wait for it in the step's next exchange (mpirun killed at 120 s: 124).
+TEST(Mpi, FailureOfOneRankInAStepEndsEveryRank) {
+  ScratchDir dir("mpi-fail-one-rank");
+  std::ofstream(dir / "scene.toml")
+      << "[target]\nwidth = 1.0e-3\nheight = 0.5e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
+         "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 1e-7\nframe_interval = 0\n"
+         "vtk = false\n";
+  writeStopScript(dir / "fail1.sh", 40, "FAIL_AT_STEP");
+  const std::string command = "timeout 120 mpirun --allow-run-as-root --oversubscribe -np 2 " +
+                              (dir / "fail1.sh") + " run " + (dir / "scene.toml") + " -o " +
+                              (dir / "out") + " --threads 1 --quiet 2>&1";
+  const test::Result r = test::runCommand(command);
+  EXPECT_EQ(r.code, 1) << "124: a process waited for the failed one\n" << r.output;
+  EXPECT_NE(r.output.find("process 1 of 2: step 40: a failure asked for by MESOPEN_FAIL_AT_STEP"),
+            std::string::npos)
+      << r.output;
 }
