@@ -172,6 +172,22 @@ nlohmann::json summaryOf(const std::string &out) {
   return nlohmann::json::parse(test::readFile(out + "/summary.json"));
 }
 
+// Whether two run.h5 files hold the same run (tests/support/same_run.py: every bit, but for the
+// checkpoint and rebalance keys of the scene).
+void expectSameRunFile(const std::string &a, const std::string &b) {
+  const std::string same = "/usr/bin/python3 " + std::string(MESOPEN_SOURCE_DIR) +
+                           "/tests/support/same_run.py " + a + " " + b;
+  EXPECT_EQ(std::system(same.c_str()), 0) << same;
+}
+
+// A small scene of the tests of stops and failures: a 1 x 0.5 mm target of 60 um grains, its
+// [run] table open for `run` keys.
+std::string smallScene(const std::string &run) {
+  return "[target]\nwidth = 1.0e-3\nheight = 0.5e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
+         "[projectile]\nlength = 0.3e-3\n[run]\n" +
+         run;
+}
+
 } // namespace
 
 // One rank and two sharing the element work (each computes the bodies it owns, the nodes of the
@@ -245,10 +261,7 @@ TEST(Mpi, OneTwoAndFourRanksAgreeWhileRebalancing) {
   const std::string plain = feScene(dir, "plain.toml", "0.1e-6", "erode_step_ratio = 0.4\n");
   ASSERT_EQ(run(0, scene, dir / "one").code, 0);
   ASSERT_EQ(run(0, plain, dir / "plain").code, 0);
-  const std::string same = "/usr/bin/python3 " + std::string(MESOPEN_SOURCE_DIR) +
-                           "/tests/support/same_run.py " + (dir / "one/run.h5") + " " +
-                           (dir / "plain/run.h5");
-  EXPECT_EQ(std::system(same.c_str()), 0) << same;
+  expectSameRunFile(dir / "one/run.h5", dir / "plain/run.h5");
   const nlohmann::json one = summaryOf(dir / "one");
   EXPECT_GT(one["eroded_elements"].get<int>(), 0);
   EXPECT_EQ(one["partition"]["method"], "one rank");
@@ -408,10 +421,7 @@ TEST(Mpi, HybridStoppedAndResumedOnTwoRanksIsTheSameRun) {
   EXPECT_EQ(stopped["status"], "interrupted");
   ASSERT_EQ(exitCode(mpirun + MESOPEN_BINARY + " run --resume " + (dir / "stopped")), 0);
   ASSERT_EQ(exitCode(mpirun + MESOPEN_BINARY + " run " + scene + " -o " + (dir / "whole")), 0);
-  const std::string same = "/usr/bin/python3 " + std::string(MESOPEN_SOURCE_DIR) +
-                           "/tests/support/same_run.py " + (dir / "whole/run.h5") + " " +
-                           (dir / "stopped/run.h5");
-  EXPECT_EQ(std::system(same.c_str()), 0) << same;
+  expectSameRunFile(dir / "whole/run.h5", dir / "stopped/run.h5");
   expectSameDisks(dir / "whole", dir / "stopped", "hybrid, resumed on two ranks");
 }
 
@@ -454,9 +464,7 @@ int runWithFilesLimited(const ScratchDir &dir) {
 // for it in the next step's exchanges (it did, until mpirun was killed).
 TEST(Mpi, OutputFailureEndsEveryRank) {
   ScratchDir dir("mpi-output-failure");
-  std::ofstream(dir / "scene.toml")
-      << "[target]\nwidth = 1.0e-3\nheight = 0.5e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
-         "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 2e-7\nframe_interval = 1e-8\n";
+  std::ofstream(dir / "scene.toml") << smallScene("end_time = 2e-7\nframe_interval = 1e-8\n");
   EXPECT_EQ(runWithFilesLimited(dir), 1) << "124: a process waited for the failed one";
   const auto summary = nlohmann::json::parse(test::readFile(dir / "out/summary.json"));
   EXPECT_EQ(summary["status"], "failed");
@@ -468,9 +476,7 @@ TEST(Mpi, OutputFailureEndsEveryRank) {
 TEST(Mpi, OutputFailureAfterTheLoopEndsEveryRankWithDisks) {
   ScratchDir dir("mpi-output-failure-dem");
   std::ofstream(dir / "scene.toml")
-      << "[target]\nwidth = 1.0e-3\nheight = 0.5e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
-         "[projectile]\nlength = 0.3e-3\n[run]\nrepresentation = \"dem\"\nend_time = 2e-7\n"
-         "frame_interval = 0\nvtk = false\n";
+      << smallScene("representation = \"dem\"\nend_time = 2e-7\nframe_interval = 0\nvtk = false\n");
   EXPECT_EQ(runWithFilesLimited(dir), 1) << "124: a process waited for the failed one";
   EXPECT_FALSE(std::filesystem::exists(dir / "out/run.h5")) << "a run.h5 that could not be whole";
 }
@@ -481,10 +487,8 @@ TEST(Mpi, OutputFailureAfterTheLoopEndsEveryRankWithDisks) {
 // The checkpoint written there continues, on two ranks, to the same run as one never stopped.
 TEST(Mpi, StopOnOneRankStopsEveryRankAtOneStep) {
   ScratchDir dir("mpi-stop-one-rank");
-  std::ofstream(dir / "scene.toml")
-      << "[target]\nwidth = 1.0e-3\nheight = 0.5e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
-         "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 1e-7\nframe_interval = 0\n"
-         "vtk = false\ncheckpoint_interval = 1e6\n";
+  std::ofstream(dir / "scene.toml") << smallScene(
+      "end_time = 1e-7\nframe_interval = 0\nvtk = false\ncheckpoint_interval = 1e6\n");
   writeStopScript(dir / "stop1.sh", 40);
   const std::string mpirun = "timeout 120 mpirun --allow-run-as-root --oversubscribe -np 2 ";
   EXPECT_EQ(exitCode(mpirun + (dir / "stop1.sh") + " run " + (dir / "scene.toml") + " -o " +
@@ -498,10 +502,7 @@ TEST(Mpi, StopOnOneRankStopsEveryRankAtOneStep) {
   EXPECT_EQ(
       exitCode(mpirun + MESOPEN_BINARY + " run " + (dir / "scene.toml") + " -o " + (dir / "whole")),
       0);
-  const std::string same = "/usr/bin/python3 " + std::string(MESOPEN_SOURCE_DIR) +
-                           "/tests/support/same_run.py " + (dir / "stopped/run.h5") + " " +
-                           (dir / "whole/run.h5");
-  EXPECT_EQ(std::system(same.c_str()), 0) << same;
+  expectSameRunFile(dir / "stopped/run.h5", dir / "whole/run.h5");
 }
 
 // Checkpoints by the wall clock (run.checkpoint_interval) on two ranks: rank 0's clock decides,
@@ -512,9 +513,7 @@ TEST(Mpi, StopOnOneRankStopsEveryRankAtOneStep) {
 TEST(Mpi, CheckpointsByTheClockComeAtOneStepOnEveryRank) {
   ScratchDir dir("mpi-clock-checkpoints");
   const std::string base =
-      "[target]\nwidth = 1.0e-3\nheight = 0.5e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
-      "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 1e-7\nmax_steps = 40\n"
-      "frame_interval = 0\nvtk = false\n";
+      smallScene("end_time = 1e-7\nmax_steps = 40\nframe_interval = 0\nvtk = false\n");
   std::ofstream(dir / "clock.toml") << base << "checkpoint_interval = 1e-9\n";
   std::ofstream(dir / "none.toml") << base;
   const std::string mpirun = "timeout 120 mpirun --allow-run-as-root --oversubscribe -np 2 ";
@@ -526,10 +525,7 @@ TEST(Mpi, CheckpointsByTheClockComeAtOneStepOnEveryRank) {
   const nlohmann::json clock = summaryOf(dir / "clock");
   EXPECT_EQ(clock["steps"], 40);
   EXPECT_EQ(clock["checkpoints"]["written"], 39); // after steps 1 to 39
-  const std::string same = "/usr/bin/python3 " + std::string(MESOPEN_SOURCE_DIR) +
-                           "/tests/support/same_run.py " + (dir / "clock/run.h5") + " " +
-                           (dir / "none/run.h5");
-  EXPECT_EQ(std::system(same.c_str()), 0) << same;
+  expectSameRunFile(dir / "clock/run.h5", dir / "none/run.h5");
 }
 
 // A failure of one process alone within a step (MESOPEN_FAIL_AT_STEP=40 on rank 1, as a bug or an
@@ -538,9 +534,7 @@ TEST(Mpi, CheckpointsByTheClockComeAtOneStepOnEveryRank) {
 TEST(Mpi, FailureOfOneRankInAStepEndsEveryRank) {
   ScratchDir dir("mpi-fail-one-rank");
   std::ofstream(dir / "scene.toml")
-      << "[target]\nwidth = 1.0e-3\nheight = 0.5e-3\ndiameter = 60e-6\nmesh_size = 15e-6\n"
-         "[projectile]\nlength = 0.3e-3\n[run]\nend_time = 1e-7\nframe_interval = 0\n"
-         "vtk = false\n";
+      << smallScene("end_time = 1e-7\nframe_interval = 0\nvtk = false\n");
   writeStopScript(dir / "fail1.sh", 40, "FAIL_AT_STEP");
   const std::string command = "timeout 120 mpirun --allow-run-as-root --oversubscribe -np 2 " +
                               (dir / "fail1.sh") + " run " + (dir / "scene.toml") + " -o " +
