@@ -186,7 +186,7 @@ def main():
           "  them, so wall times do not measure the decomposition.\n"
           "  KB/step: bytes received from the other ranks within a step (a reduction counted as a\n"
           "    gather; KB = 1000 bytes), the mean over the steps; max: the most in one step;\n"
-          "    outside: in the time loop between steps (series, flags); calls: MPI collectives a step;\n"
+          "    outside: in the time loop between steps (series, frames); calls: MPI collectives a step;\n"
           "    msgs: point-to-point messages it received a step\n"
           "  elements: active elements owned (bodies at rest are skipped); nodes: the nodes it moves\n"
           "    (its moving bodies'); halo: nodes of moving bodies the rank does not own, whose\n"
