@@ -269,7 +269,7 @@ MpiCommunicator::exchangeWith(std::vector<std::vector<std::int64_t>> to,
   if (size_ == 1)
     return from;
   const std::int64_t piece = piece_;
-  constexpr int tag = 2;
+  constexpr int tag = 3; // (its own: a message of another kind is never taken for one of these)
   std::vector<MPI_Request> requests;
   for (const int r : partners) {
     const auto n = static_cast<std::int64_t>(to[static_cast<std::size_t>(r)].size());

@@ -224,6 +224,9 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
     const std::size_t frames_before = frames.size();
     const double output_before = frames.seconds();
     for (bool last = !checkpoints.resumed() && ended(true); !last;) {
+      // (before a stop the processes agree on an output failure since, at once: it is the run's)
+      if (shared && agreed_signal != 0)
+        together([] {}, true);
       if (checkpoints.stopBySignal(result, agreed_signal)) {
         result.interrupted = true;
         result.failure = std::string("stopped by ") + stopSignalName() + " at step " +
