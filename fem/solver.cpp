@@ -867,7 +867,7 @@ void Solver::forces(double dt, bool kick) {
   }
   kick_sums_.clear();
   // In the same reduction, at a step: the providers' figures for the next step (with the work
-  // shared) and the time loop's value.
+  // shared) and the time loop's values.
   std::vector<double> figures = {
       -dt_min, inverted >= 0 ? -static_cast<double>(inverted) : -HUGE_VAL,
       static_cast<double>(failing), static_cast<double>(scaling),
@@ -1378,10 +1378,6 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   sums.dt_min = dt_min;
 }
 
-// The elements that failed in this step's pass (flagged in failed_ by elementPass) are removed
-// (erodeElements): their internal energy is booked as eroded, the element chunks are laid out
-// anew and the providers take the new boundaries. Their forces leave f(n+1), which the next
-// half-kick uses; the step to come was taken without them (elementPass).
 // `values` padded with -1 to `count`, as every process gives to an all-gather of equal parts
 // (equalParts); with one process as they are.
 std::vector<double> Solver::padTo(std::vector<double> values, std::size_t count) const {
@@ -1399,6 +1395,10 @@ std::vector<std::int64_t> Solver::equalParts(std::size_t count) const {
                                    static_cast<std::int64_t>(count));
 }
 
+// The elements that failed in this step's pass (flagged in failed_ by elementPass) are removed
+// (erodeElements): their internal energy is booked as eroded, the element chunks are laid out
+// anew and the providers take the new boundaries. Their forces leave f(n+1), which the next
+// half-kick uses; the step to come was taken without them (elementPass).
 void Solver::erode() {
   if (most_failing_ == 0) // no element of any process failed in this step's pass
     return;
