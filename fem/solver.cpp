@@ -436,8 +436,8 @@ std::vector<double> asDoubles(const std::vector<std::size_t> &counts) {
 
 } // namespace
 
-// Each rank's active elements (the bodies it owns that move), and with several processes a new
-// partition when the load is out of balance. The loads change only when the bodies that move or
+// With several processes, a new partition when the load (each rank's active elements: the bodies
+// it owns that move) is out of balance. The loads change only when the bodies that move or
 // their elements change, which is when updateActivity calls this: the check is one pass over the
 // bodies and no message, and every process, holding the same model, takes the same decision.
 // Out of balance is measured against the best a partition of whole bodies can do: the most loaded
@@ -462,15 +462,14 @@ void Solver::balanceLoad(bool forced, bool may_partition) {
       loads[static_cast<std::size_t>(owner_[b])] += load[b];
     return loads;
   };
-  rank_elements_ = rankLoads();
   // (one process owns every body; nothing moves: nothing to share)
   if (ranks == 1 || total == 0 || !may_partition)
     return;
+  std::vector<std::size_t> rank_loads = rankLoads();
   const double best = std::max(static_cast<double>(total) / static_cast<double>(ranks),
                                static_cast<double>(heaviest));
   auto excess = [&] {
-    return static_cast<double>(*std::max_element(rank_elements_.begin(), rank_elements_.end())) /
-               best -
+    return static_cast<double>(*std::max_element(rank_loads.begin(), rank_loads.end())) / best -
            1.0;
   };
   // A partition that could not reach rebalance_imbalance (a body heavier than a rank's share in
@@ -481,9 +480,9 @@ void Solver::balanceLoad(bool forced, bool may_partition) {
                             std::abs(static_cast<double>(total) - last_total_) > tol * last_total_;
   if (partitioned_ && !forced && !(out_of_balance > tol && worth_trying))
     return;
-  const double before = imbalance(asDoubles(rank_elements_));
+  const double before = imbalance(asDoubles(rank_loads));
   repartition(load);
-  rank_elements_ = rankLoads();
+  rank_loads = rankLoads();
   last_achieved_ = excess();
   last_total_ = static_cast<double>(total);
   if (partitioned_) {
@@ -492,7 +491,7 @@ void Solver::balanceLoad(bool forced, bool may_partition) {
   }
   partitioned_ = true;
   partition_.last_before = before;
-  partition_.last_after = imbalance(asDoubles(rank_elements_));
+  partition_.last_after = imbalance(asDoubles(rank_loads));
 }
 
 // Every body to the rank the partitioner gives it: each process passes the bodies it owns, with
