@@ -302,16 +302,11 @@ std::vector<DiskForce> LiggghtsDem::writeRestart(const std::string &path) {
   std::vector<DiskForce> forces(static_cast<std::size_t>(atom->nlocal));
   for (std::size_t i = 0; i < forces.size(); ++i)
     forces[i] = {atom->tag[i], atom->f[i][0], atom->f[i][1], atom->torque[i][2]};
-  const std::string temp = path + ".tmp";
-  if (temp.find_first_of(" \t\n\"'$#&") != std::string::npos)
-    throw std::invalid_argument("LIGGGHTS restart file '" + temp +
+  if (path.find_first_of(" \t\n\"'$#&") != std::string::npos)
+    throw std::invalid_argument("LIGGGHTS restart file '" + path +
                                 "': a path with a space or one of \"'$#&");
-  std::string command = "write_restart " + temp;
+  std::string command = "write_restart " + path;
   lammps_command(lmp_, command.data());
-  int rank = 0;
-  MPI_Comm_rank(comm_, &rank);
-  if (rank == 0)
-    std::filesystem::rename(temp, path);
   lammps_command(lmp_, const_cast<char *>("run 0"));
   restoreForces(forces);
   gatherDiskForces(forces);

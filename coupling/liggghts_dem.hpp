@@ -42,9 +42,9 @@ public:
   // The LIGGGHTS instance, for library.h calls (benchmarks).
   void *handle() const { return lmp_; }
 
-  // Between two windows: LIGGGHTS's restart file `path` (written under a temporary name and
-  // renamed when whole, by rank 0; every rank calls it), and every rank's disks' own forces and
-  // torques by id (a restart file does not hold them). LIGGGHTS's set-up, which must follow a
+  // Between two windows: LIGGGHTS's restart file `path` (written by rank 0, every rank calling
+  // it; a temporary name, for the caller to rename when whole), and every rank's disks' own forces
+  // and torques by id (a restart file does not hold them). LIGGGHTS's set-up, which must follow a
   // restart file, is made here as it is after read_restart (the run continued from it): with the
   // script's `lists = 1`, its lists are those the last step built, and the forces it computes
   // again (in another order of summation, without the contacts' history update) are put back as

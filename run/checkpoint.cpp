@@ -521,7 +521,7 @@ void Checkpoints::openJournal() {
   h5_->record(journal_.get());
 }
 
-void Checkpoints::afterStep(const LoopResult &loop, bool late) {
+void Checkpoints::afterStep(const LoopResult &loop, bool late, bool failed) {
   const fem::Solver &solver = *run_.solver;
   if (stop_at_ > 0 && solver.steps() == stop_at_)
     setStopSignal(SIGTERM);
@@ -529,7 +529,7 @@ void Checkpoints::afterStep(const LoopResult &loop, bool late) {
     return;
   const bool due = late || (next_time_ > 0.0 && solver.time() >= next_time_);
   if (due && !(run_.coupled && run_.coupled->windowOpen()))
-    write(loop);
+    write(loop, failed);
 }
 
 bool Checkpoints::lateByClock() const {
@@ -549,10 +549,20 @@ bool Checkpoints::stopBySignal(const LoopResult &loop, int signal) {
   return true;
 }
 
-void Checkpoints::write(const LoopResult &loop) {
+void Checkpoints::write(const LoopResult &loop, bool failed) {
   const auto began = Clock::now();
   const std::uint64_t n = number_ + 1;
   const fem::Solver &solver = *run_.solver;
+  std::string failure;                // this process's first
+  auto own = [&](const auto &files) { // this process's files alone, while none failed
+    if (failed || !failure.empty())
+      return;
+    try {
+      files();
+    } catch (const std::exception &e) {
+      failure = e.what();
+    }
+  };
   // every rank's elements, its nodes' velocities, forces and external forces and its nodes'
   // contact state, for rank 0 to write
   run_.solver->collectCheckpoint();
@@ -562,12 +572,21 @@ void Checkpoints::write(const LoopResult &loop) {
   std::vector<coupling::DiskForce> disk_forces;
   const std::string restart = run_.dem ? file("liggghts", n, ".restart") : std::string();
   if (run_.dem) {
-    disk_forces = run_.dem->writeRestart(checkpoint_dir_ + "/" + restart);
-    writeCoupling(checkpoint_dir_ + "/" +
-                      file("coupling", n, "-r" + std::to_string(world_.rank) + ".h5"),
-                  run_.coupled->state());
+    const std::string path = checkpoint_dir_ + "/" + restart;
+    disk_forces = run_.dem->writeRestart(path + ".tmp");
+    if (world_.rank == 0)
+      own([&] { fs::rename(path + ".tmp", path); });
+    own([&] {
+      writeCoupling(checkpoint_dir_ + "/" +
+                        file("coupling", n, "-r" + std::to_string(world_.rank) + ".h5"),
+                    run_.coupled->state());
+    });
     world_.barrier(); // every rank's file written before the checkpoint is
   }
+  if (failed)
+    return;
+  if (!failure.empty())
+    throw std::runtime_error(failure);
   const double wall = wall_before_ + secondsSince(start_);
   if (world_.rank == 0) {
     journal_->close();

@@ -86,7 +86,9 @@ public:
 
   // After a step that did not end the run: a checkpoint when one is due, by the simulated time or,
   // with `late` (every process's alike: the clock of rank 0, lateByClock), by the wall clock.
-  void afterStep(const LoopResult &loop, bool late);
+  // `failed`: this process's output of the step failed; it takes part in the checkpoint's gathers
+  // (the others wait for it there) and writes nothing.
+  void afterStep(const LoopResult &loop, bool late, bool failed);
   // Rank 0's wall clock calls for a checkpoint (run.checkpoint_interval since the last); false
   // on the other ranks.
   bool lateByClock() const;
@@ -98,7 +100,10 @@ public:
   void end(bool completed);
 
 private:
-  void write(const LoopResult &loop);
+  // Every process takes part in each gather whatever failed before; the first failure of this
+  // process's files (`failed`: one before the checkpoint) ends its writing and is thrown at the
+  // end.
+  void write(const LoopResult &loop, bool failed = false);
   void resume();
   void openJournal();
   std::string file(const std::string &stem, std::uint64_t number, const std::string &end) const;

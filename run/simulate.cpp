@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 
 namespace mesopen {
 
@@ -126,12 +127,19 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
 
   // Whatever happened, the files hold everything computed so far and are whole.
   if (writer) {
-    h5->record(nullptr); // (the checkpoints' journal holds the loop's calls)
-    series.write(*h5);
-    if (census)
-      writeLevels(*h5, *census);
-    writeRunAttributes(*h5, scene, runStatus(report.loop));
-    h5->close();
+    try {
+      h5->record(nullptr); // (the checkpoints' journal holds the loop's calls)
+      series.write(*h5);
+      if (census)
+        writeLevels(*h5, *census);
+      writeRunAttributes(*h5, scene, runStatus(report.loop));
+      h5->close();
+    } catch (const std::exception &e) { // (the loop's failure first: it may be the cause)
+      if (report.loop.failure.empty())
+        throw;
+      throw std::runtime_error(report.loop.failure +
+                               "; then run.h5 could not be written: " + e.what());
+    }
   }
   if (!writer)
     return report;

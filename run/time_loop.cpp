@@ -286,9 +286,18 @@ LoopResult timeLoop(const Scene &scene, const fem::Model &model, fem::Solver &so
         series.sample(model, solver);
       together(
           [&] {
-            frames.offer(model, solver, last);
+            // (a frame failed on this process: it takes part in the checkpoint's gathers)
+            std::string frame_failure;
+            try {
+              frames.offer(model, solver, last);
+            } catch (const std::exception &e) {
+              frame_failure = e.what();
+            }
             if (!last)
-              checkpoints.afterStep(result, shared ? agreed_late : checkpoints.lateByClock());
+              checkpoints.afterStep(result, shared ? agreed_late : checkpoints.lateByClock(),
+                                    !frame_failure.empty());
+            if (!frame_failure.empty())
+              throw std::runtime_error(frame_failure);
           },
           last);
       if (progress.due())

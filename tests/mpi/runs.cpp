@@ -444,11 +444,11 @@ TEST(Mpi, CoupledBaselineRunsOnTwoRanks) {
 namespace {
 
 // `mesopen run DIR/scene.toml -o DIR/out` on two processes, every process's files limited to
-// 50 KiB (SIGXFSZ ignored: a write past it fails with EFBIG), at most 120 s: mpirun's exit code
-// (124 when it was stopped for taking longer), -1 if it did not exit.
-int runWithFilesLimited(const ScratchDir &dir) {
-  std::ofstream(dir / "limited.sh")
-      << "#!/bin/sh\ntrap '' XFSZ\nulimit -f 50\nexec " << MESOPEN_BINARY << " \"$@\"\n";
+// `blocks` of 512 bytes (SIGXFSZ ignored: a write past it fails with EFBIG), at most 120 s:
+// mpirun's exit code (124 when it was stopped for taking longer), -1 if it did not exit.
+int runWithFilesLimited(const ScratchDir &dir, int blocks = 50) {
+  std::ofstream(dir / "limited.sh") << "#!/bin/sh\ntrap '' XFSZ\nulimit -f " << blocks << "\nexec "
+                                    << MESOPEN_BINARY << " \"$@\"\n";
   std::filesystem::permissions(dir / "limited.sh", std::filesystem::perms::owner_all);
   const std::string cmd = "timeout 120 mpirun --allow-run-as-root --oversubscribe -np 2 " +
                           (dir / "limited.sh") + " run " + (dir / "scene.toml") + " -o " +
@@ -468,6 +468,22 @@ TEST(Mpi, OutputFailureEndsEveryRank) {
   EXPECT_EQ(runWithFilesLimited(dir), 1) << "124: a process waited for the failed one";
   const auto summary = nlohmann::json::parse(test::readFile(dir / "out/summary.json"));
   EXPECT_EQ(summary["status"], "failed");
+}
+
+// A frame the first process cannot write at a step where a checkpoint is due: the first process
+// still takes part in the checkpoint's gathers (the other waited for it there: 124), writes
+// nothing more, and the run ends on both with exit code 1, its first failure said first. Files
+// limited to 52 KiB: the first frame's VTU file (48 KiB) is written, the second's (55 KiB) is not.
+TEST(Mpi, FrameFailureAtACheckpointEndsEveryRank) {
+  ScratchDir dir("mpi-frame-failure-checkpoint");
+  std::ofstream(dir / "scene.toml")
+      << smallScene("end_time = 2e-7\nframe_interval = 5e-8\ncheckpoint_time = 5e-8\nvtk = true\n");
+  EXPECT_EQ(runWithFilesLimited(dir, 104), 1) << "124: a process waited for the failed one";
+  const auto summary = nlohmann::json::parse(test::readFile(dir / "out/summary.json"));
+  EXPECT_EQ(summary["status"], "failed");
+  EXPECT_TRUE(summary["failure"].get<std::string>().starts_with(
+      "cannot write VTU file '" + (dir / "out/vtk/frame_000001.vtu.tmp") + "'"))
+      << summary["failure"];
 }
 
 // The same after the loop, with disks: run.h5 fails on the first process as it is closed (no
