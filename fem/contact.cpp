@@ -24,6 +24,10 @@ constexpr double list_margin = 0.5;  // a pair's lists: margin / the smaller bod
 constexpr std::size_t runs_per_thread = 4; // runs of pairs: a thread takes the next one free
 constexpr std::size_t owner_blocks = 16;   // blocks of bodies, each adding its nodes' forces
 constexpr std::size_t prefetch_ahead = 8;  // contacts and loads ahead whose nodes are fetched
+// With the work shared: a body of at least this many boundary nodes goes to a partner in part,
+// the part within this many of its element sizes of the overlaps (exchangeHalo).
+constexpr std::size_t halo_part_from = 128;
+constexpr double halo_reach = 2.0;
 constexpr double kept_softer = 2.0; // with levels: a contact's kept penalty step, at most this
                                     // times a beginning contact's (hit)
 
@@ -72,7 +76,30 @@ Contact::Contact(const Model &model, ContactSettings settings)
 void Contact::boundaryChanged(const Model &model, const std::vector<std::uint32_t> &bodies) {
   const std::vector<std::uint32_t> before = boundaries_.nodes;
   const std::vector<std::size_t> before_begin = boundaries_.node_begin;
+  // (a body of another process here in part keeps its box and its points as they came, NaN where
+  // none came; one that eroded came whole, its nodes' positions shared)
+  std::vector<Box> window_boxes;
+  for (const HaloWindow &w : windows_)
+    window_boxes.push_back(boundaries_.boxes[w.body]);
   boundaries_.take(model);
+  std::vector<HaloWindow> windows;
+  for (std::size_t i = 0; i < windows_.size(); ++i) {
+    HaloWindow &w = windows_[i];
+    window_of_[w.body] = -1;
+    if (std::binary_search(bodies.begin(), bodies.end(), w.body))
+      continue;
+    ContactBoundaries &bd = boundaries_;
+    const std::size_t first = bd.node_begin[w.body];
+    bd.boxes[w.body] = window_boxes[i];
+    for (std::size_t k = first; k < bd.node_begin[w.body + 1]; ++k)
+      bd.points[k] = {std::nan(""), std::nan("")};
+    for (std::uint32_t k : w.received)
+      bd.points[first + k] = {model.nodes.x[bd.nodes[first + k]],
+                              model.nodes.y[bd.nodes[first + k]]};
+    window_of_[w.body] = static_cast<std::int32_t>(windows.size());
+    windows.push_back(std::move(w));
+  }
+  windows_ = std::move(windows);
   for (std::uint32_t C : bodies)
     allowOverlaps(C, std::vector<std::uint32_t>(before.begin() + before_begin[C],
                                                 before.begin() + before_begin[C + 1]));
@@ -107,7 +134,7 @@ void Contact::allowOverlaps(std::size_t C, const std::vector<std::uint32_t> &bef
 
 // How deep (px, py) lies inside body B: its distance to B's boundary, 0 outside.
 double Contact::penetration(std::size_t B, double px, double py, Scratch &scratch) const {
-  if (!boundaries_.inside(B, px, py))
+  if (!insideOf(B, px, py))
     return 0.0;
   // every segment of B lies in its box
   nearSegments(B, boundaries_.ends(B), boundaries_.endsEnd(B), boundaries_.boxes[B], scratch.near);
@@ -486,45 +513,162 @@ void Contact::shareBoxes(const Model &model, bool anew) {
 
 // With the work shared: the pairs whose boxes overlap and whose bodies two processes own are
 // computed by both (each its own body's side); each sends the other its body's boundary nodes,
-// position and velocity (Model::nodes and the boundary's points).
+// position and velocity (Model::nodes and the boundary's points). A body of at least
+// halo_part_from boundary nodes (the projectile) goes in part when that is less than 3/4 of them:
+// the ends of its segments that meet the window, the box around the overlaps of its pairs with the
+// partner's bodies widened by halo_reach of its element size, with the window and whether its
+// lower-left corner lies inside the body (the owner's crossing count). There the others' points
+// are NaN until the next exchange (no near segment), and insideOf counts the crossings from that
+// corner: a node in the window is inside by the corner's answer and the parity of the segments
+// between them, all of which meet the window. A contact's node, its closest segment and the
+// segments the lists hold lie within the window, unless a node is deeper than about the reach;
+// a node found clear is clear at most until it could reach the window's edge (touch).
 void Contact::exchangeHalo(Model &model) {
   ContactBoundaries &bd = boundaries_;
   Nodes &nd = model.nodes;
   const int me = processes_->rank();
-  BodiesTo sends, receives; // (the boxes of both bodies of such a pair are current at both)
+  const auto ranks = static_cast<std::size_t>(processes_->size());
+  // per (partner, own body): the box around the overlaps with the partner's bodies; and the
+  // partners' bodies that come, (partner, body) in order as they come
+  std::vector<std::pair<std::pair<int, std::uint32_t>, Box>> sends;
+  BodiesTo receives;
   partners_.clear();
   for (const Pair &pair : pairs_.pairs()) {
     const int owner_a = (*owner_)[pair.a], owner_b = (*owner_)[pair.b];
     if (owner_a == owner_b || (owner_a != me && owner_b != me) ||
         !bd.boxes[pair.a].overlaps(bd.boxes[pair.b]))
       continue;
-    if (owner_a == me)
-      sends.emplace_back(owner_b, pair.a), receives.emplace_back(owner_b, pair.b);
-    else
-      sends.emplace_back(owner_a, pair.b), receives.emplace_back(owner_a, pair.a);
-    partners_.push_back(owner_a == me ? owner_b : owner_a);
+    const int partner = owner_a == me ? owner_b : owner_a;
+    sends.push_back(
+        {{partner, owner_a == me ? pair.a : pair.b}, bd.boxes[pair.a].overlap(bd.boxes[pair.b])});
+    receives.emplace_back(partner, owner_a == me ? pair.b : pair.a);
+    partners_.push_back(partner);
   }
   std::sort(partners_.begin(), partners_.end());
   partners_.erase(std::unique(partners_.begin(), partners_.end()), partners_.end());
-  sendBodies(
-      std::move(sends), std::move(receives),
-      [&](std::uint32_t b) { return 4 * (bd.node_begin[b + 1] - bd.node_begin[b]); },
-      [&](std::uint32_t b, std::int64_t *out) {
-        for (std::size_t k = bd.node_begin[b]; k < bd.node_begin[b + 1]; ++k) {
-          const std::uint32_t p = bd.nodes[k];
-          for (double v : {nd.x[p], nd.y[p], nd.vx[p], nd.vy[p]})
-            *out++ = std::bit_cast<std::int64_t>(v);
-        }
-      },
-      [&](std::uint32_t b, const std::int64_t *in) {
-        stats_.halo_nodes += bd.node_begin[b + 1] - bd.node_begin[b];
-        for (std::size_t k = bd.node_begin[b]; k < bd.node_begin[b + 1]; ++k, in += 4) {
-          const std::uint32_t p = bd.nodes[k];
-          nd.x[p] = std::bit_cast<double>(in[0]), nd.y[p] = std::bit_cast<double>(in[1]);
-          nd.vx[p] = std::bit_cast<double>(in[2]), nd.vy[p] = std::bit_cast<double>(in[3]);
-        }
-        bd.place(model, b);
-      });
+  std::sort(sends.begin(), sends.end(),
+            [](const auto &p, const auto &q) { return p.first < q.first; });
+  std::sort(receives.begin(), receives.end());
+  receives.erase(std::unique(receives.begin(), receives.end()), receives.end());
+  for (const HaloWindow &w : windows_)
+    window_of_[w.body] = -1;
+  windows_.clear();
+  // A body's message: its nodes' values (4 each); one of at least halo_part_from nodes first says
+  // how many come, -1 for all, and if not all the window (4 values), the corner's side (1) and
+  // before each node's values its position in the body's boundary nodes.
+  std::vector<std::vector<std::int64_t>> to(ranks);
+  std::vector<std::uint32_t> sent; // positions in the body's boundary nodes
+  for (std::size_t i = 0; i < sends.size();) {
+    const auto [partner, b] = sends[i].first;
+    Box around = sends[i].second;
+    for (++i; i < sends.size() && sends[i].first == sends[i - 1].first; ++i)
+      around = {std::min(around.x0, sends[i].second.x0), std::min(around.y0, sends[i].second.y0),
+                std::max(around.x1, sends[i].second.x1), std::max(around.y1, sends[i].second.y1)};
+    std::vector<std::int64_t> &message = to[static_cast<std::size_t>(partner)];
+    const std::size_t first = bd.node_begin[b], n = bd.node_begin[b + 1] - first;
+    auto put = [&](std::size_t k) {
+      const std::uint32_t node = bd.nodes[k];
+      for (double v : {nd.x[node], nd.y[node], nd.vx[node], nd.vy[node]})
+        message.push_back(std::bit_cast<std::int64_t>(v));
+    };
+    const Box window = around.widened(halo_reach * bd.size[b]);
+    sent.clear();
+    if (n >= halo_part_from) {
+      for (const std::uint32_t *e = bd.ends(b); e != bd.endsEnd(b); e += 2) {
+        const Point &p = bd.points[e[0]], &q = bd.points[e[1]];
+        if (window.meets(p.x, p.y, q.x, q.y))
+          sent.insert(sent.end(), {static_cast<std::uint32_t>(e[0] - first),
+                                   static_cast<std::uint32_t>(e[1] - first)});
+      }
+      std::sort(sent.begin(), sent.end());
+      sent.erase(std::unique(sent.begin(), sent.end()), sent.end());
+    }
+    const bool whole = n < halo_part_from || 4 * sent.size() >= 3 * n;
+    if (n >= halo_part_from)
+      message.push_back(whole ? -1 : static_cast<std::int64_t>(sent.size()));
+    if (whole) {
+      for (std::size_t k = first; k < first + n; ++k)
+        put(k);
+      continue;
+    }
+    for (double v : {window.x0, window.y0, window.x1, window.y1})
+      message.push_back(std::bit_cast<std::int64_t>(v));
+    message.push_back(bd.inside(b, window.x0, window.y0) ? 1 : 0);
+    for (std::uint32_t k : sent) {
+      message.push_back(k);
+      put(first + k);
+    }
+  }
+  const std::vector<std::vector<std::int64_t>> from =
+      processes_->exchangeWith(std::move(to), partners_);
+  auto take = [&](std::size_t k, const std::int64_t *in) {
+    const std::uint32_t node = bd.nodes[k];
+    nd.x[node] = std::bit_cast<double>(in[0]), nd.y[node] = std::bit_cast<double>(in[1]);
+    nd.vx[node] = std::bit_cast<double>(in[2]), nd.vy[node] = std::bit_cast<double>(in[3]);
+  };
+  std::vector<std::size_t> at(ranks, 0); // where each partner's message is read next
+  for (auto [partner, b] : receives) {
+    const std::vector<std::int64_t> &message = from[static_cast<std::size_t>(partner)];
+    std::size_t &i = at[static_cast<std::size_t>(partner)];
+    const std::size_t first = bd.node_begin[b], n = bd.node_begin[b + 1] - first;
+    const std::int64_t m = n >= halo_part_from ? message[i++] : -1;
+    if (m < 0) {
+      for (std::size_t k = first; k < first + n; ++k, i += 4)
+        take(k, &message[i]);
+      bd.place(model, b);
+      stats_.halo_nodes += n;
+      continue;
+    }
+    HaloWindow w{b,
+                 {std::bit_cast<double>(message[i]), std::bit_cast<double>(message[i + 1]),
+                  std::bit_cast<double>(message[i + 2]), std::bit_cast<double>(message[i + 3])},
+                 message[i + 4] != 0,
+                 {}};
+    i += 5;
+    for (std::size_t k = first; k < first + n; ++k)
+      bd.points[k] = {std::nan(""), std::nan("")};
+    for (std::int64_t j = 0; j < m; ++j, i += 5) {
+      const std::size_t k = first + static_cast<std::size_t>(message[i]);
+      take(k, &message[i + 1]);
+      bd.points[k] = {nd.x[bd.nodes[k]], nd.y[bd.nodes[k]]};
+      w.received.push_back(static_cast<std::uint32_t>(k - first));
+    }
+    stats_.halo_nodes += static_cast<std::size_t>(m);
+    window_of_[b] = static_cast<std::int32_t>(windows_.size());
+    windows_.push_back(std::move(w));
+  }
+}
+
+// Whether (px, py) lies inside body B: the crossing count, or for a body here in part (its window
+// holds the point) the parity of the crossings between the window's lower-left corner and the
+// point and the corner's answer (exchangeHalo).
+bool Contact::insideOf(std::size_t B, double px, double py) const {
+  const ContactBoundaries &bd = boundaries_;
+  if (window_of_.empty() || window_of_[B] < 0)
+    return bd.inside(B, px, py);
+  const HaloWindow &w = windows_[static_cast<std::size_t>(window_of_[B])];
+  const double cx = w.box.x0, cy = w.box.y0;
+  auto side = [](double ax, double ay, double bx, double by, double x, double y) {
+    return (bx - ax) * (y - ay) - (by - ay) * (x - ax) > 0.0;
+  };
+  bool in = w.corner_inside;
+  for (const std::uint32_t *e = bd.ends(B); e != bd.endsEnd(B); e += 2) {
+    const Point &a = bd.points[e[0]], &b = bd.points[e[1]];
+    if (std::isnan(a.x) || std::isnan(b.x))
+      continue;
+    if (side(cx, cy, px, py, a.x, a.y) != side(cx, cy, px, py, b.x, b.y) &&
+        side(a.x, a.y, b.x, b.y, cx, cy) != side(a.x, a.y, b.x, b.y, px, py))
+      in = !in;
+  }
+  return in;
+}
+
+// The distance from (px, py) to the edge of the window body B came in here (exchangeHalo;
+// infinite for a body here whole): its segments beyond lie at least as far.
+double Contact::windowClearance(std::size_t B, double px, double py) const {
+  if (window_of_.empty() || window_of_[B] < 0)
+    return HUGE_VAL;
+  return windows_[static_cast<std::size_t>(window_of_[B])].box.edgeDistance(px, py);
 }
 
 // With the work shared: `count(b)` values of each body of `sends` (its process, the body), packed
@@ -561,6 +705,8 @@ void Contact::sendBodies(BodiesTo sends, BodiesTo receives, Count count, Pack pa
 void Contact::shareWork(const parallel::Communicator &processes, const std::vector<int> &owner) {
   processes_ = &processes, owner_ = &owner;
   block_received_.assign(owner_blocks, {});
+  window_of_.assign(owner.size(), -1);
+  windows_.clear();
 }
 
 // Bodies about to change owner: their box and travel, and the depths their nodes were pushed at and
@@ -839,7 +985,10 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
     }
     // Outside B, the node is as far from it as from the closest point found, or from the edge
     // of the region the near segments cover (the segments beyond lie beyond it).
-    auto outside = [&] { until = std::min(until, travel + std::min(std::sqrt(c.distance), edge)); };
+    auto outside = [&] {
+      until = std::min(
+          until, travel + std::min({std::sqrt(c.distance), edge, windowClearance(B, px, py)}));
+    };
     const Near &found = *searched;
     bool counted_inside = false; // inside B by the crossing count, already counted
     if (depth < 0.0) {           // in front of the closest segment or vertex
@@ -853,7 +1002,7 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
       const narrow::Closest beneath =
           near_fold ? narrow::closestBehind(found, px, py, -depth + check_depth * h)
                     : narrow::Closest{};
-      if (beneath.segment == no_node || !(counted_inside = bd.inside(B, px, py))) {
+      if (beneath.segment == no_node || !(counted_inside = insideOf(B, px, py))) {
         outside();
         continue;
       }
@@ -862,7 +1011,7 @@ MESOPEN_INLINE void Contact::touch(const Model &model, std::size_t A, std::size_
       ++hits.beneath_folds;
     }
     if (depth <= touching * h ||
-        (depth > check_depth * h && !counted_inside && !bd.inside(B, px, py))) {
+        (depth > check_depth * h && !counted_inside && !insideOf(B, px, py))) {
       // touching only; or deeper than a few percent of an element, where a dented grain can put
       // a node outside it behind one of its segments: the crossing count decides
       if (depth > check_depth * h)

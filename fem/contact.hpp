@@ -259,6 +259,19 @@ private:
   // (ascending), and the bodies at rest its contacts loaded (sendLoads, to stepReduced).
   std::vector<int> partners_;
   std::vector<std::int64_t> woken_;
+  // With the work shared: the bodies of other processes here in part in this step (exchangeHalo),
+  // each with its window, whether the window's lower-left corner is inside it, and the boundary
+  // nodes that came (positions in its boundary nodes); per body its window's place, or -1.
+  struct HaloWindow {
+    std::uint32_t body;
+    Box box;
+    bool corner_inside;
+    std::vector<std::uint32_t> received;
+  };
+  std::vector<HaloWindow> windows_;
+  std::vector<std::int32_t> window_of_;
+  bool insideOf(std::size_t B, double px, double py) const;
+  double windowClearance(std::size_t B, double px, double py) const;
   ContactStatistics stats_;
 
 public:
