@@ -141,32 +141,56 @@ void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
       current_[b] = (*owner_)[b] == me;
   }
   DiskContact::Region now = contact_.measure(model, r_max_);
-  if (shared()) { // the region and the fastest node over every process's bodies: one reduction
-    const std::vector<double> most =
-        processes_->max({-now.x0, -now.y0, now.x1, now.y1, contact_.fastest(model)});
-    contact_.useRegion(now = {-most[0], -most[1], most[2], most[3]});
+  // With the FE bodies shared: the region and the fastest node over every process's bodies, and
+  // every process's marks (exchangeBoundaries) on the cells of the last step's region widened by
+  // the largest disk's diameter, in one all-gather; when the region now is not within those cells
+  // (a process's near disk beyond them within reach of a body could have gone unmarked: the first
+  // step, a jump), or the near disks are chosen anew, the marks again on the region now.
+  std::vector<std::int64_t> marks_of_all;
+  if (shared()) {
+    nearDisksNow();
+    const std::vector<std::int64_t> all = shareRegion(model, now);
+    const MarkGrid last(marks_region_, marks_set_);
+    const double most[5] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL, -HUGE_VAL, 0.0};
+    double largest[5];
+    std::copy(most, most + 5, largest);
+    const std::size_t each = 5 + static_cast<std::size_t>(last.each);
+    for (std::size_t at = 0; at < all.size(); at += each)
+      for (std::size_t k = 0; k < 5; ++k)
+        largest[k] = std::max(largest[k], std::bit_cast<double>(all[at + k]));
+    contact_.useRegion(now = {-largest[0], -largest[1], largest[2], largest[3]});
     region_of_all_ = now;
-    fastest_of_all_ = most[4];
+    fastest_of_all_ = largest[4];
+    const DiskContact::Region &g = marks_region_;
+    if (marks_set_ && now.x0 >= g.x0 && now.y0 >= g.y0 && now.x1 <= g.x1 && now.y1 <= g.y1)
+      for (std::size_t at = 0; at < all.size(); at += each)
+        marks_of_all.insert(marks_of_all.end(), all.begin() + static_cast<long>(at + 5),
+                            all.begin() + static_cast<long>(at + each));
   }
   if (first || now.x0 < allowed_.x0 || now.y0 < allowed_.y0 || now.x1 > allowed_.x1 ||
-      now.y1 > allowed_.y1)
+      now.y1 > allowed_.y1) {
     choose(model, now, dt);
+    marks_of_all.clear();
+  }
   // Their state now (velocities at the step's middle, as the FE nodes'), the FE-DEM contact, and
   // the second half kick of its forces.
+  nearDisksNow();
   const std::size_t nc = m.moved.size();
-  for (auto *v : {&now_.x, &now_.y, &now_.vx, &now_.vy, &now_.omega, &now_.radius, &now_.mass})
-    v->resize(nc);
-  now_.id.resize(nc);
-  for (std::size_t c = 0; c < nc; ++c) {
-    const std::uint32_t i = m.moved[c];
-    const auto [vx, vy, spin] = slow(p, i);
-    now_.x[c] = p.x[i] + elapsed_ * vx + m.dx[i], now_.y[c] = p.y[i] + elapsed_ * vy + m.dy[i];
-    now_.vx[c] = vx + m.dvx[i], now_.vy[c] = vy + m.dvy[i];
-    now_.omega[c] = spin + m.domega[i];
-    now_.radius[c] = p.radius[i], now_.mass[c] = p.mass[i], now_.id[c] = p.id[i];
+  if (shared()) {
+    if (marks_of_all.empty()) {
+      marks_region_ = now, marks_set_ = true;
+      std::vector<std::int64_t> mine = markCells(MarkGrid(marks_region_, true));
+      const auto size = static_cast<std::int64_t>(mine.size());
+      marks_of_all = processes_->allGather(
+          std::move(mine),
+          std::vector<std::int64_t>(static_cast<std::size_t>(processes_->size()), size));
+    }
+    exchangeBoundaries(model, MarkGrid(marks_region_, marks_set_), marks_of_all);
+    // (the cells of the next step's marks)
+    const double reach = 4.0 * r_max_;
+    marks_region_ = {now.x0 - reach, now.y0 - reach, now.x1 + reach, now.y1 + reach};
+    marks_set_ = std::isfinite(now.x1 - now.x0) && std::isfinite(now.y1 - now.y0);
   }
-  if (shared())
-    exchangeBoundaries(model);
   fast_.reset(nc);
   reactions_.clear();
   contact_.addForces(model, now_, fast_, reactions_, dt);
@@ -285,71 +309,111 @@ void FeDemCoupling::shareWork(const parallel::Communicator &processes,
   contact_.lookAt(shared() ? &current_ : nullptr);
 }
 
-// The FE bodies that may touch this process's near disks: the region every FE body covers is cut
-// into at most 4,096 cells, each process marks the cells its near disks reach (centre and largest
-// radius) and all-gathers the marks (512 bytes), and the owner of a moving body whose box meets a
-// cell another process marked sends that process the body's boundary nodes, positions and
-// velocities. (A disk that touches a body has a point of the body's box within its reach: that
-// point's cell is marked and in the box's cells.)
-void FeDemCoupling::exchangeBoundaries(fem::Model &model) {
-  fem::Nodes &nd = model.nodes;
-  const DiskContact::Region &r = region_of_all_;
-  constexpr int cells = 4096, words = cells / 64;
+// The near disks' state now (velocities at the step's middle, as the FE nodes'): now_.
+void FeDemCoupling::nearDisksNow() {
+  const Particles &p = dem_.particles();
+  const WindowMotion &m = motion_;
+  const std::size_t nc = m.moved.size();
+  for (auto *v : {&now_.x, &now_.y, &now_.vx, &now_.vy, &now_.omega, &now_.radius, &now_.mass})
+    v->resize(nc);
+  now_.id.resize(nc);
+  for (std::size_t c = 0; c < nc; ++c) {
+    const std::uint32_t i = m.moved[c];
+    const auto [vx, vy, spin] = slow(p, i);
+    now_.x[c] = p.x[i] + elapsed_ * vx + m.dx[i], now_.y[c] = p.y[i] + elapsed_ * vy + m.dy[i];
+    now_.vx[c] = vx + m.dvx[i], now_.vy[c] = vy + m.dvy[i];
+    now_.omega[c] = spin + m.domega[i];
+    now_.radius[c] = p.radius[i], now_.mass[c] = p.mass[i], now_.id[c] = p.id[i];
+  }
+}
+
+// Every process's region (x0, y0 negated, x1, y1) and fastest boundary node (as bits), each with
+// its marks on the cells of the last step's (markCells), when there was one: one all-gather.
+std::vector<std::int64_t> FeDemCoupling::shareRegion(const fem::Model &model,
+                                                     const DiskContact::Region &mine) const {
+  std::vector<std::int64_t> values;
+  for (double v : {-mine.x0, -mine.y0, mine.x1, mine.y1, contact_.fastest(model)})
+    values.push_back(std::bit_cast<std::int64_t>(v));
+  if (marks_set_) {
+    const std::vector<std::int64_t> marks = markCells(MarkGrid(marks_region_, true));
+    values.insert(values.end(), marks.begin(), marks.end());
+  }
+  const auto size = static_cast<std::int64_t>(values.size());
+  return processes_->allGather(
+      std::move(values),
+      std::vector<std::int64_t>(static_cast<std::size_t>(processes_->size()), size));
+}
+
+FeDemCoupling::MarkGrid::MarkGrid(const DiskContact::Region &region, bool set) : r(region) {
   const double width = r.x1 - r.x0, height = r.y1 - r.y0;
-  // (no FE body: nothing marked, nothing sent; the same on every process)
-  const bool bodies_there =
-      std::isfinite(width) && std::isfinite(height) && width > 0.0 && height > 0.0;
-  const int nx = bodies_there
-                     ? static_cast<int>(std::clamp(std::round(std::sqrt(cells * width / height)),
-                                                   1.0, 1.0 * cells))
-                     : 1;
-  const int ny = cells / nx;
-  const double cw = bodies_there ? width / nx : 1.0, ch = bodies_there ? height / ny : 1.0;
-  auto column = [&](double x) {
-    return static_cast<int>(std::clamp(std::floor((x - r.x0) / cw), 0.0, nx - 1.0));
-  };
-  auto row = [&](double y) {
-    return static_cast<int>(std::clamp(std::floor((y - r.y0) / ch), 0.0, ny - 1.0));
-  };
-  // (per process with the cells its near disks reach the blocks of 4 x 4 cells its bodies' boxes
-  // cover, so that every process knows who may send whom a body or a reaction: partners_)
-  const int bx = (nx + 3) / 4, by = (ny + 3) / 4, block_words = (bx * by + 63) / 64;
-  const int each = words + block_words;
-  std::vector<std::int64_t> marks(static_cast<std::size_t>(each), 0);
-  auto set = [](std::int64_t *m, int c) { m[c / 64] |= std::int64_t{1} << (c % 64); };
-  for (std::size_t c = 0; bodies_there && c < now_.size(); ++c) {
+  bodies_there =
+      set && std::isfinite(width) && std::isfinite(height) && width > 0.0 && height > 0.0;
+  nx = bodies_there ? static_cast<int>(std::clamp(std::round(std::sqrt(cells * width / height)),
+                                                  1.0, 1.0 * cells))
+                    : 1;
+  ny = cells / nx;
+  cw = bodies_there ? width / nx : 1.0, ch = bodies_there ? height / ny : 1.0;
+  bx = (nx + 3) / 4, by = (ny + 3) / 4, block_words = (bx * by + 63) / 64;
+  each = words + block_words;
+}
+
+// The marks of this process on `grid`'s cells: those its near disks reach (centre and largest
+// radius; a disk farther than that from the grid's region is left out, as no FE body is within its
+// reach), then in blocks of 4 x 4 cells those its bodies' boxes cover (at rest too: every process
+// may load those), so that every process knows who may send whom a body or a reaction.
+std::vector<std::int64_t> FeDemCoupling::markCells(const MarkGrid &grid) const {
+  const DiskContact::Region &r = grid.r;
+  std::vector<std::int64_t> marks(static_cast<std::size_t>(grid.each), 0);
+  for (std::size_t c = 0; grid.bodies_there && c < now_.size(); ++c) {
     const double x = now_.x[c], y = now_.y[c];
     if (x + r_max_ < r.x0 || x - r_max_ > r.x1 || y + r_max_ < r.y0 || y - r_max_ > r.y1)
       continue; // (no FE body within its reach)
-    for (int j = row(y - r_max_); j <= row(y + r_max_); ++j)
-      for (int i = column(x - r_max_); i <= column(x + r_max_); ++i)
-        set(marks.data(), j * nx + i);
+    for (int j = grid.row(y - r_max_); j <= grid.row(y + r_max_); ++j)
+      for (int i = grid.column(x - r_max_); i <= grid.column(x + r_max_); ++i)
+        MarkGrid::set(marks.data(), j * grid.nx + i);
   }
   const int me = processes_->rank();
   const std::vector<std::uint32_t> &bodies = contact_.bodies();
-  for (std::size_t k = 0; bodies_there && k < bodies.size(); ++k) {
-    if ((*owner_)[bodies[k]] != me) // (a body at rest too: every process may load it)
+  for (std::size_t k = 0; grid.bodies_there && k < bodies.size(); ++k) {
+    if ((*owner_)[bodies[k]] != me)
       continue;
     const DiskContact::Region box = contact_.box(k);
-    for (int j = row(box.y0) / 4; j <= row(box.y1) / 4; ++j)
-      for (int i = column(box.x0) / 4; i <= column(box.x1) / 4; ++i)
-        set(marks.data() + words, j * bx + i);
+    for (int j = grid.row(box.y0) / 4; j <= grid.row(box.y1) / 4; ++j)
+      for (int i = grid.column(box.x0) / 4; i <= grid.column(box.x1) / 4; ++i)
+        MarkGrid::set(marks.data() + MarkGrid::words, j * grid.bx + i);
   }
-  const auto ranks = static_cast<std::size_t>(processes_->size());
-  const std::vector<std::int64_t> all =
-      processes_->allGather(std::move(marks), std::vector<std::int64_t>(ranks, each));
+  return marks;
+}
+
+// The FE bodies that may touch this process's near disks: a region covering every FE body (and
+// every near disk within reach of one) is cut into at most 4,096 cells, every process's marks on
+// them (markCells, all-gathered: `all`, each process's in rank order) say which cells its near
+// disks reach and which blocks its bodies cover, and the owner of a moving body whose box meets a
+// cell another process marked sends that process the body's boundary nodes, positions and
+// velocities. (A disk that touches a body has a point of the body's box within its reach: that
+// point's cell is marked and in the box's cells.)
+void FeDemCoupling::exchangeBoundaries(fem::Model &model, const MarkGrid &grid,
+                                       const std::vector<std::int64_t> &all) {
+  fem::Nodes &nd = model.nodes;
+  const int nx = grid.nx, words = MarkGrid::words, bx = grid.bx, block_words = grid.block_words;
+  const int each = grid.each;
+  const bool bodies_there = grid.bodies_there;
+  auto set = MarkGrid::set;
   auto marked = [&](std::size_t rank, const DiskContact::Region &box) {
     if (!bodies_there)
       return false;
     const std::int64_t *m = &all[rank * static_cast<std::size_t>(each)];
-    for (int j = row(box.y0); j <= row(box.y1); ++j)
-      for (int i = column(box.x0); i <= column(box.x1); ++i) {
+    for (int j = grid.row(box.y0); j <= grid.row(box.y1); ++j)
+      for (int i = grid.column(box.x0); i <= grid.column(box.x1); ++i) {
         const int c = j * nx + i;
         if ((m[c / 64] >> (c % 64)) & 1)
           return true;
       }
     return false;
   };
+  const int me = processes_->rank();
+  const std::vector<std::uint32_t> &bodies = contact_.bodies();
+  const auto ranks = static_cast<std::size_t>(processes_->size());
   // q may send r a body (a moving one) when one of q's bodies covers a block with a cell r's
   // disks reach, and r send q reactions on it (on one at rest too, which every process holds)
   std::vector<std::int64_t> reached(ranks * static_cast<std::size_t>(block_words), 0);

@@ -28,7 +28,9 @@
 #include "exchange.hpp"
 #include "solver.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 
@@ -104,7 +106,30 @@ private:
   void choose(const fem::Model &model, const DiskContact::Region &now, double dt);
   void endWindow();
   bool shared() const { return processes_ != nullptr && processes_->size() > 1; }
-  void exchangeBoundaries(fem::Model &model);
+  // The cells of the FE-DEM halo's marks (exchangeBoundaries) over a region, none if it is not
+  // set or has no area: nx x ny cells, in blocks of 4 x 4 (bx x by); per process `words` words
+  // of cell bits, then `block_words` of block bits.
+  struct MarkGrid {
+    static constexpr int cells = 4096, words = cells / 64;
+    DiskContact::Region r;
+    bool bodies_there;
+    int nx, ny, bx, by, block_words, each;
+    double cw, ch;
+    MarkGrid(const DiskContact::Region &region, bool set);
+    int column(double x) const {
+      return static_cast<int>(std::clamp(std::floor((x - r.x0) / cw), 0.0, nx - 1.0));
+    }
+    int row(double y) const {
+      return static_cast<int>(std::clamp(std::floor((y - r.y0) / ch), 0.0, ny - 1.0));
+    }
+    static void set(std::int64_t *m, int c) { m[c / 64] |= std::int64_t{1} << (c % 64); }
+  };
+  void nearDisksNow();
+  std::vector<std::int64_t> shareRegion(const fem::Model &model,
+                                        const DiskContact::Region &mine) const;
+  std::vector<std::int64_t> markCells(const MarkGrid &grid) const;
+  void exchangeBoundaries(fem::Model &model, const MarkGrid &grid,
+                          const std::vector<std::int64_t> &all);
   void applyReactions(fem::Model &model);
 
   DemParticipant &dem_;
@@ -142,6 +167,10 @@ private:
   std::vector<std::int64_t> woken_;
   double fastest_of_all_ = 0.0; // the fastest boundary node over every process's bodies [m/s]
   DiskContact::Region region_of_all_{}; // the region every process's FE bodies cover
+  // the region of the next step's marks' cells (the last region widened by twice the largest
+  // disk's diameter), and whether there is one (shareRegion)
+  DiskContact::Region marks_region_{};
+  bool marks_set_ = false;
   std::size_t halo_nodes_ = 0;
   // With levels (Model::due not empty): the near disks now in cells of the largest disk's
   // diameter, the fastest closing speed [m/s] and the step [s] they were taken at (capLevels).
