@@ -24,9 +24,8 @@ constexpr double list_margin = 0.5;  // a pair's lists: margin / the smaller bod
 constexpr std::size_t runs_per_thread = 4; // runs of pairs: a thread takes the next one free
 constexpr std::size_t owner_blocks = 16;   // blocks of bodies, each adding its nodes' forces
 constexpr std::size_t prefetch_ahead = 8;  // contacts and loads ahead whose nodes are fetched
-// With the work shared: a body of at least this many boundary nodes goes to a partner in part,
-// the part within this many of its element sizes of the overlaps (exchangeHalo).
-constexpr std::size_t halo_part_from = 128;
+// With the work shared: a body in part goes to a partner with its segments within this many of its
+// element sizes (and each overlap's diagonal) of the overlaps (exchangeHalo).
 constexpr double halo_reach = 2.0;
 constexpr double kept_softer = 2.0; // with levels: a contact's kept penalty step, at most this
                                     // times a beginning contact's (hit)
@@ -514,7 +513,8 @@ void Contact::shareBoxes(const Model &model, bool anew) {
 // With the work shared: the pairs whose boxes overlap and whose bodies two processes own are
 // computed by both (each its own body's side); each sends the other its body's boundary nodes,
 // position and velocity (Model::nodes and the boundary's points). A body of at least
-// halo_part_from boundary nodes (the projectile) goes in part when that is less than 3/4 of them:
+// ContactSettings::halo_in_part_from boundary nodes (the projectile) goes in part when that is less
+// than 3/4 of them:
 // the ends of its segments that meet the window, the box around the overlaps of its pairs with the
 // partner's bodies widened by halo_reach of its element size, with the window and whether its
 // lower-left corner lies inside the body (the owner's crossing count). There the others' points
@@ -553,17 +553,27 @@ void Contact::exchangeHalo(Model &model) {
   for (const HaloWindow &w : windows_)
     window_of_[w.body] = -1;
   windows_.clear();
-  // A body's message: its nodes' values (4 each); one of at least halo_part_from nodes first says
+  // A body's message: its nodes' values (4 each); one that may go in part first says
   // how many come, -1 for all, and if not all the window (4 values), the corner's side (1) and
   // before each node's values its position in the body's boundary nodes.
+  auto may_part = [&](std::size_t n) {
+    return s_.halo_in_part_from > 0 && n >= static_cast<std::size_t>(s_.halo_in_part_from);
+  };
   std::vector<std::vector<std::int64_t>> to(ranks);
   std::vector<std::uint32_t> sent; // positions in the body's boundary nodes
   for (std::size_t i = 0; i < sends.size();) {
     const auto [partner, b] = sends[i].first;
-    Box around = sends[i].second;
-    for (++i; i < sends.size() && sends[i].first == sends[i - 1].first; ++i)
-      around = {std::min(around.x0, sends[i].second.x0), std::min(around.y0, sends[i].second.y0),
-                std::max(around.x1, sends[i].second.x1), std::max(around.y1, sends[i].second.y1)};
+    // (each overlap widened by its diagonal: a pair's lists can hold a segment as far from a node
+    // in the overlap as the node's clearance, which is at most about that)
+    auto reach = [&](const Box &o) {
+      return o.widened(std::hypot(o.x1 - o.x0, o.y1 - o.y0) + halo_reach * bd.size[b]);
+    };
+    Box window = reach(sends[i].second);
+    for (++i; i < sends.size() && sends[i].first == sends[i - 1].first; ++i) {
+      const Box o = reach(sends[i].second);
+      window = {std::min(window.x0, o.x0), std::min(window.y0, o.y0), std::max(window.x1, o.x1),
+                std::max(window.y1, o.y1)};
+    }
     std::vector<std::int64_t> &message = to[static_cast<std::size_t>(partner)];
     const std::size_t first = bd.node_begin[b], n = bd.node_begin[b + 1] - first;
     auto put = [&](std::size_t k) {
@@ -571,9 +581,8 @@ void Contact::exchangeHalo(Model &model) {
       for (double v : {nd.x[node], nd.y[node], nd.vx[node], nd.vy[node]})
         message.push_back(std::bit_cast<std::int64_t>(v));
     };
-    const Box window = around.widened(halo_reach * bd.size[b]);
     sent.clear();
-    if (n >= halo_part_from) {
+    if (may_part(n)) {
       for (const std::uint32_t *e = bd.ends(b); e != bd.endsEnd(b); e += 2) {
         const Point &p = bd.points[e[0]], &q = bd.points[e[1]];
         if (window.meets(p.x, p.y, q.x, q.y))
@@ -583,8 +592,8 @@ void Contact::exchangeHalo(Model &model) {
       std::sort(sent.begin(), sent.end());
       sent.erase(std::unique(sent.begin(), sent.end()), sent.end());
     }
-    const bool whole = n < halo_part_from || 4 * sent.size() >= 3 * n;
-    if (n >= halo_part_from)
+    const bool whole = !may_part(n) || 4 * sent.size() >= 3 * n;
+    if (may_part(n))
       message.push_back(whole ? -1 : static_cast<std::int64_t>(sent.size()));
     if (whole) {
       for (std::size_t k = first; k < first + n; ++k)
@@ -611,7 +620,7 @@ void Contact::exchangeHalo(Model &model) {
     const std::vector<std::int64_t> &message = from[static_cast<std::size_t>(partner)];
     std::size_t &i = at[static_cast<std::size_t>(partner)];
     const std::size_t first = bd.node_begin[b], n = bd.node_begin[b + 1] - first;
-    const std::int64_t m = n >= halo_part_from ? message[i++] : -1;
+    const std::int64_t m = may_part(n) ? message[i++] : -1;
     if (m < 0) {
       for (std::size_t k = first; k < first + n; ++k, i += 4)
         take(k, &message[i]);

@@ -77,6 +77,9 @@ struct ContactSettings {
   double wall_left = std::numeric_limits<double>::quiet_NaN();   // x >= wall_left
   double wall_right = std::numeric_limits<double>::quiet_NaN();  // x <= wall_right
   double wall_bottom = std::numeric_limits<double>::quiet_NaN(); // y >= wall_bottom
+  // With the work shared among processes: a body of at least this many boundary nodes goes to a
+  // halo partner in part (Contact::exchangeHalo; 0: every body whole). The run is the same.
+  std::int64_t halo_in_part_from = 128;
 };
 
 struct ContactStatistics {

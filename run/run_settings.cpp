@@ -28,6 +28,7 @@ fem::ContactSettings contactSettings(const Scene &scene, bool walls) {
   s.wall_friction = scene.run.smooth_walls ? 0.0 : c.friction;
   s.stiffness = c.stiffness;
   s.damping = c.damping;
+  s.halo_in_part_from = c.halo_in_part_from;
   if (walls)
     s.wall_left = 0.0, s.wall_right = scene.target.width, s.wall_bottom = 0.0;
   return s;

@@ -368,6 +368,10 @@ const std::vector<Key> &keys() {
         real("contact", "damping", c, &C::damping, "", 0, false, 2,
              "damping of the contact spring, a fraction of its critical damping (stable up to "
              "about 0.1)"),
+        integer("contact", "halo_in_part_from", c, &C::halo_in_part_from, 0, 1e9,
+                "with several MPI ranks: a body of at least this many boundary nodes goes to "
+                "another rank's contact halo in part, the segments near its pairs there (0: "
+                "every body whole); the run is the same"),
         real("dem", "stiffness", d, &D::stiffness, "N/m^2", 0, true, 1e16,
              "normal stiffness k_n of the disks' contacts, per metre of thickness "
              "(docs/coupling.md)"),

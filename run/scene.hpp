@@ -89,6 +89,8 @@ struct ContactSpec {
   double projectile_friction = friction;               // between the projectile and grains or walls
   double stiffness = fem::ContactSettings{}.stiffness; // penalty kappa: k = kappa m_eff / dt^2
   double damping = fem::ContactSettings{}.damping;     // fraction of the spring's critical damping
+  // with several MPI ranks: the boundary nodes from which a body goes to a halo partner in part
+  std::int64_t halo_in_part_from = fem::ContactSettings{}.halo_in_part_from;
 };
 
 // The disks' normal contact law in LIGGGHTS (liggghts-inputs/dem.in): linear (hooke/stiffness) or
