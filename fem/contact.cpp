@@ -722,12 +722,17 @@ void Contact::shareWork(const parallel::Communicator &processes, const std::vect
 // their allowances, kept by their owner only, go to their new owner, who places their boundaries
 // where their old owner measured them this step (their nodes came with them: Solver::repartition);
 // every side of every pair is looked at whole at the next step (its clear nodes were measured by
-// the process that computed it).
+// the process that computed it). With levels a node's depth is kept per level of pair, with the
+// time it was pushed at and its contact's penalty step.
 void Contact::bodiesMoving(const Model &model, const std::vector<std::uint32_t> &bodies,
                            const std::vector<int> &new_owner) {
   if (!shared())
     return;
-  constexpr std::size_t values = 3; // per node: pushed depth, allowance, release per step
+  const bool levels = !pushed_time_.empty();
+  const std::size_t depths = levels ? pushed_levels_ : 1, n_nodes = model.nodes.size();
+  // per node: allowance, release per step, the pushed depths (with levels, each with its time
+  // and penalty step)
+  const std::size_t values = 2 + (levels ? 3 : 1) * depths;
   constexpr std::size_t body_values = ContactBoundaries::box_values; // per body: box, travel
   ContactBoundaries &bd = boundaries_;
   parallel::moveValues(
@@ -744,22 +749,33 @@ void Contact::bodiesMoving(const Model &model, const std::vector<std::uint32_t> 
         for (std::size_t a = body.node_begin; a < body.node_end; ++a) {
           const auto p = static_cast<std::uint32_t>(a);
           const double allowance = allowances_.of(p);
-          *out++ = pushed_[a], *out++ = allowance;
-          *out++ = allowance > 0.0 ? allowances_.rate(p) : 0.0;
+          *out++ = allowance, *out++ = allowance > 0.0 ? allowances_.rate(p) : 0.0;
+          for (std::size_t l = 0; l < depths; ++l) {
+            *out++ = pushed_[l * n_nodes + a];
+            if (levels)
+              *out++ = pushed_time_[l * n_nodes + a], *out++ = pushed_penalty_[l * n_nodes + a];
+          }
         }
       },
       [&](std::size_t k, const double *in) {
         const std::uint32_t b = bodies[k];
         bd.setBoxAndTravel(b, in);
         in += body_values;
-        for (std::size_t a = model.bodies[b].node_begin; a < model.bodies[b].node_end;
-             ++a, in += values) {
+        for (std::size_t a = model.bodies[b].node_begin; a < model.bodies[b].node_end; ++a) {
           const auto p = static_cast<std::uint32_t>(a);
-          if (in[0] != 0.0 && pushed_[a] == 0.0)
-            block_pushed_[block_[b]].push_back(p);
-          pushed_[a] = in[0];
-          if (in[1] > 0.0 || allowances_.of(p) > 0.0)
-            allowances_.set(p, in[1], in[2]);
+          if (in[0] > 0.0 || allowances_.of(p) > 0.0)
+            allowances_.set(p, in[0], in[1]);
+          in += 2;
+          if (!levels) {
+            if (in[0] != 0.0 && pushed_[a] == 0.0)
+              block_pushed_[block_[b]].push_back(p);
+            pushed_[a] = *in++;
+            continue;
+          }
+          for (std::size_t l = 0; l < depths; ++l, in += 3) {
+            const std::size_t at = l * n_nodes + a;
+            pushed_[at] = in[0], pushed_time_[at] = in[1], pushed_penalty_[at] = in[2];
+          }
         }
         bd.place(model, b);
       });

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <sstream>
 #ifdef __AVX__
@@ -173,6 +174,7 @@ Solver::Solver(Model &model, SolverSettings settings, const parallel::Communicat
       addKinetic(a, 0.5 * nd.mass[a] * (nd.vx[a] * nd.vx[a] + nd.vy[a] * nd.vy[a]));
   if (levels()) {
     bodySums(0, units_.size());
+    shareBodySteps(s_.max_level);
     std::fill(m_.window.begin(), m_.window.end(), dt_);
   }
   accountEnergy();
@@ -537,7 +539,8 @@ void Solver::repartition(const std::vector<std::size_t> &load) {
   }
   // The bodies that change owner and move carry their state to their new owner alone (a body at
   // rest is the same on every process): its elements' state, its nodes' x(n+1), v(n+1), f(n+1)
-  // and external forces (the next step's half-kick and the work it does), at the end of a step.
+  // and external forces (the next step's half-kick and the work it does), at the end of a step;
+  // with levels what only the owner keeps of them (packLevels).
   std::vector<std::uint32_t> moving;
   for (std::size_t b = 0; b < owner.size(); ++b)
     if (owner[b] != owner_[b]) {
@@ -552,7 +555,7 @@ void Solver::repartition(const std::vector<std::size_t> &load) {
       [&](std::size_t k) {
         const Body &body = m_.bodies[moving[k]];
         return fields.size() * (body.element_end - body.element_begin) +
-               10 * (body.node_end - body.node_begin);
+               10 * (body.node_end - body.node_begin) + levelValues(moving[k]);
       },
       [&](std::size_t k, double *out) {
         const Body &body = m_.bodies[moving[k]];
@@ -565,6 +568,7 @@ void Solver::repartition(const std::vector<std::size_t> &load) {
           *out++ = nd.fx[a], *out++ = nd.fy[a];
           *out++ = x.fx, *out++ = x.fy, *out++ = x.friction_x, *out++ = x.friction_y;
         }
+        packLevels(moving[k], out);
       },
       [&](std::size_t k, const double *in) {
         const Body &body = m_.bodies[moving[k]];
@@ -579,6 +583,7 @@ void Solver::repartition(const std::vector<std::size_t> &load) {
           if (!nd.is_loaded[a] && (in[6] != 0.0 || in[7] != 0.0 || in[8] != 0.0 || in[9] != 0.0))
             nd.is_loaded[a] = 1, nd.loaded.push_back(static_cast<std::uint32_t>(a));
         }
+        unpackLevels(moving[k], in);
       });
   for (ForceProvider *provider : providers_)
     provider->bodiesMoving(m_, moving, owner);
@@ -830,10 +835,8 @@ void Solver::forces(double dt, bool kick) {
   }
   // This process's sums: its elements' energies (chunk order), its units' kick sums (unit order)
   // and the second half's constraints at its nodes (applyConstraints); the processes' shares of
-  // the energies are summed only when asked (sumEnergy). The step's figures every process needs,
-  // in one reduction (the largest of each): the shortest element step, the first inverted
-  // element, the most elements that failed or asked for mass on a process (erode and scaleMasses
-  // gather theirs only then, as many from each), whether the energies are no longer finite.
+  // the energies are summed only when asked (sumEnergy). The step's figures every process needs
+  // in its one reduction (reduceStep).
   const long n = static_cast<long>(chunks_.size());
   double dt_min = std::numeric_limits<double>::infinity();
   std::int64_t inverted = -1;
@@ -865,12 +868,27 @@ void Solver::forces(double dt, bool kick) {
     }
   }
   kick_sums_.clear();
-  // In the same reduction, at a step: the providers' figures for the next step (with the work
-  // shared) and the time loop's values.
+  dt_min = reduceStep(dt_min, inverted, failing, scaling,
+                      std::isfinite(energy_.kinetic) && std::isfinite(internal), kick, time_ + dt);
+  next_dt_ = s_.safety * step_scale_ * dt_min;
+  shortest_step_ = dt_min;
+  if (measure_body_steps_)
+    bodyStepsFromElements();
+}
+
+// The step's one reduction (every process calls it; the largest of each value over the
+// processes): this process's shortest element step `dt_min` (returned: every process's shortest),
+// its first inverted element (-1: none), its elements that failed and that ask for mass (erode and
+// scaleMasses gather theirs only when some process has some, as many from each), whether its
+// energies are finite; at a step (`kick`) also the providers' figures for the next step (with the
+// work shared) and the time loop's values. An inverted element ends the run (`time`: the step's
+// end), named by the lowest number whoever computed it (its area from the process that did,
+// gathered only then).
+double Solver::reduceStep(double dt_min, std::int64_t inverted, std::size_t failing,
+                          std::size_t scaling, bool finite, bool kick, double time) {
   std::vector<double> figures = {
       -dt_min, inverted >= 0 ? -static_cast<double>(inverted) : -HUGE_VAL,
-      static_cast<double>(failing), static_cast<double>(scaling),
-      std::isfinite(energy_.kinetic) && std::isfinite(internal) ? 0.0 : 1.0};
+      static_cast<double>(failing), static_cast<double>(scaling), finite ? 0.0 : 1.0};
   const bool provider_figures = kick && comm_.size() > 1;
   std::vector<std::size_t> provider_first; // where each provider's figures begin
   if (provider_figures) {
@@ -886,7 +904,6 @@ void Solver::forces(double dt, bool kick) {
     agree_next_.clear();
   }
   const std::vector<double> all = comm_.max(std::move(figures));
-  dt_min = -all[0];
   most_failing_ = static_cast<std::size_t>(all[2]),
   most_scaling_ = static_cast<std::size_t>(all[3]);
   not_finite_ = all[4] != 0.0;
@@ -897,8 +914,6 @@ void Solver::forces(double dt, bool kick) {
   }
   if (kick)
     agreed_.assign(all.begin() + static_cast<long>(first_agreed), all.end());
-  // The first inverted element of any process, the lowest number whoever computed it (its area
-  // from the process that did, gathered only then).
   if (all[1] > -HUGE_VAL) {
     const auto e = static_cast<std::size_t>(-all[1]);
     const double area =
@@ -907,22 +922,22 @@ void Solver::forces(double dt, bool kick) {
     std::ostringstream msg;
     msg << "element " << e << " of body " << body.name << " (material "
         << m_.materials[body.material]->type() << ") is inverted: area " << area
-        << " m^2, initially " << m_.elements.area0[e] << " m^2, at t = " << time_ + dt
-        << " s, step " << steps_ + 1;
+        << " m^2, initially " << m_.elements.area0[e] << " m^2, at t = " << time << " s, step "
+        << steps_ + 1;
     throw RunFailure(msg.str());
   }
-  next_dt_ = s_.safety * step_scale_ * dt_min;
-  shortest_step_ = dt_min;
-  if (measure_body_steps_)
-    bodyStepsFromElements();
+  return -all[0];
 }
 
 // How far any node this process moves can go in the next step's drift, dt' |v + dt'/2 f / m| at
 // most (each component bounded by its magnitudes), from the state after this step's second
 // half-kick: the next step dt' is at most max_dt_growth times this one (nextStep; the end's equal
 // steps are shorter); mass scaling, which comes before it, only adds mass (slower nodes, smaller
-// kicks); a node whose velocity is imposed moves by dt' times it (its v now).
+// kicks); a node whose velocity is imposed moves by dt' times it (its v now). With levels see
+// nextDriftBoundLevels.
 double Solver::nextDriftBound() const {
+  if (levels())
+    return nextDriftBoundLevels();
   const Nodes &nd = m_.nodes;
   const double dt = std::max(1.0, s_.max_dt_growth) * dt_, half_dt = 0.5 * dt;
   const long blocks = static_cast<long>(node_ranges_.size());

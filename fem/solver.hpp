@@ -204,12 +204,13 @@ public:
   void addForceProvider(ForceProvider *provider);
   // Elements updated in the last step (bodies at rest and eroded elements are skipped).
   std::size_t activeElements() const { return step_elements_; }
-  // Over the run (this process's steps): the element updates computed, and those a single-rate
-  // run would have computed (the active elements of every step); equal without levels.
+  // Over the run (this process's steps): the element updates computed (this process's, of its
+  // own bodies), and those a single-rate run would have computed (the active elements of every
+  // step, of every process); equal without levels on one process.
   double elementSteps() const { return element_steps_; }
   double singleRateElementSteps() const { return single_rate_element_steps_; }
-  // With levels: the active elements at each level now (a body in parts by its parts' levels);
-  // the bodies stepped in parts and their parts.
+  // With levels: the active elements of this process's bodies at each level now (a body in parts
+  // by its parts' levels); the bodies stepped in parts and their parts.
   std::vector<std::size_t> elementsByLevel() const;
   std::size_t bodiesInParts() const { return parted_bodies_.size(); }
   std::size_t parts() const { return parts_.size(); }
@@ -346,7 +347,10 @@ private:
   void addKickSums(const std::vector<KickSums> &sums, double half_dt);
   void kickAndDrift(double dt);
   void forces(double dt, bool kick);
+  double reduceStep(double dt_min, std::int64_t inverted, std::size_t failing, std::size_t scaling,
+                    bool finite, bool kick, double time);
   double nextDriftBound() const;
+  double nextDriftBoundLevels() const;
   void nodalVolumes(const Unit &unit, const UnitNodes &nodes);
   void unitPass(const Unit &unit, double dt, UnitScratch &scratch);
   void storeReferenceShapes();
@@ -375,10 +379,15 @@ private:
   bool levels() const { return s_.max_level > 0; }
   void stepLevels();
   void kickAndDriftLevels(int top, const double *tau);
-  void forcesLevels(int top, const double *tau);
+  void forcesLevels(int top, const double *tau, double base_dt);
   void halfKickLevels(std::size_t a, double half_dt, double half_external, double fx, double fy,
                       bool second_half, double &vx, double &vy, KickSums &sums) const;
   void chooseLevels(int top);
+  void shareBodySteps(int top);
+  std::size_t levelValues(std::uint32_t b) const;
+  void packLevels(std::uint32_t b, double *&out) const;
+  void unpackLevels(std::uint32_t b, const double *&in);
+  std::size_t partedIndex(std::uint32_t b) const;
   void startLevels();
   State::Levels levelsState() const;
   void restoreLevels(const State::Levels &st);
@@ -464,6 +473,7 @@ private:
   std::vector<std::uint8_t> level_, own_level_, laid_levels_;
   std::vector<double> body_step_min_, body_kinetic_, body_internal_, level_start_;
   std::vector<double> level_step_; // per element: its step in its last pass
+  double step_end_ = 0.0;          // the time at the end of the step being taken
   std::vector<std::size_t> level_units_, level_blocks_;
   std::vector<std::vector<std::size_t>> due_thread_blocks_;
   double element_steps_ = 0.0, single_rate_element_steps_ = 0.0;

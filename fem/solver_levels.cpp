@@ -25,10 +25,6 @@
 namespace mesopen::fem {
 
 void Solver::startLevels() {
-  if (comm_.size() > 1)
-    throw std::invalid_argument("multiple time stepping (max_level " +
-                                std::to_string(s_.max_level) + ") runs on one process, not " +
-                                std::to_string(comm_.size()));
   if (s_.max_level > 7)
     throw std::invalid_argument("max_level " + std::to_string(s_.max_level) +
                                 ": at most 7 levels above the base step");
@@ -113,6 +109,78 @@ void Solver::restoreLevels(const State::Levels &st) {
   single_rate_element_steps_ = st.single_rate_element_steps;
 }
 
+// With several processes, what only a body's owner keeps of its levels, which goes with it to a
+// new owner (Solver::repartition): its elements' steps of their last pass, its kinetic and
+// internal energy at its last update; of a body in parts each part's level, own level, shortest
+// step and weight, its force at its nodes, and the body's nodes' window starts. (Its level, own
+// level and shortest step every process knows.)
+std::size_t Solver::levelValues(std::uint32_t b) const {
+  if (!levels())
+    return 0;
+  const Body &body = m_.bodies[b];
+  std::size_t count = body.element_end - body.element_begin + 2;
+  if (part_begin_[b] < part_begin_[b + 1])
+    count += 4 * (part_begin_[b + 1] - part_begin_[b]) +
+             2 * (part_node_begin_[part_begin_[b + 1]] - part_node_begin_[part_begin_[b]]) +
+             2 * static_cast<std::size_t>(s_.max_level) * (body.node_end - body.node_begin);
+  return count;
+}
+
+void Solver::packLevels(std::uint32_t b, double *&out) const {
+  if (!levels())
+    return;
+  const Body &body = m_.bodies[b];
+  out = std::copy(level_step_.begin() + static_cast<long>(body.element_begin),
+                  level_step_.begin() + static_cast<long>(body.element_end), out);
+  *out++ = body_kinetic_[b], *out++ = body_internal_[b];
+  if (part_begin_[b] == part_begin_[b + 1])
+    return;
+  for (std::size_t p = part_begin_[b]; p < part_begin_[b + 1]; ++p)
+    *out++ = part_level_[p], *out++ = part_own_level_[p], *out++ = part_step_min_[p],
+    *out++ = part_weight_[p];
+  for (std::size_t j = part_node_begin_[part_begin_[b]]; j < part_node_begin_[part_begin_[b + 1]];
+       ++j)
+    *out++ = part_force_[j].x, *out++ = part_force_[j].y;
+  const std::size_t i = partedIndex(b);
+  for (int l = 1; l <= s_.max_level; ++l)
+    for (const auto *start :
+         {&window_x_[i][static_cast<std::size_t>(l)], &window_y_[i][static_cast<std::size_t>(l)]})
+      out = std::copy(start->begin(), start->end(), out);
+}
+
+void Solver::unpackLevels(std::uint32_t b, const double *&in) {
+  if (!levels())
+    return;
+  const Body &body = m_.bodies[b];
+  std::copy(in, in + (body.element_end - body.element_begin),
+            level_step_.begin() + static_cast<long>(body.element_begin));
+  in += body.element_end - body.element_begin;
+  body_kinetic_[b] = *in++, body_internal_[b] = *in++;
+  if (part_begin_[b] == part_begin_[b + 1])
+    return;
+  for (std::size_t p = part_begin_[b]; p < part_begin_[b + 1]; ++p, in += 4) {
+    part_level_[p] = static_cast<std::uint8_t>(in[0]);
+    part_own_level_[p] = static_cast<std::uint8_t>(in[1]);
+    part_step_min_[p] = in[2], part_weight_[p] = in[3];
+  }
+  for (std::size_t j = part_node_begin_[part_begin_[b]]; j < part_node_begin_[part_begin_[b + 1]];
+       ++j, in += 2)
+    part_force_[j] = {in[0], in[1]};
+  const std::size_t i = partedIndex(b);
+  for (int l = 1; l <= s_.max_level; ++l)
+    for (auto *to :
+         {&window_x_[i][static_cast<std::size_t>(l)], &window_y_[i][static_cast<std::size_t>(l)]}) {
+      std::copy(in, in + to->size(), to->begin());
+      in += to->size();
+    }
+}
+
+// The place of body b (a body in parts) among parted_bodies_.
+std::size_t Solver::partedIndex(std::uint32_t b) const {
+  return static_cast<std::size_t>(std::find(parted_bodies_.begin(), parted_bodies_.end(), b) -
+                                  parted_bodies_.begin());
+}
+
 // The bodies of at least parts_from elements step in parts of part_elements consecutive elements
 // (the projectile: its elements are ordered from the tip, so that a part is a slab across it).
 void Solver::startParts() {
@@ -168,8 +236,7 @@ void Solver::partsPass(const Unit &unit, int top, const double *tau, UnitScratch
   const std::uint32_t b = nd.body[unit.node_lo];
   const int e = level_[b];
   const std::size_t base = unit.node_lo, n = unit.node_hi - base;
-  const std::size_t i_body = static_cast<std::size_t>(
-      std::find(parted_bodies_.begin(), parted_bodies_.end(), b) - parted_bodies_.begin());
+  const std::size_t i_body = partedIndex(b);
   std::vector<NodeState> &state = scratch.state;
   std::vector<NodeForce> &force = scratch.force, &part_force = scratch.part_force;
   state.resize(n);
@@ -305,6 +372,8 @@ std::vector<std::size_t> Solver::elementsByLevel() const {
   std::vector<std::size_t> count(static_cast<std::size_t>(s_.max_level) + 1, 0);
   for (std::uint32_t b : active_bodies_) {
     const Body &body = m_.bodies[b];
+    if (!owns(b))
+      continue;
     if (part_begin_.empty() || part_begin_[b] == part_begin_[b + 1]) {
       count[level_[b]] += body.element_end - body.element_begin - body.eroded;
       continue;
@@ -344,7 +413,10 @@ void Solver::halfKickLevels(std::size_t a, double half_dt, double half_external,
 }
 
 // The time loop's step with levels: the bodies due at this step (level at most `top`) step over
-// their windows tau[level], the pairs of two due bodies load them, the others stand still.
+// their windows tau[level], the pairs of two due bodies load them, the others stand still. With
+// several processes, as step(): each moves and computes its own bodies, the step's one reduction
+// (forcesLevels) tells every process the bodies the others' forces woke, and the levels are chosen
+// alike on every process (chooseLevels).
 void Solver::stepLevels() {
   const double stable = dt_;
   bool last = false;
@@ -352,11 +424,16 @@ void Solver::stepLevels() {
   const std::size_t k = steps_ + 1;
   const int top = std::min(s_.max_level, std::countr_zero(k));
   const double time_new = last ? end_at_ : time_ + dt;
+  step_end_ = time_new;
   double tau[8];
   for (int l = 0; l <= top; ++l)
     tau[l] = time_new - level_start_[static_cast<std::size_t>(l)];
   kick_work_ = provider_work_ = friction_work_ = 0.0;
-  // the work laid out for the levels chosen at the last step, before their bodies move
+  const bool shared = comm_.size() > 1;
+  if (shared && s_.rebalance_every > 0 && steps_ > 0 && steps_ % s_.rebalance_every == 0)
+    rebalance_due_ = true;
+  // the work laid out for the levels chosen at the last step, before their bodies move (every
+  // process knows the same bodies to move: the load is balanced here)
   updateActivity();
   kickAndDriftLevels(top, tau); // v += tau'/2 f / m + J / 2m; x += tau' v (due bodies)
   Nodes &nd = m_.nodes;
@@ -379,11 +456,16 @@ void Solver::stepLevels() {
   }
   for (auto *provider : providers_) // pairs of due bodies: contact at x(n+1)
     provider->addForces(m_, time_new, dt);
-  updateActivity(); // bodies the providers woke take part (at level 0)
+  // bodies the providers woke take part (at level 0); with several processes known to move at
+  // their owner now, at the others after the step's reduction (forcesLevels)
+  updateActivity(!shared);
+  forcesLevels(top, tau, dt);
   single_rate_element_steps_ += static_cast<double>(active_elements_);
   step_elements_ = active_elements_;
-  forcesLevels(top, tau);
-  applyConstraints(0.5 * dt, true); // bodies with imposed velocities are at level 0
+  for (std::size_t r = 0; r < rank_elements_.size(); ++r) {
+    rank_element_steps_[r] += static_cast<double>(rank_elements_[r]);
+    rank_node_steps_[r] += static_cast<double>(rank_nodes_[r]);
+  }
   scaleMasses(0.5 * dt);
   time_ = time_new;
   ++steps_;
@@ -397,7 +479,8 @@ void Solver::stepLevels() {
     level_start_[static_cast<std::size_t>(l)] = time_;
   chooseLevels(top);
   accountEnergy();
-  if (!std::isfinite(energy_.kinetic) || !std::isfinite(energy_.internal))
+  if (not_finite_ ||
+      (!shared && (!std::isfinite(energy_.kinetic) || !std::isfinite(energy_.internal))))
     throw RunFailure(notFinite());
   erode();
 }
@@ -436,13 +519,13 @@ void Solver::kickAndDriftLevels(int top, const double *tau) {
 // The element pass and second half-kick of the due bodies (levels 0 to top, each over its window),
 // then the step's sums: each body keeps its internal and kinetic energy and its shortest step from
 // its last update, the run's are their sums.
-void Solver::forcesLevels(int top, const double *tau) {
+void Solver::forcesLevels(int top, const double *tau, double base_dt) {
   Nodes &nd = m_.nodes;
   const std::size_t units_end = level_units_[static_cast<std::size_t>(top) + 1];
   std::vector<KickSums> unit_sums(units_end);
-  // The due levels' units in one pass, taken as threads come free (their results do not depend on
-  // which thread computes them): a large body (the projectile, a unit of its own) then runs beside
-  // the other levels' units instead of holding up its level's.
+  // The due levels' units (this process's) in one pass, taken as threads come free (their results
+  // do not depend on which thread computes them): a large body (the projectile, a unit of its own)
+  // then runs beside the other levels' units instead of holding up its level's.
 #pragma omp parallel if (units_end > 1)
   {
     UnitScratch scratch;
@@ -480,42 +563,37 @@ void Solver::forcesLevels(int top, const double *tau) {
       unit_sums[u] = sums;
     }
   }
-  // The step's sums, in unit order (the same for any thread count).
+  // This process's sums, in unit order (the same for any thread count), its bodies' energies and
+  // shortest steps; the step's one reduction (reduceStep) as in forces.
   const std::size_t chunks_end = units_end > 0 ? units_[units_end - 1].chunk_end : 0;
   double plastic = 0.0, viscous = 0.0;
-  long inverted = -1;
-  most_failing_ = most_scaling_ = 0; // (one process: its own)
+  std::int64_t inverted = -1;
+  std::size_t failing = 0, scaling = 0;
   for (std::size_t i = 0; i < chunks_end; ++i) {
     plastic += sums_[i].plastic;
     viscous += sums_[i].viscous;
     if (sums_[i].eroding)
       for (std::size_t e = chunks_[i].begin; e < chunks_[i].end; ++e)
-        most_failing_ += failed_[e] != 0;
-    most_scaling_ += sums_[i].scaled.size();
+        failing += failed_[e] != 0;
+    scaling += sums_[i].scaled.size();
     if (inverted < 0)
       inverted = sums_[i].inverted;
     if (chunks_[i].level <= top)
       element_steps_ += static_cast<double>(chunks_[i].end - chunks_[i].begin);
   }
-  if (inverted >= 0) {
-    const auto e = static_cast<std::size_t>(inverted);
-    const Body &body = m_.bodies[m_.elements.body[e]];
-    std::ostringstream msg;
-    msg << "element " << e << " of body " << body.name << " (material "
-        << m_.materials[body.material]->type() << ") is inverted: area " << m_.elements.area[e]
-        << " m^2, initially " << m_.elements.area0[e] << " m^2, at t = " << time_ + tau[0]
-        << " s, step " << steps_ + 1;
-    throw RunFailure(msg.str());
-  }
   double internal = 0.0, kinetic = 0.0, dt_min = HUGE_VAL;
-  for (std::uint32_t b : active_bodies_) {
-    internal += body_internal_[b];
-    kinetic += body_kinetic_[b];
-    dt_min = std::min(dt_min, body_step_min_[b]);
-  }
+  for (std::uint32_t b : active_bodies_)
+    if (owns(b)) {
+      internal += body_internal_[b];
+      kinetic += body_kinetic_[b];
+      dt_min = std::min(dt_min, body_step_min_[b]);
+    }
   step_sums_ = {internal, plastic, viscous};
   energy_.kinetic = kinetic;
   addKickSums(unit_sums, 1.0);
+  applyConstraints(0.5 * base_dt, true); // bodies with imposed velocities are at level 0
+  dt_min = reduceStep(dt_min, inverted, failing, scaling,
+                      std::isfinite(energy_.kinetic) && std::isfinite(internal), true, step_end_);
   next_dt_ = s_.safety * step_scale_ * dt_min;
   shortest_step_ = dt_min;
 }
@@ -550,10 +628,13 @@ void Solver::nextPartForces(std::uint32_t body, int top,
 
 // The levels of the bodies that stepped: each body's own level from its own step on the base step
 // to come, at most level_gap levels coarser than the own level of a body it may meet, and no
-// coarser than the step number allows.
+// coarser than the step number allows. Every process chooses every body's level alike (the own
+// steps from the bodies' owners, shareBodySteps; the providers' pairs are every process's), but
+// a body in parts, whose parts only its owner knows: its owner's level goes to the others.
 void Solver::chooseLevels(int top) {
   const std::size_t n = m_.bodies.size();
   const auto max_level = static_cast<std::uint8_t>(s_.max_level);
+  shareBodySteps(top);
   for (std::size_t b = 0; b < n; ++b)
     if (m_.at_rest[b])
       own_level_[b] = max_level;
@@ -574,12 +655,16 @@ void Solver::chooseLevels(int top) {
   for (const auto &c : m_.constraints)
     for (std::uint32_t a : c.nodes)
       cap[m_.nodes.body[a]] = 0, constrained[m_.nodes.body[a]] = 0;
+  std::vector<std::uint32_t> parted_stepped; // the bodies in parts that stepped
   for (std::size_t b = 0; b < n; ++b)
     if (!m_.at_rest[b] && level_[b] <= top) {
       if (part_begin_[b] == part_begin_[b + 1]) {
         level_[b] = std::min({own_level_[b], cap[b], static_cast<std::uint8_t>(top)});
         continue;
       }
+      parted_stepped.push_back(static_cast<std::uint32_t>(b));
+      if (!owns(b))
+        continue;
       // a body in parts: at its finest part's level, no coarser than the bodies it may meet
       const std::size_t p0 = part_begin_[b], p1 = part_begin_[b + 1];
       const std::vector<std::uint8_t> stepped_at(part_level_.begin() + static_cast<long>(p0),
@@ -591,6 +676,89 @@ void Solver::chooseLevels(int top) {
       level_[b] = std::min({finest, cap[b], static_cast<std::uint8_t>(top)});
       nextPartForces(static_cast<std::uint32_t>(b), top, stepped_at);
     }
+  if (comm_.size() > 1 && !parted_stepped.empty()) { // their owners' levels (-1: not the owner)
+    std::vector<double> chosen;
+    for (std::uint32_t b : parted_stepped)
+      chosen.push_back(owns(b) ? static_cast<double>(level_[b]) : -1.0);
+    chosen = comm_.max(std::move(chosen));
+    for (std::size_t i = 0; i < parted_stepped.size(); ++i)
+      level_[parted_stepped[i]] = static_cast<std::uint8_t>(chosen[i]);
+  }
+}
+
+// With several processes: the shortest element step of each body that stepped (active, level at
+// most `top`), from its owner (bodySums) to every process, in one all-gather (every process
+// knows how many each gives: the bodies it owns that stepped, in body order).
+void Solver::shareBodySteps(int top) {
+  if (comm_.size() == 1)
+    return;
+  std::vector<std::vector<std::uint32_t>> stepped(static_cast<std::size_t>(comm_.size()));
+  for (std::uint32_t b : active_bodies_)
+    if (level_[b] <= top)
+      stepped[static_cast<std::size_t>(owner(b))].push_back(b);
+  std::vector<std::int64_t> sizes;
+  for (const auto &bodies : stepped)
+    sizes.push_back(std::ssize(bodies));
+  std::vector<double> mine;
+  for (std::uint32_t b : stepped[static_cast<std::size_t>(comm_.rank())])
+    mine.push_back(body_step_min_[b]);
+  const std::vector<double> all = comm_.allGather(std::move(mine), sizes);
+  std::size_t i = 0;
+  for (const auto &bodies : stepped)
+    for (std::uint32_t b : bodies)
+      body_step_min_[b] = all[i++];
+}
+
+// nextDriftBound with levels, from the state after this step's second half-kick (before the
+// levels to come are chosen). A node drifts at the next step over its body's next window, at most
+// T = the longest window of a level due then (from that level's window start to this step's end,
+// plus dt' <= max_dt_growth dt), after the half-kick
+//   v += T/2 (f - f_ext) / m + W/2 f_ext / m     (kickAndDriftLevels),
+// W its body's window now (the external force's). A node of a body in parts is kicked instead by
+// each part p that stepped with (2 tau_l' - tau_l)/2 f_p <= tau_l' f_p (nextPartForces), tau_l' the
+// part's next window, at most 2^max_level dt': bounded by the sum of the parts' |f_p| at it.
+double Solver::nextDriftBoundLevels() const {
+  const Nodes &nd = m_.nodes;
+  const double growth = std::max(1.0, s_.max_dt_growth);
+  const int next_top = std::min(s_.max_level, std::countr_zero(steps_ + 2));
+  double T = growth * dt_;
+  for (int l = 1; l <= next_top; ++l)
+    T = std::max(T, step_end_ - level_start_[static_cast<std::size_t>(l)] + growth * dt_);
+  const double part_window = std::ldexp(growth * dt_, s_.max_level);
+  // the parts' force magnitudes at the nodes of this process's bodies in parts
+  std::unordered_map<std::uint32_t, std::pair<double, double>> part_kick;
+  for (std::uint32_t b : parted_bodies_) {
+    if (!owns(b) || m_.at_rest[b])
+      continue;
+    for (std::size_t p = part_begin_[b]; p < part_begin_[b + 1]; ++p)
+      for (std::size_t j = part_node_begin_[p]; j < part_node_begin_[p + 1]; ++j) {
+        auto &[kx, ky] = part_kick[part_nodes_[j]];
+        kx += std::abs(part_force_[j].x), ky += std::abs(part_force_[j].y);
+      }
+  }
+  const double half = 0.5 * T;
+  double most = 0.0;
+  for (const Range &r : node_ranges_)
+    for (std::size_t a = r.begin; a < r.end; ++a) {
+      double kx, ky;
+      const std::uint32_t b = nd.body[a];
+      if (part_begin_[b] < part_begin_[b + 1]) { // gravity, the external force, the parts
+        const auto it = part_kick.find(static_cast<std::uint32_t>(a));
+        kx = half * nd.mass[a] * std::abs(s_.gravity_x),
+        ky = half * nd.mass[a] * std::abs(s_.gravity_y);
+        if (it != part_kick.end())
+          kx += part_window * it->second.first, ky += part_window * it->second.second;
+      } else
+        kx = half * std::abs(nd.fx[a]), ky = half * std::abs(nd.fy[a]);
+      if (nd.is_loaded[a]) {
+        const double h = half + 0.5 * m_.window[b];
+        kx += h * std::abs(nd.external[a].fx), ky += h * std::abs(nd.external[a].fy);
+      }
+      const double ux = std::abs(nd.vx[a]) + kx * inv_mass_[a];
+      const double uy = std::abs(nd.vy[a]) + ky * inv_mass_[a];
+      most = std::max(most, ux * ux + uy * uy);
+    }
+  return T * std::sqrt(most);
 }
 
 } // namespace mesopen::fem

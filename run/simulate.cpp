@@ -117,6 +117,14 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
   const RankFigures rank_figures = rankFigures(assembly, report.loop);
   solver.sumEnergy(); // (with several ranks, the energies at the end, however the loop ended)
   const nlohmann::json dem = assembly.coupled ? demFigures(assembly, world) : nlohmann::json();
+  // With levels: the element updates and the active elements by level, every rank's summed.
+  std::vector<double> level_sums;
+  if (scene.run.max_level > 0) {
+    level_sums.push_back(solver.elementSteps());
+    for (std::size_t count : solver.elementsByLevel())
+      level_sums.push_back(static_cast<double>(count));
+    level_sums = solver.processes().sumInOrder(std::move(level_sums));
+  }
   report.steps = solver.steps();
   report.time = solver.time();
   report.elements = model.elements.size();
@@ -153,14 +161,17 @@ RunReport simulate(const Scene &scene, const RunPlace &place, const parallel::Wo
     summary["levels"] = levelFigures(*census, report.loop, assembly.contact.get());
   if (scene.run.max_level > 0) {
     const fem::Solver &solver = *assembly.solver;
-    const double single = solver.singleRateElementSteps();
+    const double single = solver.singleRateElementSteps(), updates = level_sums[0];
+    std::vector<std::size_t> by_level;
+    for (std::size_t l = 1; l < level_sums.size(); ++l)
+      by_level.push_back(static_cast<std::size_t>(level_sums[l]));
     summary["multiple_time_stepping"] = {
         {"max_level", scene.run.max_level},
         {"level_gap", scene.run.level_gap},
-        {"element_updates", solver.elementSteps()},
+        {"element_updates", updates},
         {"single_rate_element_updates", single},
-        {"element_update_share", single > 0.0 ? solver.elementSteps() / single : 1.0},
-        {"active_elements_by_level_at_end", solver.elementsByLevel()},
+        {"element_update_share", single > 0.0 ? updates / single : 1.0},
+        {"active_elements_by_level_at_end", by_level},
         {"bodies_in_parts", solver.bodiesInParts()},
         {"parts", solver.parts()}};
   }

@@ -327,6 +327,56 @@ TEST(Mpi, OneTwoAndFourRanksAgreeWhileRebalancing) {
   }
 }
 
+// Multiple time stepping (run.max_level = 2, level gap 1) on one, two and four ranks, on the fully
+// meshed scene to 0.2 us (1,162 steps) with time-step erosion at 0.4 of the first step and a new
+// partition forced every 100 steps: the projectile steps in 8 parts, each at a level of its own.
+// Every process chooses every body's level alike (the bodies' own steps from their owners), a body
+// in parts takes its owner's level, and a body that changes owner brings what its owner alone kept
+// of its levels (its elements' last steps, its energies, its parts' levels, forces and window
+// starts; the contact's pushed depths per level of pair). The same run but for the energies' sum
+// order, with as many element updates and as many active elements by level at the end.
+TEST(Mpi, OneTwoAndFourRanksAgreeAtLevels) {
+  ScratchDir dir("mpi-fe-levels");
+  const std::string scene =
+      feScene(dir, "levels.toml", "0.2e-6",
+              "max_level = 2\nerode_step_ratio = 0.4\nrebalance_every = 100\n");
+  ASSERT_EQ(run(0, scene, dir / "one").code, 0);
+  const nlohmann::json one = summaryOf(dir / "one");
+  const nlohmann::json &levels = one["multiple_time_stepping"];
+  EXPECT_EQ(levels["bodies_in_parts"], 1);
+  EXPECT_LT(levels["element_update_share"].get<double>(), 1.0);
+  EXPECT_GT(levels["active_elements_by_level_at_end"][1].get<int>(), 0);
+  EXPECT_GT(one["eroded_elements"].get<int>(), 0);
+  for (int ranks : {2, 4}) {
+    const std::string out = dir / ("ranks-" + std::to_string(ranks));
+    const test::Result r = run(ranks, scene, out);
+    ASSERT_EQ(r.code, 0) << r.output;
+    const std::string label = std::to_string(ranks) + " ranks at levels";
+    const nlohmann::json many = summaryOf(out);
+    EXPECT_EQ(many["steps"], one["steps"]) << label;
+    EXPECT_EQ(many["eroded_elements"], one["eroded_elements"]) << label;
+    EXPECT_EQ(many["contact"]["pair_searches"], one["contact"]["pair_searches"]) << label;
+    EXPECT_EQ(many["multiple_time_stepping"], levels) << label;
+    EXPECT_GT(many["partition"]["migrated_bodies"].get<int>(), 0) << label;
+    expectSameFeRun(dir / "one", out, label);
+  }
+}
+
+// Under mpirun, levels run fully meshed and without checkpoints: with disks, or with checkpoints,
+// the scene is refused (exit 2) before the run starts.
+TEST(Mpi, LevelsWithDisksOrCheckpointsAreRefused) {
+  ScratchDir dir("mpi-levels-refused");
+  const std::string mpirun = "timeout 120 mpirun --allow-run-as-root --oversubscribe -np 2 ";
+  for (const std::string extra : {"representation = \"hybrid\"\n", "checkpoint_time = 5e-8\n"}) {
+    std::ofstream(dir / "scene.toml")
+        << smallScene("end_time = 1e-7\nframe_interval = 0\nmax_level = 2\n" + extra);
+    EXPECT_EQ(
+        exitCode(mpirun + MESOPEN_BINARY + " run " + (dir / "scene.toml") + " -o " + (dir / "out")),
+        2)
+        << extra;
+  }
+}
+
 // A projectile driven at constant velocity (run.constant_velocity: every node's velocity imposed)
 // on one, two and four ranks: the contact's forces on its nodes are complete at its owner only,
 // and the work they do, which the imposed velocities correct at both half-kicks, is taken there
