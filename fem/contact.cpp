@@ -8,6 +8,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <numeric>
 #include <span>
 #include <stdexcept>
 #include <tuple>
@@ -1272,14 +1273,29 @@ Contact::State Contact::state(const Model &model) const {
         st.allowance.push_back(allowance[2 * k]), st.rate.push_back(allowance[2 * k + 1]);
   st.pushed.assign(pushed.begin(), pushed.end());
   st.pushed_depth = pushed_depth;
-  if (!pushed_time_.empty()) { // with levels (one process)
+  if (!pushed_time_.empty()) { // with levels, in the order of their places l n + node
     st.pushed_levels = pushed_levels_;
+    const std::size_t n_nodes = model.nodes.size();
+    std::vector<std::int64_t> places;
+    std::vector<double> values; // depth, time, penalty step
     for (std::size_t at = 0; at < pushed_time_.size(); ++at)
-      if (pushed_time_[at] != -HUGE_VAL) {
-        st.level_pushed.push_back(at), st.level_pushed_depth.push_back(pushed_[at]);
-        st.level_pushed_time.push_back(pushed_time_[at]);
-        st.level_pushed_penalty.push_back(pushed_penalty_[at]);
-      }
+      if (pushed_time_[at] != -HUGE_VAL && mine(body[at % n_nodes]))
+        places.push_back(static_cast<std::int64_t>(at)),
+            values.insert(values.end(), {pushed_[at], pushed_time_[at], pushed_penalty_[at]});
+    if (shared()) {
+      places = processes_->allGather(std::move(places));
+      values = processes_->allGather(std::move(values));
+    }
+    std::vector<std::size_t> order(places.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t i, std::size_t j) { return places[i] < places[j]; });
+    for (std::size_t i : order) {
+      st.level_pushed.push_back(static_cast<std::uint64_t>(places[i]));
+      st.level_pushed_depth.push_back(values[3 * i]);
+      st.level_pushed_time.push_back(values[3 * i + 1]);
+      st.level_pushed_penalty.push_back(values[3 * i + 2]);
+    }
   }
   st.statistics = statisticsOfAll();
   return st;

@@ -1026,6 +1026,8 @@ void Solver::collectCheckpoint() {
   collectFrame();
   shareOwned<2>(active_bodies_, &Body::node_begin, &Body::node_end, {&nd.fx, &nd.fy}, true);
   collectExternal(active_bodies_);
+  if (levels())
+    collectLevels();
   if (comm_.size() > 1) { // every process's share, kept for the checkpoint, and their sum
     checkpoint_shares_ = comm_.allGather(
         sharesOf(energy_), std::vector<std::int64_t>(static_cast<std::size_t>(comm_.size()),

@@ -384,6 +384,7 @@ private:
                       bool second_half, double &vx, double &vy, KickSums &sums) const;
   void chooseLevels(int top);
   void shareBodySteps(int top);
+  void collectLevels();
   std::size_t levelValues(std::uint32_t b) const;
   void packLevels(std::uint32_t b, double *&out) const;
   void unpackLevels(std::uint32_t b, const double *&in);
@@ -477,6 +478,7 @@ private:
   std::vector<std::size_t> level_units_, level_blocks_;
   std::vector<std::vector<std::size_t>> due_thread_blocks_;
   double element_steps_ = 0.0, single_rate_element_steps_ = 0.0;
+  double checkpoint_element_steps_ = 0.0; // every process's, at the last collectCheckpoint
   // Bodies stepped in parts (levels(), at least parts_from elements: the projectile): parts of
   // part_elements consecutive elements, each at a level of its own at or above its body's. Per
   // body the first of its parts (parts of b: [part_begin_[b], part_begin_[b + 1])); per part its

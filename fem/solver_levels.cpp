@@ -61,7 +61,8 @@ Solver::State::Levels Solver::levelsState() const {
       for (const auto *start :
            {&window_x_[i][static_cast<std::size_t>(l)], &window_y_[i][static_cast<std::size_t>(l)]})
         st.window_start.insert(st.window_start.end(), start->begin(), start->end());
-  st.element_steps = element_steps_;
+  // (with several processes, every process's as collectLevels summed them)
+  st.element_steps = comm_.size() > 1 ? checkpoint_element_steps_ : element_steps_;
   st.single_rate_element_steps = single_rate_element_steps_;
   return st;
 }
@@ -105,7 +106,8 @@ void Solver::restoreLevels(const State::Levels &st) {
         std::copy(start, start + to->size(), to->begin());
         start += to->size();
       }
-  element_steps_ = st.element_steps;
+  // (with several processes, the updates so far are the first process's: their sum counts them)
+  element_steps_ = comm_.rank() == 0 ? st.element_steps : 0.0;
   single_rate_element_steps_ = st.single_rate_element_steps;
 }
 
@@ -179,6 +181,29 @@ void Solver::unpackLevels(std::uint32_t b, const double *&in) {
 std::size_t Solver::partedIndex(std::uint32_t b) const {
   return static_cast<std::size_t>(std::find(parted_bodies_.begin(), parted_bodies_.end(), b) -
                                   parted_bodies_.begin());
+}
+
+// With several processes, for a checkpoint: what only the owners keep of the active bodies' levels
+// (packLevels) to the first process, which writes it, and the element updates every process
+// computed, summed (levelsState).
+void Solver::collectLevels() {
+  if (comm_.size() == 1)
+    return;
+  const std::vector<std::vector<std::uint32_t>> of = byOwner(active_bodies_);
+  std::size_t count = 0;
+  for (std::uint32_t b : of[static_cast<std::size_t>(comm_.rank())])
+    count += levelValues(b);
+  comm_.collect(
+      count,
+      [&](double *out) {
+        for (std::uint32_t b : of[static_cast<std::size_t>(comm_.rank())])
+          packLevels(b, out);
+      },
+      [&](int r, const double *in) {
+        for (std::uint32_t b : of[static_cast<std::size_t>(r)])
+          unpackLevels(b, in);
+      });
+  checkpoint_element_steps_ = comm_.sumInOrder({element_steps_})[0];
 }
 
 // The bodies of at least parts_from elements step in parts of part_elements consecutive elements

@@ -137,12 +137,6 @@ int runCommand(const RunOptions &given) {
                        "\" runs on one process, not " + std::to_string(world.size) +
                        " MPI ranks; allowed under mpirun: max_level = 0, or representation = "
                        "\"fe\"");
-    if (scene.run.max_level > 0 && world.size > 1 && scene.run.checkpoints())
-      throw InputError(scene.path + ": run.max_level = " + std::to_string(scene.run.max_level) +
-                       " (multiple time stepping) with checkpoints (run.checkpoint_interval, "
-                       "run.checkpoint_time) runs on one process, not " +
-                       std::to_string(world.size) +
-                       " MPI ranks; allowed under mpirun: max_level = 0, or no checkpoints");
   } catch (const InputError &e) {
     std::cerr << "mesopen run: " << e.what() << '\n';
     return 2;

@@ -362,19 +362,43 @@ TEST(Mpi, OneTwoAndFourRanksAgreeAtLevels) {
   }
 }
 
-// Under mpirun, levels run fully meshed and without checkpoints: with disks, or with checkpoints,
-// the scene is refused (exit 2) before the run starts.
-TEST(Mpi, LevelsWithDisksOrCheckpointsAreRefused) {
+// Under mpirun, levels run fully meshed: with disks the scene is refused (exit 2) before the run
+// starts.
+TEST(Mpi, LevelsWithDisksAreRefused) {
   ScratchDir dir("mpi-levels-refused");
   const std::string mpirun = "timeout 120 mpirun --allow-run-as-root --oversubscribe -np 2 ";
-  for (const std::string extra : {"representation = \"hybrid\"\n", "checkpoint_time = 5e-8\n"}) {
+  for (const std::string representation : {"hybrid", "dem"}) {
     std::ofstream(dir / "scene.toml")
-        << smallScene("end_time = 1e-7\nframe_interval = 0\nmax_level = 2\n" + extra);
+        << smallScene("end_time = 1e-7\nframe_interval = 0\nmax_level = 2\nrepresentation = \"" +
+                      representation + "\"\n");
     EXPECT_EQ(
         exitCode(mpirun + MESOPEN_BINARY + " run " + (dir / "scene.toml") + " -o " + (dir / "out")),
         2)
-        << extra;
+        << representation;
   }
+}
+
+// The run of OneTwoAndFourRanksAgreeAtLevels on two ranks, stopped by rank 1 after step 600 (so at
+// step 601, within a cycle of levels: the bodies at level 1 and 2 between their steps) and resumed,
+// against the same run whole: the checkpoint holds what only the owners keep of the levels (their
+// elements' last steps, energies, the projectile's parts; the contact's pushed depths per level
+// of pair), gathered to the first process. run.h5 is the same bytes, and the element updates the
+// same.
+TEST(Mpi, StoppedAndResumedAtLevelsIsTheSameRun) {
+  ScratchDir dir("mpi-levels-resume");
+  const std::string scene = feScene(dir, "levels.toml", "0.2e-6",
+                                    "max_level = 2\nerode_step_ratio = 0.4\nrebalance_every = 100\n"
+                                    "checkpoint_interval = 1e6\n");
+  writeStopScript(dir / "stop1.sh", 600);
+  const std::string mpirun = "timeout 300 mpirun --allow-run-as-root --oversubscribe -np 2 ";
+  ASSERT_EQ(exitCode(mpirun + (dir / "stop1.sh") + " run " + scene + " -o " + (dir / "stopped")),
+            143);
+  EXPECT_EQ(summaryOf(dir / "stopped")["steps"], 601);
+  ASSERT_EQ(exitCode(mpirun + MESOPEN_BINARY + " run --resume " + (dir / "stopped")), 0);
+  ASSERT_EQ(exitCode(mpirun + MESOPEN_BINARY + " run " + scene + " -o " + (dir / "whole")), 0);
+  expectSameRunFile(dir / "whole/run.h5", dir / "stopped/run.h5");
+  EXPECT_EQ(summaryOf(dir / "stopped")["multiple_time_stepping"],
+            summaryOf(dir / "whole")["multiple_time_stepping"]);
 }
 
 // A projectile driven at constant velocity (run.constant_velocity: every node's velocity imposed)
