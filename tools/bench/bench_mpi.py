@@ -14,9 +14,13 @@ on them, so wall times say nothing about the decomposition; the bytes and the wo
 
     python3 tools/bench/bench_mpi.py [--mesopen build/bin/mesopen] [--out build/bench]
         [--scene examples/baseline.toml] [--representation fe] [--size-factor 2] [--steps 400]
-        [--ranks 1,2,4,8] [--mpirun mpirun]
+        [--ranks 1,2,4,8] [--mpirun mpirun] [--max-level 0]
 
-Writes OUT/bench_mpi.json (OUT/bench_mpi-dem.json, -hybrid.json for the others); exit 1 if a run
+--max-level L > 0 runs with multiple time stepping (run.max_level = L, fe only under mpirun) and
+adds the element updates computed over those of a single rate.
+
+Writes OUT/bench_mpi.json (OUT/bench_mpi-dem.json, -hybrid.json for the others; -levels2.json
+and so on with --max-level); exit 1 if a run
 fails, its projectile is still in free flight at the end (more --steps needed), or the ranks
 disagree on the projectile's motion (fe: to the bit; with disks, by more than 1e-6 of its speed,
 as LIGGGHTS sums a disk's forces in another order on another number of ranks); 2 on bad
@@ -116,7 +120,14 @@ def main():
     ap.add_argument("--ranks", type=positive_ranks, default=[1, 2, 4, 8],
                     help="rank counts, comma-separated (default 1,2,4,8)")
     ap.add_argument("--mpirun", default="mpirun")
+    ap.add_argument("--max-level", type=int, default=0,
+                    help="run.max_level: multiple time stepping's largest level (default 0: none)")
     args = ap.parse_args()
+    if not 0 <= args.max_level <= 3:
+        ap.error(f"--max-level {args.max_level}: allowed 0 to 3")
+    if args.max_level > 0 and args.representation != "fe":
+        ap.error(f"--max-level {args.max_level} with --representation {args.representation}: "
+                 "levels run under mpirun with fe only")
     if not 0.25 <= args.size_factor <= 4.0:
         ap.error(f"--size-factor {args.size_factor}: allowed 0.25 to 4")
     if not 1 <= args.steps <= 100000:
@@ -137,7 +148,7 @@ def main():
     for table, key, value in [("target", "width", repr(width)), ("target", "height", repr(height)),
                               ("run", "representation", f'"{args.representation}"'),
                               ("run", "max_steps", args.steps), ("run", "frame_interval", 0),
-                              ("run", "vtk", "false")]:
+                              ("run", "vtk", "false"), ("run", "max_level", args.max_level)]:
         text = with_key(text, table, key, value)
     os.makedirs(args.out, exist_ok=True)
 
@@ -155,6 +166,8 @@ def main():
                             "velocity": s["run"]["velocity"],
                             "rebalances": s["partition"]["rebalances"],
                             "imbalance": s["partition"]["imbalance"],
+                            "element_update_share":
+                                s.get("multiple_time_stepping", {}).get("element_update_share", 1.0),
                             "per_rank": per_rank(s)})
 
     first = results[0]
@@ -167,7 +180,8 @@ def main():
                             f"(vy {r['projectile_vy']} m/s): no contact yet; raise --steps")
         tolerance = 0.0 if args.representation == "fe" else 1e-6 * first["velocity"]
         if abs(r["projectile_vy"] - first["projectile_vy"]) > tolerance or \
-                r["steps"] != first["steps"]:
+                r["steps"] != first["steps"] or \
+                r["element_update_share"] != first["element_update_share"]:
             problems.append(f"np {r['np']}: the projectile's vy {r['projectile_vy']} m/s after "
                             f"{r['steps']} steps, against {first['projectile_vy']} after "
                             f"{first['steps']} on np {first['np']}")
@@ -175,13 +189,16 @@ def main():
     m = first["model"]
     print(f"mesopen run {os.path.relpath(args.scene, ROOT)} on a {width * 1e3:.3f} x "
           f"{height * 1e3:.3f} mm target ({args.size_factor ** 2:g} x the area), "
-          f"{args.representation}: "
+          f"{args.representation}{f', max_level {args.max_level}' if args.max_level else ''}: "
           f"{m['bodies']} bodies, {m['elements']} elements, {m['nodes']} nodes; "
           f"{first['steps']} steps, no frames, --threads 1")
     spread = max(abs(r["projectile_vy"] - first["projectile_vy"]) for r in results)
     print(f"  the projectile slowed from {first['velocity']:g} to {-first['projectile_vy']:.2f} "
           f"m/s, {first['projectile_depth'] * 1e6:.1f} um deep (the same on every np: "
           f"{'yes, to the bit' if spread == 0.0 else f'within {spread:.2g} m/s'})")
+    if args.max_level:
+        print("  element updates over a single rate's: " +
+              ", ".join(f"np {r['np']} {r['element_update_share']:.3f}" for r in results))
     print("  Counts per rank per step, not seconds: with more ranks than cores the ranks take turns on\n"
           "  them, so wall times do not measure the decomposition.\n"
           "  KB/step: bytes received from the other ranks within a step (a reduction counted as a\n"
@@ -212,13 +229,15 @@ def main():
               f"on one: {max(received) / 1e3:.1f})")
 
     result = {"scene": os.path.relpath(args.scene, ROOT), "size_factor": args.size_factor,
+              "max_level": args.max_level,
               "width": width, "height": height, "representation": args.representation,
               "threads": 1,
               "steps": args.steps, "ranks": args.ranks,
               "note": "counts per rank per step, not seconds: the ranks are oversubscribed",
               "runs": results, "problems": problems}
-    path = os.path.join(args.out, "bench_mpi.json" if args.representation == "fe"
-                        else f"bench_mpi-{args.representation}.json")
+    name = "bench_mpi" + ("" if args.representation == "fe" else f"-{args.representation}") + \
+        (f"-levels{args.max_level}" if args.max_level else "")
+    path = os.path.join(args.out, name + ".json")
     with open(path + ".tmp", "w") as f:
         json.dump(result, f, indent=1)
     os.replace(path + ".tmp", path)
