@@ -589,8 +589,12 @@ void Solver::forcesLevels(int top, const double *tau, double base_dt) {
     }
   }
   // This process's sums, in unit order (the same for any thread count), its bodies' energies and
-  // shortest steps; the step's one reduction (reduceStep) as in forces.
+  // shortest steps; the step's one reduction (reduceStep) as in forces. The chunks not due keep
+  // their last pass's sums: the elements they found failed or asking for mass then were dealt
+  // with then (erode, scaleMasses, which read every chunk's).
   const std::size_t chunks_end = units_end > 0 ? units_[units_end - 1].chunk_end : 0;
+  for (std::size_t i = chunks_end; i < chunks_.size(); ++i)
+    sums_[i].scaled.clear(), sums_[i].eroding = false;
   double plastic = 0.0, viscous = 0.0;
   std::int64_t inverted = -1;
   std::size_t failing = 0, scaling = 0;
