@@ -534,10 +534,14 @@ void Contact::exchangeHalo(Model &model) {
   std::vector<std::pair<std::pair<int, std::uint32_t>, Box>> sends;
   BodiesTo receives;
   partners_.clear();
+  const bool levels = !model.due.empty();
   for (const Pair &pair : pairs_.pairs()) {
     const int owner_a = (*owner_)[pair.a], owner_b = (*owner_)[pair.b];
     if (owner_a == owner_b || (owner_a != me && owner_b != me) ||
         !bd.boxes[pair.a].overlaps(bd.boxes[pair.b]))
+      continue;
+    // (with levels, the pairs due at this step alone: no other is computed, narrowPhase)
+    if (levels && !(model.due[pair.a] && model.due[pair.b]))
       continue;
     const int partner = owner_a == me ? owner_b : owner_a;
     sends.push_back(
