@@ -439,8 +439,9 @@ std::vector<double> asDoubles(const std::vector<std::size_t> &counts) {
 } // namespace
 
 // With several processes, a new partition when the load (each rank's active elements: the bodies
-// it owns that move) is out of balance. The loads change only when the bodies that move or
-// their elements change, which is when updateActivity calls this: the check is one pass over the
+// it owns that move; with levels, each weighted by its updates per base step, 2^-level: levelLoad)
+// is out of balance. The loads change only when the bodies that move, their elements or their
+// levels change, which is when updateActivity calls this: the check is one pass over the
 // bodies and no message, and every process, holding the same model, takes the same decision.
 // Out of balance is measured against the best a partition of whole bodies can do: the most loaded
 // rank's active elements over the larger of their mean and the heaviest body's, less 1 (with no
@@ -449,59 +450,60 @@ std::vector<double> asDoubles(const std::vector<std::size_t> &counts) {
 // `may_partition` (a run continued with its partition).
 void Solver::balanceLoad(bool forced, bool may_partition) {
   const std::size_t ranks = static_cast<std::size_t>(comm_.size());
-  std::vector<std::size_t> load(m_.bodies.size(), 0);
-  std::size_t total = 0, heaviest = 0;
+  // (one process owns every body: nothing to share)
+  if (ranks == 1 || !may_partition)
+    return;
+  std::vector<double> load(m_.bodies.size(), 0.0);
+  double total = 0.0, heaviest = 0.0;
   for (std::size_t b = 0; b < load.size(); ++b) {
     const Body &body = m_.bodies[b];
     if (!m_.at_rest[b])
-      load[b] = body.element_end - body.element_begin - body.eroded;
+      load[b] = levels() ? levelLoad(b)
+                         : static_cast<double>(body.element_end - body.element_begin - body.eroded);
     total += load[b];
     heaviest = std::max(heaviest, load[b]);
   }
   auto rankLoads = [&] {
-    std::vector<std::size_t> loads(ranks, 0);
+    std::vector<double> loads(ranks, 0.0);
     for (std::size_t b = 0; b < load.size(); ++b)
       loads[static_cast<std::size_t>(owner_[b])] += load[b];
     return loads;
   };
-  // (one process owns every body; nothing moves: nothing to share)
-  if (ranks == 1 || total == 0 || !may_partition)
+  if (total == 0.0) // (nothing moves: nothing to share)
     return;
-  std::vector<std::size_t> rank_loads = rankLoads();
-  const double best = std::max(static_cast<double>(total) / static_cast<double>(ranks),
-                               static_cast<double>(heaviest));
+  std::vector<double> rank_loads = rankLoads();
+  const double best = std::max(total / static_cast<double>(ranks), heaviest);
   auto excess = [&] {
-    return static_cast<double>(*std::max_element(rank_loads.begin(), rank_loads.end())) / best -
-           1.0;
+    return *std::max_element(rank_loads.begin(), rank_loads.end()) / best - 1.0;
   };
   // A partition that could not reach rebalance_imbalance (a body heavier than a rank's share in
   // the middle of the others: no straight cut balances it) is made again only once the load is
   // that much worse than it achieved, or the total load has changed by that fraction since.
   const double out_of_balance = excess(), tol = s_.rebalance_imbalance;
-  const bool worth_trying = out_of_balance > last_achieved_ + tol ||
-                            std::abs(static_cast<double>(total) - last_total_) > tol * last_total_;
+  const bool worth_trying =
+      out_of_balance > last_achieved_ + tol || std::abs(total - last_total_) > tol * last_total_;
   if (partitioned_ && !forced && !(out_of_balance > tol && worth_trying))
     return;
-  const double before = imbalance(asDoubles(rank_loads));
+  const double before = imbalance(rank_loads);
   repartition(load);
   rank_loads = rankLoads();
   last_achieved_ = excess();
-  last_total_ = static_cast<double>(total);
+  last_total_ = total;
   if (partitioned_) {
     ++partition_.rebalances;
     partition_.forced += forced;
   }
   partitioned_ = true;
   partition_.last_before = before;
-  partition_.last_after = imbalance(asDoubles(rank_loads));
+  partition_.last_after = imbalance(rank_loads);
 }
 
 // Every body to the rank the partitioner gives it: each process passes the bodies it owns, with
-// their nodes' centroid and their active elements `load`, and all learn every body's new owner.
+// their nodes' centroid and their load (balanceLoad), and all learn every body's new owner.
 // Every process holds every body, but only a body's owner keeps its elements' state (stress,
 // energy, plastic strain...) and its nodes' motion current: the moving bodies that change owner
 // take theirs to their new owner.
-void Solver::repartition(const std::vector<std::size_t> &load) {
+void Solver::repartition(const std::vector<double> &load) {
   Nodes &nd = m_.nodes;
   parallel::PartitionItems mine;
   for (std::size_t b = 0; b < m_.bodies.size(); ++b) {
@@ -516,7 +518,7 @@ void Solver::repartition(const std::vector<std::size_t> &load) {
     mine.id.push_back(static_cast<std::uint32_t>(b));
     mine.x.push_back(x / nodes);
     mine.y.push_back(y / nodes);
-    mine.weight.push_back(static_cast<double>(load[b]));
+    mine.weight.push_back(load[b]);
   }
   const std::vector<int> to = partitioner_.partition(mine);
   std::vector<std::int64_t> moves;

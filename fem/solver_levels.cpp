@@ -183,6 +183,23 @@ std::size_t Solver::partedIndex(std::uint32_t b) const {
                                   parted_bodies_.begin());
 }
 
+// A moving body's load for the partition with levels: its active elements' updates per base step,
+// 2^-level each (a body in parts by its parts' levels, which every process knows: chooseLevels).
+double Solver::levelLoad(std::size_t b) const {
+  const Body &body = m_.bodies[b];
+  if (part_begin_[b] == part_begin_[b + 1])
+    return std::ldexp(static_cast<double>(body.element_end - body.element_begin - body.eroded),
+                      -level_[b]);
+  double load = 0.0;
+  for (std::size_t p = part_begin_[b]; p < part_begin_[b + 1]; ++p) {
+    std::size_t active = 0;
+    for (std::size_t e = parts_[p].element_begin; e < parts_[p].element_end; ++e)
+      active += m_.elements.eroded[e] ? 0 : 1;
+    load += std::ldexp(static_cast<double>(active), -part_level_[p]);
+  }
+  return load;
+}
+
 // With several processes, for a checkpoint: what only the owners keep of the active bodies' levels
 // (packLevels) to the first process, which writes it, and the element updates every process
 // computed, summed (levelsState).
@@ -705,13 +722,22 @@ void Solver::chooseLevels(int top) {
       level_[b] = std::min({finest, cap[b], static_cast<std::uint8_t>(top)});
       nextPartForces(static_cast<std::uint32_t>(b), top, stepped_at);
     }
-  if (comm_.size() > 1 && !parted_stepped.empty()) { // their owners' levels (-1: not the owner)
+  // their owners' levels and parts' levels (-1: not the owner; the parts' levels weigh the body's
+  // load, levelLoad)
+  if (comm_.size() > 1 && !parted_stepped.empty()) {
     std::vector<double> chosen;
-    for (std::uint32_t b : parted_stepped)
+    for (std::uint32_t b : parted_stepped) {
       chosen.push_back(owns(b) ? static_cast<double>(level_[b]) : -1.0);
+      for (std::size_t p = part_begin_[b]; p < part_begin_[b + 1]; ++p)
+        chosen.push_back(owns(b) ? static_cast<double>(part_level_[p]) : -1.0);
+    }
     chosen = comm_.max(std::move(chosen));
-    for (std::size_t i = 0; i < parted_stepped.size(); ++i)
-      level_[parted_stepped[i]] = static_cast<std::uint8_t>(chosen[i]);
+    std::size_t i = 0;
+    for (std::uint32_t b : parted_stepped) {
+      level_[b] = static_cast<std::uint8_t>(chosen[i++]);
+      for (std::size_t p = part_begin_[b]; p < part_begin_[b + 1]; ++p)
+        part_level_[p] = static_cast<std::uint8_t>(chosen[i++]);
+    }
   }
 }
 
