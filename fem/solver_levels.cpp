@@ -183,21 +183,21 @@ std::size_t Solver::partedIndex(std::uint32_t b) const {
                                   parted_bodies_.begin());
 }
 
-// A moving body's load for the partition with levels: its active elements' updates per base step,
-// 2^-level each (a body in parts by its parts' levels, which every process knows: chooseLevels).
-double Solver::levelLoad(std::size_t b) const {
+// A moving body's active elements by level into `by_level` (at its level; a body in parts at its
+// parts' levels, which every process knows: chooseLevels); without levels all at level 0.
+void Solver::levelElements(std::size_t b, double *by_level) const {
   const Body &body = m_.bodies[b];
-  if (part_begin_[b] == part_begin_[b + 1])
-    return std::ldexp(static_cast<double>(body.element_end - body.element_begin - body.eroded),
-                      -level_[b]);
-  double load = 0.0;
+  if (!levels() || part_begin_[b] == part_begin_[b + 1]) {
+    by_level[levels() ? level_[b] : 0] +=
+        static_cast<double>(body.element_end - body.element_begin - body.eroded);
+    return;
+  }
   for (std::size_t p = part_begin_[b]; p < part_begin_[b + 1]; ++p) {
     std::size_t active = 0;
     for (std::size_t e = parts_[p].element_begin; e < parts_[p].element_end; ++e)
       active += m_.elements.eroded[e] ? 0 : 1;
-    load += std::ldexp(static_cast<double>(active), -part_level_[p]);
+    by_level[part_level_[p]] += static_cast<double>(active);
   }
-  return load;
 }
 
 // With several processes, for a checkpoint: what only the owners keep of the active bodies' levels
@@ -723,7 +723,7 @@ void Solver::chooseLevels(int top) {
       nextPartForces(static_cast<std::uint32_t>(b), top, stepped_at);
     }
   // their owners' levels and parts' levels (-1: not the owner; the parts' levels weigh the body's
-  // load, levelLoad)
+  // load, levelElements)
   if (comm_.size() > 1 && !parted_stepped.empty()) {
     std::vector<double> chosen;
     for (std::uint32_t b : parted_stepped) {
@@ -780,15 +780,19 @@ double Solver::nextDriftBoundLevels() const {
   for (int l = 1; l <= next_top; ++l)
     T = std::max(T, step_end_ - level_start_[static_cast<std::size_t>(l)] + growth * dt_);
   const double part_window = std::ldexp(growth * dt_, s_.max_level);
-  // the parts' force magnitudes at the nodes of this process's bodies in parts
-  std::unordered_map<std::uint32_t, std::pair<double, double>> part_kick;
-  for (std::uint32_t b : parted_bodies_) {
+  // the parts' force magnitudes at the nodes of this process's bodies in parts (by node from the
+  // first of its body's)
+  std::vector<std::vector<NodeForce>> part_kick(parted_bodies_.size());
+  for (std::size_t i = 0; i < parted_bodies_.size(); ++i) {
+    const std::uint32_t b = parted_bodies_[i];
     if (!owns(b) || m_.at_rest[b])
       continue;
+    const std::size_t first = m_.bodies[b].node_begin;
+    part_kick[i].assign(m_.bodies[b].node_end - first, NodeForce{0.0, 0.0});
     for (std::size_t p = part_begin_[b]; p < part_begin_[b + 1]; ++p)
       for (std::size_t j = part_node_begin_[p]; j < part_node_begin_[p + 1]; ++j) {
-        auto &[kx, ky] = part_kick[part_nodes_[j]];
-        kx += std::abs(part_force_[j].x), ky += std::abs(part_force_[j].y);
+        NodeForce &k = part_kick[i][part_nodes_[j] - first];
+        k.x += std::abs(part_force_[j].x), k.y += std::abs(part_force_[j].y);
       }
   }
   const double half = 0.5 * T;
@@ -798,11 +802,9 @@ double Solver::nextDriftBoundLevels() const {
       double kx, ky;
       const std::uint32_t b = nd.body[a];
       if (part_begin_[b] < part_begin_[b + 1]) { // gravity, the external force, the parts
-        const auto it = part_kick.find(static_cast<std::uint32_t>(a));
-        kx = half * nd.mass[a] * std::abs(s_.gravity_x),
-        ky = half * nd.mass[a] * std::abs(s_.gravity_y);
-        if (it != part_kick.end())
-          kx += part_window * it->second.first, ky += part_window * it->second.second;
+        const NodeForce &k = part_kick[partedIndex(b)][a - m_.bodies[b].node_begin];
+        kx = half * nd.mass[a] * std::abs(s_.gravity_x) + part_window * k.x;
+        ky = half * nd.mass[a] * std::abs(s_.gravity_y) + part_window * k.y;
       } else
         kx = half * std::abs(nd.fx[a]), ky = half * std::abs(nd.fy[a]);
       if (nd.is_loaded[a]) {
