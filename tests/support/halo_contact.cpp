@@ -6,6 +6,7 @@
 // and the square was pushed out. Prints what failed and exits 1.
 #include "meshes.hpp"
 #include "mpi_communicator.hpp"
+#include "node_states.hpp"
 #include "zoltan_partitioner.hpp"
 
 #include "contact.hpp"
@@ -22,8 +23,7 @@ namespace {
 
 constexpr double h = 10e-6; // the element size
 
-struct Run {
-  std::vector<double> x, y, vx, vy;
+struct Run : test::NodeStates {
   double deepest = 0.0;
 };
 
@@ -42,7 +42,7 @@ Run pressed(const parallel::Communicator &processes, const parallel::Partitioner
   for (int step = 0; step < 200; ++step)
     solver.step();
   solver.collectFrame(); // every node's position and velocity on the first process
-  return {model.nodes.x, model.nodes.y, model.nodes.vx, model.nodes.vy,
+  return {{model.nodes.x, model.nodes.y, model.nodes.vx, model.nodes.vy},
           contact.statistics().max_depth};
 }
 
@@ -57,17 +57,7 @@ int main(int argc, char **argv) {
     const Run shared = pressed(world, rcb);
     if (world.rank() == 0) {
       const Run one = pressed(parallel::serial(), parallel::serialPartitioner());
-      for (auto [name, a, b] : {std::tuple{"x", &shared.x, &one.x},
-                                {"y", &shared.y, &one.y},
-                                {"vx", &shared.vx, &one.vx},
-                                {"vy", &shared.vy, &one.vy}})
-        for (std::size_t i = 0; i < a->size(); ++i)
-          if ((*a)[i] != (*b)[i]) {
-            std::printf("%d processes: node %zu's %s is %.17g, on one %.17g\n", world.size(), i,
-                        name, (*a)[i], (*b)[i]);
-            ++failures;
-            break;
-          }
+      failures += test::differingNodeStates(world.size(), shared, one);
       // the square's nodes were pushed up by the strip, from 0.2 h deep
       if (!(one.deepest > 0.15 && one.vy.back() > 1.0)) {
         std::printf("the square was not pressed and pushed out: deepest %.3g, vy %.3g m/s\n",

@@ -9,6 +9,7 @@
 // on one process saved element updates. Prints what failed and exits 1.
 #include "meshes.hpp"
 #include "mpi_communicator.hpp"
+#include "node_states.hpp"
 
 #include "contact.hpp"
 #include "solver.hpp"
@@ -41,8 +42,7 @@ private:
   mutable unsigned calls_ = 0;
 };
 
-struct Run {
-  std::vector<double> x, y, vx, vy;
+struct Run : test::NodeStates {
   double share = 1.0; // element updates computed over those at a single rate
   std::size_t parts = 0;
 };
@@ -61,10 +61,7 @@ Run struck(const parallel::Communicator &processes, const parallel::Partitioner 
   for (int step = 0; step < 300; ++step)
     solver.step();
   solver.collectFrame(); // every node's position and velocity on the first process
-  return {model.nodes.x,
-          model.nodes.y,
-          model.nodes.vx,
-          model.nodes.vy,
+  return {{model.nodes.x, model.nodes.y, model.nodes.vx, model.nodes.vy},
           solver.elementSteps() / solver.singleRateElementSteps(),
           solver.parts()};
 }
@@ -80,17 +77,7 @@ int main(int argc, char **argv) {
     const Run shared = struck(world, rotating);
     if (world.rank() == 0) {
       const Run one = struck(parallel::serial(), parallel::serialPartitioner());
-      for (auto [name, a, b] : {std::tuple{"x", &shared.x, &one.x},
-                                {"y", &shared.y, &one.y},
-                                {"vx", &shared.vx, &one.vx},
-                                {"vy", &shared.vy, &one.vy}})
-        for (std::size_t i = 0; i < a->size(); ++i)
-          if ((*a)[i] != (*b)[i]) {
-            std::printf("%d processes: node %zu's %s is %.17g, on one %.17g\n", world.size(), i,
-                        name, (*a)[i], (*b)[i]);
-            ++failures;
-            break;
-          }
+      failures += test::differingNodeStates(world.size(), shared, one);
       if (!(one.parts == 4 && one.share < 0.9)) {
         std::printf("not a run at levels in parts: %zu parts, %.3f of the element updates\n",
                     one.parts, one.share);
