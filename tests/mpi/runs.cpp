@@ -199,6 +199,23 @@ void expectSameRunFile(const std::string &a, const std::string &b) {
   EXPECT_EQ(std::system(same.c_str()), 0) << same;
 }
 
+// `scene` on two ranks into dir/stopped, rank 1 stopping itself after step `step` (the run
+// interrupted with a checkpoint there, exit 143; its summary then into `stopped`), resumed there;
+// the same run whole into dir/whole: the same run.h5.
+void stopResumeAndRunWhole(const ScratchDir &dir, const std::string &scene, int step,
+                           nlohmann::json *stopped = nullptr) {
+  writeStopScript(dir / "stop1.sh", step);
+  const std::string mpirun = "timeout 300 mpirun --allow-run-as-root --oversubscribe -np 2 ";
+  ASSERT_EQ(exitCode(mpirun + (dir / "stop1.sh") + " run " + scene + " -o " + (dir / "stopped")),
+            143);
+  EXPECT_EQ(summaryOf(dir / "stopped")["status"], "interrupted");
+  if (stopped)
+    *stopped = summaryOf(dir / "stopped");
+  ASSERT_EQ(exitCode(mpirun + MESOPEN_BINARY + " run --resume " + (dir / "stopped")), 0);
+  ASSERT_EQ(exitCode(mpirun + MESOPEN_BINARY + " run " + scene + " -o " + (dir / "whole")), 0);
+  expectSameRunFile(dir / "whole/run.h5", dir / "stopped/run.h5");
+}
+
 // A small scene of the tests of stops and failures: a 1 x 0.5 mm target of 60 um grains, its
 // [run] table open for `run` keys.
 std::string smallScene(const std::string &run) {
@@ -339,8 +356,9 @@ TEST(Mpi, OneTwoAndFourRanksAgreeWhileRebalancing) {
 }
 
 // Multiple time stepping (run.max_level = 2, level gap 1) on one, two and four ranks, on the fully
-// meshed scene to 0.2 us (1,162 steps) with time-step erosion at 0.4 of the first step and a new
-// partition forced every 100 steps: the projectile steps in 8 parts, each at a level of its own.
+// meshed scene to 0.2 us (about 1,160 steps) with time-step erosion at 0.4 of the first step, mass
+// scaling at 0.5 and a new partition forced every 100 steps: the projectile steps in 8 parts, each
+// at a level of its own.
 // Every process chooses every body's level alike (the bodies' own steps from their owners), a body
 // in parts takes its owner's level, and a body that changes owner brings what its owner alone kept
 // of its levels (its elements' last steps, its energies, its parts' levels, forces and window
@@ -420,14 +438,9 @@ TEST(Mpi, StoppedAndResumedAtLevelsIsTheSameRun) {
   const std::string scene = feScene(dir, "levels.toml", "0.2e-6",
                                     "max_level = 2\nerode_step_ratio = 0.4\nrebalance_every = 100\n"
                                     "checkpoint_interval = 1e6\n");
-  writeStopScript(dir / "stop1.sh", 600);
-  const std::string mpirun = "timeout 300 mpirun --allow-run-as-root --oversubscribe -np 2 ";
-  ASSERT_EQ(exitCode(mpirun + (dir / "stop1.sh") + " run " + scene + " -o " + (dir / "stopped")),
-            143);
-  EXPECT_EQ(summaryOf(dir / "stopped")["steps"], 601);
-  ASSERT_EQ(exitCode(mpirun + MESOPEN_BINARY + " run --resume " + (dir / "stopped")), 0);
-  ASSERT_EQ(exitCode(mpirun + MESOPEN_BINARY + " run " + scene + " -o " + (dir / "whole")), 0);
-  expectSameRunFile(dir / "whole/run.h5", dir / "stopped/run.h5");
+  nlohmann::json stopped;
+  stopResumeAndRunWhole(dir, scene, 600, &stopped);
+  EXPECT_EQ(stopped["steps"], 601);
   EXPECT_EQ(summaryOf(dir / "stopped")["multiple_time_stepping"],
             summaryOf(dir / "whole")["multiple_time_stepping"]);
 }
@@ -524,15 +537,7 @@ TEST(Mpi, HybridStoppedAndResumedOnTwoRanksIsTheSameRun) {
       feScene(dir, "hybrid.toml", "0.6e-6",
               "representation = \"hybrid\"\nerode_step_ratio = 0.4\nrebalance_every = 200\n"
               "checkpoint_interval = 1e6\n");
-  writeStopScript(dir / "stop1.sh", 1500);
-  const std::string mpirun = "timeout 300 mpirun --allow-run-as-root --oversubscribe -np 2 ";
-  ASSERT_EQ(exitCode(mpirun + (dir / "stop1.sh") + " run " + scene + " -o " + (dir / "stopped")),
-            143);
-  const auto stopped = nlohmann::json::parse(test::readFile(dir / "stopped/summary.json"));
-  EXPECT_EQ(stopped["status"], "interrupted");
-  ASSERT_EQ(exitCode(mpirun + MESOPEN_BINARY + " run --resume " + (dir / "stopped")), 0);
-  ASSERT_EQ(exitCode(mpirun + MESOPEN_BINARY + " run " + scene + " -o " + (dir / "whole")), 0);
-  expectSameRunFile(dir / "whole/run.h5", dir / "stopped/run.h5");
+  stopResumeAndRunWhole(dir, scene, 1500);
   expectSameDisks(dir / "whole", dir / "stopped", "hybrid, resumed on two ranks");
 }
 
