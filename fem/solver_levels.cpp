@@ -525,6 +525,10 @@ void Solver::stepLevels() {
       (!shared && (!std::isfinite(energy_.kinetic) || !std::isfinite(energy_.internal))))
     throw RunFailure(notFinite());
   erode();
+  // (with several processes the load is checked here, as step() does, so that a checkpoint after
+  // the step finds it checked: Solver::restore)
+  if (shared)
+    updateActivity(true);
 }
 
 // The first half-kick and the drift of the due bodies' nodes (levels 0 to top, each over its
@@ -770,8 +774,9 @@ void Solver::shareBodySteps(int top) {
 // plus dt' <= max_dt_growth dt), after the half-kick
 //   v += T/2 (f - f_ext) / m + W/2 f_ext / m     (kickAndDriftLevels),
 // W its body's window now (the external force's). A node of a body in parts is kicked instead by
-// each part p that stepped with (2 tau_l' - tau_l)/2 f_p <= tau_l' f_p (nextPartForces), tau_l' the
-// part's next window, at most 2^max_level dt': bounded by the sum of the parts' |f_p| at it.
+// each part p that stepped with tau_e'/2 w_p f_p, w_p = (2^(l_p+1) - 2^l_last) / 2^e
+// (nextPartForces), at most T 2^L f_p whatever the base steps in the body's window: bounded by the
+// sum of the parts' |f_p| at it.
 double Solver::nextDriftBoundLevels() const {
   const Nodes &nd = m_.nodes;
   const double growth = std::max(1.0, s_.max_dt_growth);
@@ -779,7 +784,7 @@ double Solver::nextDriftBoundLevels() const {
   double T = growth * dt_;
   for (int l = 1; l <= next_top; ++l)
     T = std::max(T, step_end_ - level_start_[static_cast<std::size_t>(l)] + growth * dt_);
-  const double part_window = std::ldexp(growth * dt_, s_.max_level);
+
   // the parts' force magnitudes at the nodes of this process's bodies in parts (by node from the
   // first of its body's)
   std::vector<std::vector<NodeForce>> part_kick(parted_bodies_.size());
@@ -795,6 +800,8 @@ double Solver::nextDriftBoundLevels() const {
         k.x += std::abs(part_force_[j].x), k.y += std::abs(part_force_[j].y);
       }
   }
+  // (a part's kick is tau_e'/2 w_p f_p, w_p = (2^(l+1) - 2^l_last) / 2^e: at most T 2^L f_p)
+  const double part_window = std::ldexp(T, s_.max_level);
   const double half = 0.5 * T;
   double most = 0.0;
   for (const Range &r : node_ranges_)
