@@ -439,73 +439,42 @@ std::vector<double> asDoubles(const std::vector<std::size_t> &counts) {
 } // namespace
 
 // With several processes, a new partition when the load (each rank's active elements: the bodies
-// it owns that move) is out of balance. With levels the ranks meet at every base step, so each
-// step's work is shared: a body's active elements count at their level (a body in parts by its
-// parts' levels, which every process knows: chooseLevels), the step whose coarsest due level is t
-// computes levels 0 to t, and the load is the work over a cycle of 2^L base steps, each step's
-// the most any rank has (each level its own weight in the partition). The loads change only when
-// the bodies that move, their elements or their levels change, which is when updateActivity
-// calls this: the check is one pass over the bodies and no message, and every process, holding
-// the same model, takes the same decision. Out of balance is measured against the best a
-// partition of whole bodies can do: the most loaded rank's load over the larger of the mean and
-// the heaviest body's, less 1 (with no body heavier than the mean, the imbalance max / mean - 1).
-// The bodies are partitioned at the first load, when `forced`, and when that measure passes
-// rebalance_above_; never when not `may_partition` (a run continued with its partition).
+// it owns that move; with levels each element weighted by its updates per base step, 2^-level, a
+// body in parts by its parts' levels, which every process knows: chooseLevels) is out of balance.
+// The loads change only when the bodies that move, their elements or their levels change, which
+// is when updateActivity calls this: the check is one pass over the bodies and no message, and
+// every process, holding the same model, takes the same decision. Out of balance is measured
+// against the best a partition of whole bodies can do: the most loaded rank's load over the
+// larger of the mean and the heaviest body's, less 1 (with no body heavier than the mean, the
+// imbalance max / mean - 1). The bodies are partitioned at the first load, when `forced`, and when
+// that measure passes rebalance_above_; never when not `may_partition` (a run continued with its
+// partition).
 void Solver::balanceLoad(bool forced, bool may_partition) {
   const std::size_t ranks = static_cast<std::size_t>(comm_.size());
   // (one process owns every body: nothing to share)
   if (ranks == 1 || !may_partition)
     return;
-  const std::size_t n_levels = levels() ? static_cast<std::size_t>(s_.max_level) + 1 : 1;
-  // per body and level its active elements
-  std::vector<double> load(m_.bodies.size() * n_levels, 0.0);
-  for (std::size_t b = 0; b < m_.bodies.size(); ++b)
-    if (!m_.at_rest[b])
-      levelElements(b, &load[b * n_levels]);
-  // the steps of a cycle whose coarsest due level is t: 2^(L - t - 1), and one for t = L
-  std::vector<double> steps_at(n_levels, 1.0);
-  for (std::size_t t = 0; t + 1 < n_levels; ++t)
-    steps_at[t] = std::ldexp(1.0, static_cast<int>(n_levels - t) - 2);
-  auto cycleWork = [&](const double *by_level) {
-    double work = 0.0, step = 0.0;
-    for (std::size_t t = 0; t < n_levels; ++t)
-      step += by_level[t], work += steps_at[t] * step;
-    return work;
-  };
+  std::vector<double> load(m_.bodies.size(), 0.0);
   double total = 0.0, heaviest = 0.0;
-  for (std::size_t b = 0; b < m_.bodies.size(); ++b) {
-    const double work = cycleWork(&load[b * n_levels]);
-    total += work;
-    heaviest = std::max(heaviest, work);
+  for (std::size_t b = 0; b < load.size(); ++b) {
+    if (!m_.at_rest[b])
+      load[b] = levelLoad(b);
+    total += load[b];
+    heaviest = std::max(heaviest, load[b]);
   }
   if (total == 0.0) // (nothing moves: nothing to share)
     return;
-  // per rank and level its bodies' active elements; per rank its work over a cycle
-  std::vector<double> rank_levels;
-  auto share = [&] {
-    rank_levels.assign(ranks * n_levels, 0.0);
-    for (std::size_t b = 0; b < m_.bodies.size(); ++b)
-      for (std::size_t l = 0; l < n_levels; ++l)
-        rank_levels[static_cast<std::size_t>(owner_[b]) * n_levels + l] += load[b * n_levels + l];
-    std::vector<double> work(ranks);
-    for (std::size_t r = 0; r < ranks; ++r)
-      work[r] = cycleWork(&rank_levels[r * n_levels]);
-    return work;
+  auto rankLoads = [&] {
+    std::vector<double> loads(ranks, 0.0);
+    for (std::size_t b = 0; b < load.size(); ++b)
+      loads[static_cast<std::size_t>(owner_[b])] += load[b];
+    return loads;
   };
-  // the cycle's work when every step waits for its most loaded rank
-  auto slowest = [&] {
-    double work = 0.0;
-    std::vector<double> step(ranks, 0.0);
-    for (std::size_t t = 0; t < n_levels; ++t) {
-      for (std::size_t r = 0; r < ranks; ++r)
-        step[r] += rank_levels[r * n_levels + t];
-      work += steps_at[t] * *std::max_element(step.begin(), step.end());
-    }
-    return work;
-  };
-  std::vector<double> rank_loads = share();
+  std::vector<double> rank_loads = rankLoads();
   const double best = std::max(total / static_cast<double>(ranks), heaviest);
-  auto excess = [&] { return slowest() / best - 1.0; };
+  auto excess = [&] {
+    return *std::max_element(rank_loads.begin(), rank_loads.end()) / best - 1.0;
+  };
   // A partition that could not reach rebalance_imbalance (a body heavier than a rank's share in
   // the middle of the others: no straight cut balances it) is made again only once the load is
   // that much worse than it achieved, or the total load has changed by that fraction since.
@@ -515,8 +484,8 @@ void Solver::balanceLoad(bool forced, bool may_partition) {
   if (partitioned_ && !forced && !(out_of_balance > tol && worth_trying))
     return;
   const double before = imbalance(rank_loads);
-  repartition(load, n_levels);
-  rank_loads = share();
+  repartition(load);
+  rank_loads = rankLoads();
   last_achieved_ = excess();
   last_total_ = total;
   if (partitioned_) {
@@ -529,15 +498,13 @@ void Solver::balanceLoad(bool forced, bool may_partition) {
 }
 
 // Every body to the rank the partitioner gives it: each process passes the bodies it owns, with
-// their nodes' centroid and their loads (`weights` each, balanceLoad), and all learn every body's
-// new owner.
+// their nodes' centroid and their load (balanceLoad), and all learn every body's new owner.
 // Every process holds every body, but only a body's owner keeps its elements' state (stress,
 // energy, plastic strain...) and its nodes' motion current: the moving bodies that change owner
 // take theirs to their new owner.
-void Solver::repartition(const std::vector<double> &load, std::size_t weights) {
+void Solver::repartition(const std::vector<double> &load) {
   Nodes &nd = m_.nodes;
   parallel::PartitionItems mine;
-  mine.weight_dim = weights;
   for (std::size_t b = 0; b < m_.bodies.size(); ++b) {
     if (!owns(b))
       continue;
@@ -550,8 +517,7 @@ void Solver::repartition(const std::vector<double> &load, std::size_t weights) {
     mine.id.push_back(static_cast<std::uint32_t>(b));
     mine.x.push_back(x / nodes);
     mine.y.push_back(y / nodes);
-    mine.weight.insert(mine.weight.end(), load.begin() + static_cast<long>(b * weights),
-                       load.begin() + static_cast<long>((b + 1) * weights));
+    mine.weight.push_back(load[b]);
   }
   const std::vector<int> to = partitioner_.partition(mine);
   std::vector<std::int64_t> moves;

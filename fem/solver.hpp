@@ -337,8 +337,8 @@ private:
   void updateActivity(bool may_partition = true);
   void countActive();
   void balanceLoad(bool forced, bool may_partition);
-  void repartition(const std::vector<double> &load, std::size_t weights);
-  void levelElements(std::size_t b, double *by_level) const;
+  void repartition(const std::vector<double> &load);
+  double levelLoad(std::size_t b) const;
   void shareAmongThreads();
   struct KickSums {
     double gravity = 0.0, kinetic = 0.0, provider = 0.0, friction = 0.0;

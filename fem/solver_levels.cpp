@@ -183,21 +183,22 @@ std::size_t Solver::partedIndex(std::uint32_t b) const {
                                   parted_bodies_.begin());
 }
 
-// A moving body's active elements by level into `by_level` (at its level; a body in parts at its
-// parts' levels, which every process knows: chooseLevels); without levels all at level 0.
-void Solver::levelElements(std::size_t b, double *by_level) const {
+// A moving body's load for the partition: its active elements, with levels each weighted by its
+// updates per base step, 2^-level (a body in parts by its parts' levels, which every process
+// knows: chooseLevels).
+double Solver::levelLoad(std::size_t b) const {
   const Body &body = m_.bodies[b];
-  if (!levels() || part_begin_[b] == part_begin_[b + 1]) {
-    by_level[levels() ? level_[b] : 0] +=
-        static_cast<double>(body.element_end - body.element_begin - body.eroded);
-    return;
-  }
+  if (!levels() || part_begin_[b] == part_begin_[b + 1])
+    return std::ldexp(static_cast<double>(body.element_end - body.element_begin - body.eroded),
+                      levels() ? -level_[b] : 0);
+  double load = 0.0;
   for (std::size_t p = part_begin_[b]; p < part_begin_[b + 1]; ++p) {
     std::size_t active = 0;
     for (std::size_t e = parts_[p].element_begin; e < parts_[p].element_end; ++e)
       active += m_.elements.eroded[e] ? 0 : 1;
-    by_level[part_level_[p]] += static_cast<double>(active);
+    load += std::ldexp(static_cast<double>(active), -part_level_[p]);
   }
+  return load;
 }
 
 // With several processes, for a checkpoint: what only the owners keep of the active bodies' levels
@@ -727,7 +728,7 @@ void Solver::chooseLevels(int top) {
       nextPartForces(static_cast<std::uint32_t>(b), top, stepped_at);
     }
   // their owners' levels and parts' levels (-1: not the owner; the parts' levels weigh the body's
-  // load, levelElements)
+  // load, levelLoad)
   if (comm_.size() > 1 && !parted_stepped.empty()) {
     std::vector<double> chosen;
     for (std::uint32_t b : parted_stepped) {

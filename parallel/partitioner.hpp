@@ -9,13 +9,11 @@
 
 namespace mesopen::parallel {
 
-// The items one process owns now: a global id each (below 2^32), a point, and `weight_dim` weights
-// (item by item: the work the item brings, zero for an item that brings none now; with several,
-// kinds of work each to be shared evenly, as every process's weight_dim, the same).
+// The items one process owns now: a global id each (below 2^32), a point, and a weight (the work
+// the item brings; zero for an item that brings none now).
 struct PartitionItems {
   std::vector<std::uint32_t> id;
   std::vector<double> x, y, weight;
-  std::size_t weight_dim = 1;
   std::size_t size() const { return id.size(); }
 };
 

@@ -28,9 +28,8 @@ void itemList(void *data, int /*gid_entries*/, int /*lid_entries*/, ZOLTAN_ID_PT
   for (std::size_t k = 0; k < items.size(); ++k) {
     global_ids[k] = items.id[k];
     local_ids[k] = static_cast<ZOLTAN_ID_TYPE>(k);
+    weights[k] = static_cast<float>(items.weight[k]);
   }
-  for (std::size_t j = 0; j < items.weight.size(); ++j)
-    weights[j] = static_cast<float>(items.weight[j]);
   *error = ZOLTAN_OK;
 }
 
@@ -65,7 +64,7 @@ ZoltanRcb::ZoltanRcb(MPI_Comm comm) : comm_(comm) {
       {"LB_APPROACH", "PARTITION"}, // from scratch every time (no incremental repartitioning)
       {"NUM_GID_ENTRIES", "1"},     // a global id below 2^32
       {"NUM_LID_ENTRIES", "1"},     // the item's place in PartitionItems
-      {"OBJ_WEIGHT_DIM", "1"},      // one weight: the item's work (partition: as many as given)
+      {"OBJ_WEIGHT_DIM", "1"},      // one weight: the item's work
       {"RETURN_LISTS", "PARTS"},    // every item's part, moved or not
       {"IMBALANCE_TOL", "1.01"},    // each cut within 1 % of the weighted median, as far as the
                                     // items allow (Zoltan's default, 1.1, leaves up to 10 %)
@@ -85,11 +84,6 @@ std::vector<int> ZoltanRcb::partition(const PartitionItems &mine) const {
   const unsigned long total = allReduce<unsigned long>(mine.size(), MPI_SUM, comm_);
   if (total < 2)
     return std::vector<int>(mine.size(), rank);
-  // Several weights: RCB's multicriteria bisection, each cut balancing every weight as far as one
-  // cut can (the largest of their imbalances the least).
-  const std::string weight_dim = std::to_string(mine.weight_dim);
-  if (Zoltan_Set_Param(zoltan_, "OBJ_WEIGHT_DIM", weight_dim.c_str()) != ZOLTAN_OK)
-    throw std::runtime_error("Zoltan refused the parameter OBJ_WEIGHT_DIM = " + weight_dim);
   void *data = const_cast<PartitionItems *>(&mine); // Zoltan's callbacks take void *; read only
   Zoltan_Set_Num_Obj_Fn(zoltan_, itemCount, data);
   Zoltan_Set_Obj_List_Fn(zoltan_, itemList, data);
