@@ -136,6 +136,7 @@ void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
   elapsed_ += dt;
   if (shared()) { // this process's bodies are current, the others' come with exchangeBoundaries
     const int me = processes_->rank();
+    levels_ = !model.due.empty();
     current_.resize(model.bodies.size());
     for (std::size_t b = 0; b < current_.size(); ++b)
       current_[b] = (*owner_)[b] == me;
@@ -215,8 +216,13 @@ void FeDemCoupling::measureForLevels(const fem::Model &model, double dt) {
     x0 = std::min(x0, now_.x[c]), x1 = std::max(x1, now_.x[c]);
     y0 = std::min(y0, now_.y[c]), y1 = std::max(y1, now_.y[c]);
   }
-  closing_speed_ = contact_.fastest(model) + fastest_disk;
+  fastest_node_ = contact_.fastest(model), fastest_disk_ = fastest_disk;
+  closing_speed_ = fastest_node_ + fastest_disk_; // (over every process's: stepReduced)
   level_dt_ = dt;
+  const std::vector<std::uint32_t> &bodies = contact_.bodies();
+  box_current_.resize(bodies.size());
+  for (std::size_t k = 0; k < bodies.size(); ++k)
+    box_current_[k] = !shared() || model.at_rest[bodies[k]] || current_[bodies[k]];
   if (nc == 0)
     return;
   level_disks_.cover(x0, y0, x1 - x0, y1 - y0, std::max(2.0 * r_max_, 1e-12));
@@ -225,41 +231,106 @@ void FeDemCoupling::measureForLevels(const fem::Model &model, double dt) {
       [&](std::size_t c) { return static_cast<std::uint32_t>(c); });
 }
 
-std::uint8_t FeDemCoupling::levelClearOfDisks(double x0, double y0, double x1, double y1,
-                                              std::uint8_t top) const {
-  if (top == 0 || now_.x.empty() || !std::isfinite(x0) || !(x0 <= x1 && y0 <= y1))
-    return top;
+double FeDemCoupling::gapToDisks(double x0, double y0, double x1, double y1,
+                                 const std::vector<double> &more) const {
+  double gap = HUGE_VAL;
+  if (!std::isfinite(x0) || !(x0 <= x1 && y0 <= y1))
+    return gap;
+  const double search = levelSearch();
+  auto disk = [&](double x, double y, double radius) {
+    const double dx = std::max({x0 - x, 0.0, x - x1}), dy = std::max({y0 - y, 0.0, y - y1});
+    if (const double g = std::hypot(dx, dy) - radius; g <= search)
+      gap = std::min(gap, g);
+  };
+  if (!now_.x.empty()) {
+    const double reach = r_max_ + search;
+    level_disks_.forEach(level_disks_.cells(x0 - reach, y0 - reach, x1 + reach, y1 + reach),
+                         [&](std::uint32_t c) { disk(now_.x[c], now_.y[c], now_.radius[c]); });
+  }
+  for (std::size_t i = 0; i + 3 <= more.size(); i += 3)
+    disk(more[i], more[i + 1], more[i + 2]);
+  return gap;
+}
+
+std::uint8_t FeDemCoupling::levelClearOf(double gap, std::uint8_t top) const {
   const double unit = 2.0 * level_dt_ * closing_speed_; // the reach of level l: 2^l unit
-  const double reach = r_max_ + std::ldexp(unit, top);
-  double gap = HUGE_VAL; // from the box to the nearest disk's surface
-  level_disks_.forEach(level_disks_.cells(x0 - reach, y0 - reach, x1 + reach, y1 + reach),
-                       [&](std::uint32_t c) {
-                         const double dx = std::max({x0 - now_.x[c], 0.0, now_.x[c] - x1});
-                         const double dy = std::max({y0 - now_.y[c], 0.0, now_.y[c] - y1});
-                         gap = std::min(gap, std::hypot(dx, dy) - now_.radius[c]);
-                       });
   std::uint8_t level = 0;
   while (level < top && std::ldexp(unit, level + 1) < gap)
     ++level;
   return level;
 }
 
-void FeDemCoupling::capLevels(const std::vector<std::uint8_t> &,
-                              std::vector<std::uint8_t> &cap) const {
+// Each body's gap to the near disks, and its cap. With the FE bodies shared, every process
+// gives the gaps of the moving bodies whose boxes are current here, as (body, gap), and the
+// near disks within the search of a body in parts it does not own, as (-1 - body, x, y, radius),
+// in one all-gather: every process takes the least gap of each body, the owner of a body in parts
+// keeps the disks for capParts.
+void FeDemCoupling::capLevels(const fem::Model &model, const std::vector<std::uint8_t> &,
+                              std::vector<std::uint8_t> &cap) {
   const std::vector<std::uint32_t> &bodies = contact_.bodies();
-  for (std::size_t k = 0; k < bodies.size(); ++k) {
+  gap_.assign(model.bodies.size(), HUGE_VAL);
+  parts_disks_.assign(in_parts_.size(), {});
+  std::vector<double> given;
+  for (std::size_t k = 0; k < bodies.size() && k < box_current_.size(); ++k) {
+    const std::uint32_t b = bodies[k];
+    if (!box_current_[k] || (shared() && model.at_rest[b]))
+      continue;
     const DiskContact::Region box = contact_.box(k);
-    std::uint8_t &c = cap[bodies[k]];
-    c = std::min(c, levelClearOfDisks(box.x0, box.y0, box.x1, box.y1, c));
+    const double gap = gapToDisks(box.x0, box.y0, box.x1, box.y1);
+    if (!shared())
+      gap_[b] = gap;
+    else if (gap < HUGE_VAL)
+      given.insert(given.end(), {static_cast<double>(b), gap});
   }
+  if (shared()) {
+    const double search = levelSearch();
+    for (const std::uint32_t b : in_parts_) {
+      const auto k = static_cast<std::size_t>(std::lower_bound(bodies.begin(), bodies.end(), b) -
+                                              bodies.begin());
+      if (k >= box_current_.size() || bodies[k] != b || !box_current_[k] || model.at_rest[b] ||
+          (*owner_)[b] == processes_->rank())
+        continue;
+      const DiskContact::Region box = contact_.box(k);
+      for (std::size_t c = 0; c < now_.x.size(); ++c) {
+        const double dx = std::max({box.x0 - now_.x[c], 0.0, now_.x[c] - box.x1});
+        const double dy = std::max({box.y0 - now_.y[c], 0.0, now_.y[c] - box.y1});
+        if (std::hypot(dx, dy) - now_.radius[c] <= search)
+          given.insert(given.end(),
+                       {-1.0 - static_cast<double>(b), now_.x[c], now_.y[c], now_.radius[c]});
+      }
+    }
+    const std::vector<double> all = processes_->allGather(std::move(given));
+    for (std::size_t i = 0; i < all.size();) {
+      if (all[i] >= 0.0) {
+        double &gap = gap_[static_cast<std::size_t>(all[i])];
+        gap = std::min(gap, all[i + 1]);
+        i += 2;
+        continue;
+      }
+      const auto b = static_cast<std::uint32_t>(-1.0 - all[i]);
+      const auto p = static_cast<std::size_t>(std::find(in_parts_.begin(), in_parts_.end(), b) -
+                                              in_parts_.begin());
+      if ((*owner_)[b] == processes_->rank())
+        parts_disks_[p].insert(parts_disks_[p].end(), all.begin() + static_cast<long>(i + 1),
+                               all.begin() + static_cast<long>(i + 4));
+      i += 4;
+    }
+  }
+  for (const std::uint32_t b : bodies)
+    cap[b] = std::min(cap[b], levelClearOf(gap_[b], cap[b]));
 }
 
-void FeDemCoupling::capParts(const std::vector<std::uint8_t> &, std::uint32_t,
+void FeDemCoupling::capParts(const std::vector<std::uint8_t> &, std::uint32_t body,
                              const std::vector<double> &boxes,
                              std::vector<std::uint8_t> &cap) const {
+  static const std::vector<double> none;
+  const auto i = static_cast<std::size_t>(std::find(in_parts_.begin(), in_parts_.end(), body) -
+                                          in_parts_.begin());
+  const std::vector<double> &more = i < parts_disks_.size() ? parts_disks_[i] : none;
   for (std::size_t p = 0; p < cap.size(); ++p)
-    cap[p] = std::min(cap[p], levelClearOfDisks(boxes[4 * p], boxes[4 * p + 1], boxes[4 * p + 2],
-                                                boxes[4 * p + 3], cap[p]));
+    cap[p] = std::min(cap[p], levelClearOf(gapToDisks(boxes[4 * p], boxes[4 * p + 1],
+                                                      boxes[4 * p + 2], boxes[4 * p + 3], more),
+                                           cap[p]));
 }
 
 // The DEM participant's step with the window's motion; the last FE forces on the disks are
@@ -358,18 +429,20 @@ FeDemCoupling::MarkGrid::MarkGrid(const DiskContact::Region &region, bool set) :
 }
 
 // The marks of this process on `grid`'s cells: those its near disks reach (centre and largest
-// radius; a disk farther than that from the grid's region is left out, as no FE body is within its
-// reach), then in blocks of 4 x 4 cells those its bodies' boxes cover (at rest too: every process
-// may load those), so that every process knows who may send whom a body or a reaction.
+// radius, with levels the levels' search further; a disk farther than that from the grid's region
+// is left out, as no FE body is within its reach), then in blocks of 4 x 4 cells those its bodies'
+// boxes cover (at rest too: every process may load those), so that every process knows who may send
+// whom a body or a reaction.
 std::vector<std::int64_t> FeDemCoupling::markCells(const MarkGrid &grid) const {
   const DiskContact::Region &r = grid.r;
   std::vector<std::int64_t> marks(static_cast<std::size_t>(grid.each), 0);
+  const double reach = r_max_ + (levels_ ? levelSearch() : 0.0);
   for (std::size_t c = 0; grid.bodies_there && c < now_.size(); ++c) {
     const double x = now_.x[c], y = now_.y[c];
-    if (x + r_max_ < r.x0 || x - r_max_ > r.x1 || y + r_max_ < r.y0 || y - r_max_ > r.y1)
+    if (x + reach < r.x0 || x - reach > r.x1 || y + reach < r.y0 || y - reach > r.y1)
       continue; // (no FE body within its reach)
-    for (int j = grid.row(y - r_max_); j <= grid.row(y + r_max_); ++j)
-      for (int i = grid.column(x - r_max_); i <= grid.column(x + r_max_); ++i)
+    for (int j = grid.row(y - reach); j <= grid.row(y + reach); ++j)
+      for (int i = grid.column(x - reach); i <= grid.column(x + reach); ++i)
         MarkGrid::set(marks.data(), j * grid.nx + i);
   }
   const int me = processes_->rank();
@@ -525,12 +598,17 @@ void FeDemCoupling::applyReactions(fem::Model &model) {
   }
 }
 
-void FeDemCoupling::stepFigures(const fem::Model &, double, std::vector<double> &figures) const {
+void FeDemCoupling::stepFigures(const fem::Model &model, double,
+                                std::vector<double> &figures) const {
   figures.push_back(static_cast<double>(woken_.size()));
+  if (!model.due.empty())
+    figures.insert(figures.end(), {fastest_node_, fastest_disk_});
 }
 
 void FeDemCoupling::stepReduced(fem::Model &model, const double *largest) {
   fem::wakeEverywhere(model, *processes_, woken_, static_cast<std::size_t>(largest[0]));
+  if (!model.due.empty())
+    closing_speed_ = largest[1] + largest[2];
 }
 
 Particles FeDemCoupling::disks() const {

@@ -57,14 +57,20 @@ public:
   void stepFigures(const fem::Model &model, double drift,
                    std::vector<double> &figures) const override;
   void stepReduced(fem::Model &model, const double *largest) override;
-  // Multiple time stepping (one process): the FE-DEM contact is computed at the base step, so a
-  // body (or part) a disk may reach before its next step steps at level 0. It may take level l
-  // only while the gap between its box and every near disk exceeds 2^(l+1) dt v, v the fastest
-  // closing speed (the fastest FE boundary node's speed plus the fastest near disk's, its spin
-  // included): a disk cannot touch it within twice its window.
+  // Multiple time stepping: the FE-DEM contact is computed at the base step, so a body (or part) a
+  // disk may reach before its next step steps at level 0. It may take level l only while the gap
+  // between its box and every near disk exceeds 2^(l+1) dt v, v the fastest closing speed (the
+  // fastest FE boundary node's speed plus the fastest near disk's, its spin included): a disk
+  // cannot touch it within twice its window. Disks are looked for up to the largest disk's radius
+  // from the box (`level_search`); one farther is taken as that far.
+  // With the FE bodies shared, a body's gap is the least of the processes' own (a process whose
+  // disk lies within the search of a moving body's box has the body: its marks reach that far at
+  // levels), gathered in capLevels with the disks near a body in parts, whose owner caps its
+  // parts; the closing speed's two maxima ride in the step's reduction (stepFigures).
   bool takesLevels() const override { return true; }
-  void capLevels(const std::vector<std::uint8_t> &reach,
-                 std::vector<std::uint8_t> &cap) const override;
+  void bodiesInParts(const std::vector<std::uint32_t> &bodies) override { in_parts_ = bodies; }
+  void capLevels(const fem::Model &model, const std::vector<std::uint8_t> &reach,
+                 std::vector<std::uint8_t> &cap) override;
   void capParts(const std::vector<std::uint8_t> &own, std::uint32_t body,
                 const std::vector<double> &boxes, std::vector<std::uint8_t> &cap) const override;
   // Other processes' FE boundary nodes received, over the run.
@@ -171,16 +177,26 @@ private:
   // disk's diameter), and whether there is one (shareRegion)
   DiskContact::Region marks_region_{};
   bool marks_set_ = false;
+  bool levels_ = false; // Model::due not empty: the marks reach level_search farther
   std::size_t halo_nodes_ = 0;
   // With levels (Model::due not empty): the near disks now in cells of the largest disk's
-  // diameter, the fastest closing speed [m/s] and the step [s] they were taken at (capLevels).
+  // diameter, this process's fastest FE boundary node and near disk [m/s] (closing_speed_ their
+  // sum over every process) and the step [s] they were taken at, and which bodies' boxes are
+  // current here (capLevels).
   void measureForLevels(const fem::Model &model, double dt);
-  // The coarsest level up to `top` whose reach 2^(l+1) dt v stays short of every near disk from
-  // the box [x0, x1] x [y0, y1].
-  std::uint8_t levelClearOfDisks(double x0, double y0, double x1, double y1,
-                                 std::uint8_t top) const;
+  // The gap from the box [x0, x1] x [y0, y1] to the nearest of this process's near disks within
+  // level_search of it (infinite if none), and to those of `more` (x, y, radius each).
+  double gapToDisks(double x0, double y0, double x1, double y1,
+                    const std::vector<double> &more = {}) const;
+  // The coarsest level up to `top` whose reach 2^(l+1) dt v stays short of `gap`.
+  std::uint8_t levelClearOf(double gap, std::uint8_t top) const;
+  double levelSearch() const { return r_max_; }
   CellGrid<> level_disks_;
-  double closing_speed_ = 0.0, level_dt_ = 0.0;
+  double closing_speed_ = 0.0, level_dt_ = 0.0, fastest_node_ = 0.0, fastest_disk_ = 0.0;
+  std::vector<std::uint32_t> in_parts_;
+  std::vector<char> box_current_;                // per contact body (index k)
+  std::vector<double> gap_;                      // per model body, from capLevels
+  std::vector<std::vector<double>> parts_disks_; // per body in parts: other processes' near disks
 };
 
 } // namespace mesopen::coupling

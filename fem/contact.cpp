@@ -1200,8 +1200,8 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
   hits.deep += found_depth / h > deep;
 }
 
-void Contact::capLevels(const std::vector<std::uint8_t> &reach,
-                        std::vector<std::uint8_t> &cap) const {
+void Contact::capLevels(const Model &, const std::vector<std::uint8_t> &reach,
+                        std::vector<std::uint8_t> &cap) {
   for (const Pair &pair : pairs_.pairs()) {
     cap[pair.a] = std::min(cap[pair.a], reach[pair.b]);
     cap[pair.b] = std::min(cap[pair.b], reach[pair.a]);

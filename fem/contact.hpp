@@ -109,8 +109,8 @@ public:
   // Levels: a pair is computed at steps where both bodies are due, over the coarser body's window;
   // a body may meet the bodies of its pairs (boxes within the search margin).
   bool takesLevels() const override { return true; }
-  void capLevels(const std::vector<std::uint8_t> &reach,
-                 std::vector<std::uint8_t> &cap) const override;
+  void capLevels(const Model &model, const std::vector<std::uint8_t> &reach,
+                 std::vector<std::uint8_t> &cap) override;
   // A part may meet the bodies of its body's pairs whose boxes, widened by the search margin (by
   // which the pairs were found), overlap its box.
   void capParts(const std::vector<std::uint8_t> &own, std::uint32_t body,

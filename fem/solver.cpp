@@ -208,6 +208,8 @@ void Solver::addForceProvider(ForceProvider *provider) {
                                 "coupling): allowed with FE-FE contact alone");
   providers_.push_back(provider);
   provider->shareWork(comm_, owner_);
+  if (levels())
+    provider->bodiesInParts(parted_bodies_);
   const double scale = std::sqrt(std::max(0.0, 1.0 - 0.25 * provider->stepStiffness()));
   if (scale < step_scale_) { // the step already taken from the elements, scaled
     next_dt_ *= scale / step_scale_;

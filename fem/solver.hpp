@@ -121,9 +121,13 @@ public:
   // body's `reach` (its own level plus the level gap: the coarsest level a body it may meet may
   // take), the least reach of the bodies each body may meet through it (`cap`, lowered only), so
   // that bodies step together, or a level gap apart at most, before they touch.
+  // Every process calls capLevels, in provider order, after the step's reduction: it may make
+  // collective calls. `bodiesInParts` names the bodies stepped in parts (once, when the provider
+  // is added).
   virtual bool takesLevels() const { return false; }
-  virtual void capLevels(const std::vector<std::uint8_t> & /*reach*/,
-                         std::vector<std::uint8_t> & /*cap*/) const {}
+  virtual void bodiesInParts(const std::vector<std::uint32_t> & /*bodies*/) {}
+  virtual void capLevels(const Model &, const std::vector<std::uint8_t> & /*reach*/,
+                         std::vector<std::uint8_t> & /*cap*/) {}
   // The same for the parts of body `body` (boxes x0, y0, x1, y1 each): the finest own level of the
   // bodies each part may meet (`cap`, one per part, lowered only).
   virtual void capParts(const std::vector<std::uint8_t> & /*own*/, std::uint32_t /*body*/,

@@ -701,7 +701,7 @@ void Solver::chooseLevels(int top) {
   }
   std::vector<std::uint8_t> cap(n, max_level);
   for (auto *provider : providers_)
-    provider->capLevels(reach, cap);
+    provider->capLevels(m_, reach, cap);
   std::vector<std::uint8_t> constrained(n, max_level); // 0: imposed velocities, its parts too
   for (const auto &c : m_.constraints)
     for (std::uint32_t a : c.nodes)

@@ -130,13 +130,6 @@ int runCommand(const RunOptions &given) {
     scene = prepareRun(given, warnings);
     // Under mpirun every rank runs the scene; rank 0 writes the files.
     world = parallel::world(scene.run.grains && scene.run.representation != Representation::fe);
-    if (scene.run.max_level > 0 && world.size > 1 && scene.run.representation != Representation::fe)
-      throw InputError(scene.path + ": run.max_level = " + std::to_string(scene.run.max_level) +
-                       " (multiple time stepping) with run.representation = \"" +
-                       nameOf(scene.run.representation, representation_names) +
-                       "\" runs on one process, not " + std::to_string(world.size) +
-                       " MPI ranks; allowed under mpirun: max_level = 0, or representation = "
-                       "\"fe\"");
   } catch (const InputError &e) {
     std::cerr << "mesopen run: " << e.what() << '\n';
     return 2;
