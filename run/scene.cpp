@@ -327,7 +327,7 @@ const std::vector<Key> &keys() {
                 "2^level base steps (the shortest body's step) within its own stable step and "
                 "at most level_gap levels coarser than the bodies it may meet, a contact pair "
                 "when both its bodies step, a body a disk may reach within its window every "
-                "step (docs/solver.md; fe, dem and hybrid; under mpirun fe only); "
+                "step (docs/solver.md; fe, dem and hybrid); "
                 "0: every body every step"),
         integer("run", "level_gap", r, &R::level_gap, 0, 3,
                 "multiple time stepping: the most levels a body steps coarser than the own level "
