@@ -576,6 +576,21 @@ TEST(Mpi, HybridStoppedAndResumedOnTwoRanksIsTheSameRun) {
   expectSameDisks(dir / "whole", dir / "stopped", "hybrid, resumed on two ranks");
 }
 
+// The same at levels (the scene of HybridRunsAgreeAtLevelsOnOneTwoAndFourRanks): the disks' caps
+// are measured anew at each step, so the resumed run chooses the levels the whole one did; run.h5
+// is the same bytes, the element updates the same.
+TEST(Mpi, HybridStoppedAndResumedAtLevelsOnTwoRanksIsTheSameRun) {
+  ScratchDir dir("mpi-hybrid-levels-resume");
+  const std::string scene = feScene(dir, "hybrid.toml", "0.6e-6",
+                                    "representation = \"hybrid\"\nerode_step_ratio = 0.4\n"
+                                    "rebalance_every = 200\nmax_level = 2\n"
+                                    "checkpoint_interval = 1e6\n");
+  stopResumeAndRunWhole(dir, scene, 1500);
+  expectSameDisks(dir / "whole", dir / "stopped", "hybrid at levels, resumed on two ranks");
+  EXPECT_EQ(summaryOf(dir / "stopped")["multiple_time_stepping"],
+            summaryOf(dir / "whole")["multiple_time_stepping"]);
+}
+
 // The coupled baseline (examples/baseline-dem.toml: run 6's 6,198 grains as disks) runs to one
 // projectile length on 2 ranks.
 TEST(Mpi, CoupledBaselineRunsOnTwoRanks) {
