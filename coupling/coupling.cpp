@@ -136,7 +136,6 @@ void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
   elapsed_ += dt;
   if (shared()) { // this process's bodies are current, the others' come with exchangeBoundaries
     const int me = processes_->rank();
-    levels_ = !model.due.empty();
     current_.resize(model.bodies.size());
     for (std::size_t b = 0; b < current_.size(); ++b)
       current_[b] = (*owner_)[b] == me;
@@ -180,7 +179,7 @@ void FeDemCoupling::addForces(fem::Model &model, double, double dt) {
   if (shared()) {
     if (marks_of_all.empty()) {
       marks_region_ = now, marks_set_ = true;
-      std::vector<std::int64_t> mine = markCells(MarkGrid(marks_region_, true));
+      std::vector<std::int64_t> mine = markCells(MarkGrid(marks_region_, true), model);
       const auto size = static_cast<std::int64_t>(mine.size());
       marks_of_all = processes_->allGather(
           std::move(mine),
@@ -231,24 +230,36 @@ void FeDemCoupling::measureForLevels(const fem::Model &model, double dt) {
       [&](std::size_t c) { return static_cast<std::uint32_t>(c); });
 }
 
+namespace {
+// The gap from the box [x0, x1] x [y0, y1] to the surface of a disk at (x, y) of `radius`.
+double boxGap(double x0, double y0, double x1, double y1, double x, double y, double radius) {
+  return std::hypot(std::max({x0 - x, 0.0, x - x1}), std::max({y0 - y, 0.0, y - y1})) - radius;
+}
+} // namespace
+
+template <class Visit>
+void FeDemCoupling::forDisksNear(double x0, double y0, double x1, double y1, Visit visit) const {
+  if (now_.x.empty() || !std::isfinite(x0) || !(x0 <= x1 && y0 <= y1))
+    return;
+  const double search = levelSearch(), reach = r_max_ + search;
+  level_disks_.forEach(
+      level_disks_.cells(x0 - reach, y0 - reach, x1 + reach, y1 + reach), [&](std::uint32_t c) {
+        const double g = boxGap(x0, y0, x1, y1, now_.x[c], now_.y[c], now_.radius[c]);
+        if (g <= search)
+          visit(c, g);
+      });
+}
+
 double FeDemCoupling::gapToDisks(double x0, double y0, double x1, double y1,
                                  const std::vector<double> &more) const {
   double gap = HUGE_VAL;
   if (!std::isfinite(x0) || !(x0 <= x1 && y0 <= y1))
     return gap;
-  const double search = levelSearch();
-  auto disk = [&](double x, double y, double radius) {
-    const double dx = std::max({x0 - x, 0.0, x - x1}), dy = std::max({y0 - y, 0.0, y - y1});
-    if (const double g = std::hypot(dx, dy) - radius; g <= search)
-      gap = std::min(gap, g);
-  };
-  if (!now_.x.empty()) {
-    const double reach = r_max_ + search;
-    level_disks_.forEach(level_disks_.cells(x0 - reach, y0 - reach, x1 + reach, y1 + reach),
-                         [&](std::uint32_t c) { disk(now_.x[c], now_.y[c], now_.radius[c]); });
-  }
+  forDisksNear(x0, y0, x1, y1, [&](std::uint32_t, double g) { gap = std::min(gap, g); });
   for (std::size_t i = 0; i + 3 <= more.size(); i += 3)
-    disk(more[i], more[i + 1], more[i + 2]);
+    if (const double g = boxGap(x0, y0, x1, y1, more[i], more[i + 1], more[i + 2]);
+        g <= levelSearch())
+      gap = std::min(gap, g);
   return gap;
 }
 
@@ -268,7 +279,7 @@ std::uint8_t FeDemCoupling::levelClearOf(double gap, std::uint8_t top) const {
 void FeDemCoupling::capLevels(const fem::Model &model, const std::vector<std::uint8_t> &,
                               std::vector<std::uint8_t> &cap) {
   const std::vector<std::uint32_t> &bodies = contact_.bodies();
-  gap_.assign(model.bodies.size(), HUGE_VAL);
+  std::vector<double> gaps(model.bodies.size(), HUGE_VAL);
   parts_disks_.assign(in_parts_.size(), {});
   std::vector<double> given;
   for (std::size_t k = 0; k < bodies.size() && k < box_current_.size(); ++k) {
@@ -278,12 +289,11 @@ void FeDemCoupling::capLevels(const fem::Model &model, const std::vector<std::ui
     const DiskContact::Region box = contact_.box(k);
     const double gap = gapToDisks(box.x0, box.y0, box.x1, box.y1);
     if (!shared())
-      gap_[b] = gap;
+      gaps[b] = gap;
     else if (gap < HUGE_VAL)
       given.insert(given.end(), {static_cast<double>(b), gap});
   }
   if (shared()) {
-    const double search = levelSearch();
     for (const std::uint32_t b : in_parts_) {
       const auto k = static_cast<std::size_t>(std::lower_bound(bodies.begin(), bodies.end(), b) -
                                               bodies.begin());
@@ -291,18 +301,15 @@ void FeDemCoupling::capLevels(const fem::Model &model, const std::vector<std::ui
           (*owner_)[b] == processes_->rank())
         continue;
       const DiskContact::Region box = contact_.box(k);
-      for (std::size_t c = 0; c < now_.x.size(); ++c) {
-        const double dx = std::max({box.x0 - now_.x[c], 0.0, now_.x[c] - box.x1});
-        const double dy = std::max({box.y0 - now_.y[c], 0.0, now_.y[c] - box.y1});
-        if (std::hypot(dx, dy) - now_.radius[c] <= search)
-          given.insert(given.end(),
-                       {-1.0 - static_cast<double>(b), now_.x[c], now_.y[c], now_.radius[c]});
-      }
+      forDisksNear(box.x0, box.y0, box.x1, box.y1, [&](std::uint32_t c, double) {
+        given.insert(given.end(),
+                     {-1.0 - static_cast<double>(b), now_.x[c], now_.y[c], now_.radius[c]});
+      });
     }
     const std::vector<double> all = processes_->allGather(std::move(given));
     for (std::size_t i = 0; i < all.size();) {
       if (all[i] >= 0.0) {
-        double &gap = gap_[static_cast<std::size_t>(all[i])];
+        double &gap = gaps[static_cast<std::size_t>(all[i])];
         gap = std::min(gap, all[i + 1]);
         i += 2;
         continue;
@@ -317,7 +324,7 @@ void FeDemCoupling::capLevels(const fem::Model &model, const std::vector<std::ui
     }
   }
   for (const std::uint32_t b : bodies)
-    cap[b] = std::min(cap[b], levelClearOf(gap_[b], cap[b]));
+    cap[b] = std::min(cap[b], levelClearOf(gaps[b], cap[b]));
 }
 
 void FeDemCoupling::capParts(const std::vector<std::uint8_t> &, std::uint32_t body,
@@ -406,7 +413,7 @@ std::vector<std::int64_t> FeDemCoupling::shareRegion(const fem::Model &model,
   for (double v : {-mine.x0, -mine.y0, mine.x1, mine.y1, contact_.fastest(model)})
     values.push_back(std::bit_cast<std::int64_t>(v));
   if (marks_set_) {
-    const std::vector<std::int64_t> marks = markCells(MarkGrid(marks_region_, true));
+    const std::vector<std::int64_t> marks = markCells(MarkGrid(marks_region_, true), model);
     values.insert(values.end(), marks.begin(), marks.end());
   }
   const auto size = static_cast<std::int64_t>(values.size());
@@ -433,10 +440,11 @@ FeDemCoupling::MarkGrid::MarkGrid(const DiskContact::Region &region, bool set) :
 // is left out, as no FE body is within its reach), then in blocks of 4 x 4 cells those its bodies'
 // boxes cover (at rest too: every process may load those), so that every process knows who may send
 // whom a body or a reaction.
-std::vector<std::int64_t> FeDemCoupling::markCells(const MarkGrid &grid) const {
+std::vector<std::int64_t> FeDemCoupling::markCells(const MarkGrid &grid,
+                                                   const fem::Model &model) const {
   const DiskContact::Region &r = grid.r;
   std::vector<std::int64_t> marks(static_cast<std::size_t>(grid.each), 0);
-  const double reach = r_max_ + (levels_ ? levelSearch() : 0.0);
+  const double reach = r_max_ + (model.due.empty() ? 0.0 : levelSearch());
   for (std::size_t c = 0; grid.bodies_there && c < now_.size(); ++c) {
     const double x = now_.x[c], y = now_.y[c];
     if (x + reach < r.x0 || x - reach > r.x1 || y + reach < r.y0 || y - reach > r.y1)

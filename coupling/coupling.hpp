@@ -133,7 +133,7 @@ private:
   void nearDisksNow();
   std::vector<std::int64_t> shareRegion(const fem::Model &model,
                                         const DiskContact::Region &mine) const;
-  std::vector<std::int64_t> markCells(const MarkGrid &grid) const;
+  std::vector<std::int64_t> markCells(const MarkGrid &grid, const fem::Model &model) const;
   void exchangeBoundaries(fem::Model &model, const MarkGrid &grid,
                           const std::vector<std::int64_t> &all);
   void applyReactions(fem::Model &model);
@@ -177,13 +177,16 @@ private:
   // disk's diameter), and whether there is one (shareRegion)
   DiskContact::Region marks_region_{};
   bool marks_set_ = false;
-  bool levels_ = false; // Model::due not empty: the marks reach level_search farther
   std::size_t halo_nodes_ = 0;
   // With levels (Model::due not empty): the near disks now in cells of the largest disk's
   // diameter, this process's fastest FE boundary node and near disk [m/s] (closing_speed_ their
   // sum over every process) and the step [s] they were taken at, and which bodies' boxes are
   // current here (capLevels).
   void measureForLevels(const fem::Model &model, double dt);
+  // visit(c, gap) for each of this process's near disks c within level_search of the box
+  // [x0, x1] x [y0, y1], `gap` from the box to its surface.
+  template <class Visit>
+  void forDisksNear(double x0, double y0, double x1, double y1, Visit visit) const;
   // The gap from the box [x0, x1] x [y0, y1] to the nearest of this process's near disks within
   // level_search of it (infinite if none), and to those of `more` (x, y, radius each).
   double gapToDisks(double x0, double y0, double x1, double y1,
@@ -195,7 +198,6 @@ private:
   double closing_speed_ = 0.0, level_dt_ = 0.0, fastest_node_ = 0.0, fastest_disk_ = 0.0;
   std::vector<std::uint32_t> in_parts_;
   std::vector<char> box_current_;                // per contact body (index k)
-  std::vector<double> gap_;                      // per model body, from capLevels
   std::vector<std::vector<double>> parts_disks_; // per body in parts: other processes' near disks
 };
 
