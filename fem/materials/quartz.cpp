@@ -42,20 +42,21 @@ public:
 
 private:
   // G(J) and dG/dJ: G = G0 + G1 P + G2 P^2, P = max(P-bar(mu), 0), mu = 1/J - 1.
+  // (inlined without a branch, so that the batch loop of elasticUpdate vectorizes)
   struct Shear {
     double G, dG_dJ, d2G_dJ2;
   };
-  Shear shear(double J) const {
+  [[gnu::always_inline]] Shear shear(double J) const {
     const double mu = 1.0 / J - 1.0, P = std::max(eos_.cold(mu), 0.0);
     const bool loaded = P > 0.0;
     const double P_mu = loaded ? (3.0 * eos_.K2 * mu + 2.0 * eos_.K1) * mu + eos_.K : 0.0;
     const double P_mumu = loaded ? 6.0 * eos_.K2 * mu + 2.0 * eos_.K1 : 0.0;
     const double G = G0_ + (G2_ * P + G1_) * P;
-    if (G <= 0.0) // a fit falling below zero is held there
-      return {0.0, 0.0, 0.0};
     const double G_P = G1_ + 2.0 * G2_ * P, mu_J = -1.0 / (J * J), mu_JJ = 2.0 / (J * J * J);
-    return {G, G_P * P_mu * mu_J,
-            2.0 * G2_ * P_mu * P_mu * mu_J * mu_J + G_P * (P_mumu * mu_J * mu_J + P_mu * mu_JJ)};
+    const double dG_dJ = G_P * P_mu * mu_J, d2G_dJ2 = 2.0 * G2_ * P_mu * P_mu * mu_J * mu_J +
+                                                      G_P * (P_mumu * mu_J * mu_J + P_mu * mu_JJ);
+    const bool held = G <= 0.0; // a fit falling below zero is held there
+    return {held ? 0.0 : G, held ? 0.0 : dG_dJ, held ? 0.0 : d2G_dJ2};
   }
 
   // Without strength: the stored deviatoric energy W = G(J) / 2 (tr b* - 3) per initial volume;
@@ -63,9 +64,14 @@ private:
   // takes W's change.
   void elasticUpdate(const StrainBatch &in, StressState &s, MaterialOutput &out) const {
     const double p_min = -eos_.cutoff;
+    // Local array pointers: contiguous vector loads and stores (no per-lane gathers).
     const double *f0 = in.f[0], *f1 = in.f[1], *f2 = in.f[2], *f3 = in.f[3];
     const double *g0 = in.f_old[0], *g1 = in.f_old[1], *g2 = in.f_old[2], *g3 = in.f_old[3];
     const double *r = in.inverse_cube_root_j, *r_old = in.inverse_cube_root_j_old;
+    const double *jac = in.jacobian, *dvol = in.volume_change, *vol0 = in.volume0;
+    double *sxx = s.sxx, *syy = s.syy, *sxy = s.sxy, *pressure = s.pressure, *energy = s.energy;
+    double *cs = out.sound_speed, *shear_share = out.shear_share;
+#pragma omp simd
     for (std::size_t i = 0; i < in.n; ++i) {
       const double J = determinant(f0[i], f1[i], f2[i], f3[i]);
       const double J_old = determinant(g0[i], g1[i], g2[i], g3[i]);
@@ -74,24 +80,24 @@ private:
       const double tr = trace - 3.0,
                    tr_old = isochoricTrace(g0[i], g1[i], g2[i], g3[i], r_old[i]) - 3.0;
       const double p_shear = -0.5 * now.dG_dJ * tr, p_shear_old = -0.5 * before.dG_dJ * tr_old;
-      neoHookeanDeviator(f0[i], f1[i], f2[i], f3[i], J, r[i], now.G, s.sxx[i], s.syy[i], s.sxy[i]);
-      const double w_dev = in.volume0[i] * 0.5 * (now.G * tr - before.G * tr_old);
-      const double mu = 1.0 / in.jacobian[i] - 1.0;
+      neoHookeanDeviator(f0[i], f1[i], f2[i], f3[i], J, r[i], now.G, sxx[i], syy[i], sxy[i]);
+      const double w_dev = vol0[i] * 0.5 * (now.G * tr - before.G * tr_old);
+      const double mu = 1.0 / jac[i] - 1.0;
       // The stored shear energy is not heat: the thermal term Gamma rho0 e sees E - A0 W.
-      const double b = eos_.gamma / in.volume0[i];
-      const double a = eos_.energyFree(mu, eos_.cold(mu)) - b * in.volume0[i] * 0.5 * now.G * tr;
-      double p_eos = s.pressure[i] - p_shear_old;
-      energyEquation(a, b, p_min, in.volume_change[i], w_dev, s.energy[i], p_eos);
-      s.pressure[i] = p_eos + p_shear;
-      const double bulk = eos_.tangentBulk(mu, p_eos, a + b * s.energy[i], p_min);
+      const double b = eos_.gamma / vol0[i];
+      const double a = eos_.energyFree(mu, eos_.cold(mu)) - b * vol0[i] * 0.5 * now.G * tr;
+      double p_eos = pressure[i] - p_shear_old;
+      energyEquation(a, b, p_min, dvol[i], w_dev, energy[i], p_eos);
+      pressure[i] = p_eos + p_shear;
+      const double bulk = eos_.tangentBulk(mu, p_eos, a + b * energy[i], p_min);
       // The stiffness W's dependence on J adds: in volume, -J dp_G/dJ = J G''(J) (tr b* - 3) / 2,
       // and coupling volume and shear, about |G'(J)| |dev b*| (|dev b*|^2 ~ 2 (tr b* - 3)).
       const double coupled = std::max(0.5 * J * now.d2G_dJ2 * tr, 0.0) +
                              std::abs(now.dG_dJ) * std::sqrt(2.0 * std::max(tr, 0.0));
       const double G = incrementalShearModulus(now.G, trace, J),
                    longitudinal = bulk + coupled + 4.0 / 3.0 * G;
-      out.sound_speed[i] = std::sqrt(longitudinal * in.jacobian[i] / rho0_);
-      out.shear_share[i] = longitudinal > 0.0 ? G / longitudinal : 0.75;
+      cs[i] = std::sqrt(longitudinal * jac[i] / rho0_);
+      shear_share[i] = longitudinal > 0.0 ? G / longitudinal : 0.75;
     }
     out.plastic_work = 0.0;
   }
