@@ -345,6 +345,8 @@ void Solver::choosePartLevels(std::uint32_t body, int top, std::uint8_t limit) {
   const Nodes &nd = m_.nodes;
   // (the parts that did not step keep their level: an empty box)
   std::vector<double> boxes(4 * (p1 - p0), HUGE_VAL);
+  // (the parts side by side on the threads: each part's figures its own)
+#pragma omp parallel for schedule(static) if (p1 - p0 > 1)
   for (std::size_t p = p0; p < p1; ++p) {
     if (part_level_[p] > top)
       continue;
