@@ -1309,17 +1309,21 @@ void Solver::elementPass(const Chunk &chunk, double dt, const UnitNodes &nodes, 
   alignas(64) double known_gain[max_chunk];
   if (levels())
     std::fill(known_gain, known_gain + n, 0.0);
+  // (in vector lanes, criticalStepGains: in a uniform mesh every element may be near)
   if (dt_min < refine_below) {
-    dt_min = HUGE_VAL;
+    alignas(64) std::uint32_t near[max_chunk];
+    alignas(64) double gain[max_chunk];
+    std::size_t count = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      if (step[i] < refine_below) {
-        const double g_x[3] = {gx[0][i], gx[1][i], gx[2][i]},
-                     g_y[3] = {gy[0][i], gy[1][i], gy[2][i]};
-        step[i] *= criticalStepGain(g_x, g_y, area[i], (2.0 / 3.0) * len[i], shear_share[i]);
-        known_gain[i] = 1.0;
-      }
-      dt_min = std::min(dt_min, step[i]);
+      near[count] = static_cast<std::uint32_t>(i);
+      count += step[i] < refine_below;
     }
+    criticalStepGains(near, count, gx, gy, area, len, shear_share, gain);
+    for (std::size_t j = 0; j < count; ++j)
+      step[near[j]] *= gain[j], known_gain[near[j]] = 1.0;
+    dt_min = HUGE_VAL;
+    for (std::size_t i = 0; i < n; ++i)
+      dt_min = std::min(dt_min, step[i]);
   }
   // For the others: the exact gain (criticalStepGain) where the step may set its body's (its least
   // gain over shapes, leastStepGain, brings it below the body's last shortest with a margin for
