@@ -265,6 +265,8 @@ void Solver::startParts() {
   part_level_.assign(parts_.size(), 0);
   part_own_level_.assign(parts_.size(), static_cast<std::uint8_t>(s_.max_level));
   part_step_min_.assign(parts_.size(), HUGE_VAL);
+  part_box_.assign(4 * parts_.size(), HUGE_VAL);
+  part_pass_step_.assign(parts_.size(), HUGE_VAL);
 }
 
 // A body in parts (one unit): its due parts in order, each from its nodes' velocities over its
@@ -317,6 +319,23 @@ void Solver::partsPass(const Unit &unit, int top, const double *tau, UnitScratch
     }
     for (; i < unit.chunk_end && chunks_[i].part == p; ++i)
       elementPass(chunks_[i], tau[l], nodes, sums_[i]);
+    // the part's box and shortest element step for choosePartLevels, while they are at hand
+    double x_lo = HUGE_VAL, y_lo = HUGE_VAL, x_hi = -HUGE_VAL, y_hi = -HUGE_VAL, step = HUGE_VAL;
+    for (std::size_t element = parts_[p].element_begin; element < parts_[p].element_end;
+         ++element) {
+      if (m_.elements.eroded[element])
+        continue;
+      step = std::min(step, level_step_[element]);
+      for (int k = 0; k < 3; ++k) {
+        const NodeState &node =
+            state[m_.elements.node[3 * element + static_cast<std::size_t>(k)] - base];
+        x_lo = std::min(x_lo, node.x), x_hi = std::max(x_hi, node.x);
+        y_lo = std::min(y_lo, node.y), y_hi = std::max(y_hi, node.y);
+      }
+    }
+    double *box = &part_box_[4 * p];
+    box[0] = x_lo, box[1] = y_lo, box[2] = x_hi, box[3] = y_hi;
+    part_pass_step_[p] = step;
     const double ratio = tau[l] / tau[e];
     NodeForce *kept = part_force_.data() + part_node_begin_[p];
     for (std::size_t j = 0; j < count; ++j) {
@@ -341,31 +360,16 @@ void Solver::partsPass(const Unit &unit, int top, const double *tau, UnitScratch
 // the provider's reach), nor than the step number allows.
 void Solver::choosePartLevels(std::uint32_t body, int top, std::uint8_t limit) {
   const std::size_t p0 = part_begin_[body], p1 = part_begin_[body + 1];
-  const Elements &el = m_.elements;
-  const Nodes &nd = m_.nodes;
-  // (the parts that did not step keep their level: an empty box)
+  // (the parts that did not step keep their level: an empty box; those that did have their box
+  // and shortest step from partsPass)
   std::vector<double> boxes(4 * (p1 - p0), HUGE_VAL);
-  // (the parts side by side on the threads: each part's figures its own)
-#pragma omp parallel for schedule(static) if (p1 - p0 > 1)
   for (std::size_t p = p0; p < p1; ++p) {
     if (part_level_[p] > top)
       continue;
-    double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, step = HUGE_VAL;
-    for (std::size_t e = parts_[p].element_begin; e < parts_[p].element_end; ++e) {
-      if (el.eroded[e])
-        continue;
-      step = std::min(step, level_step_[e]);
-      for (int k = 0; k < 3; ++k) {
-        const std::uint32_t a = el.node[3 * e + static_cast<std::size_t>(k)];
-        x0 = std::min(x0, nd.x[a]), x1 = std::max(x1, nd.x[a]);
-        y0 = std::min(y0, nd.y[a]), y1 = std::max(y1, nd.y[a]);
-      }
-    }
-    double *box = &boxes[4 * (p - p0)];
-    box[0] = x0, box[1] = y0, box[2] = x1, box[3] = y1;
-    part_step_min_[p] = step;
-    part_own_level_[p] = static_cast<std::uint8_t>(
-        ownLevel(s_.safety * step_scale_ * step, dt_, part_own_level_[p], s_.max_level));
+    std::copy_n(&part_box_[4 * p], 4, &boxes[4 * (p - p0)]);
+    part_step_min_[p] = part_pass_step_[p];
+    part_own_level_[p] = static_cast<std::uint8_t>(ownLevel(
+        s_.safety * step_scale_ * part_pass_step_[p], dt_, part_own_level_[p], s_.max_level));
   }
   std::vector<std::uint8_t> cap(p1 - p0, static_cast<std::uint8_t>(s_.max_level));
   for (auto *provider : providers_)
