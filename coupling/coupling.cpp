@@ -256,9 +256,9 @@ double FeDemCoupling::gapToDisks(double x0, double y0, double x1, double y1,
   if (!std::isfinite(x0) || !(x0 <= x1 && y0 <= y1))
     return gap;
   forDisksNear(x0, y0, x1, y1, [&](std::uint32_t, double g) { gap = std::min(gap, g); });
+  const double search = levelSearch();
   for (std::size_t i = 0; i + 3 <= more.size(); i += 3)
-    if (const double g = boxGap(x0, y0, x1, y1, more[i], more[i + 1], more[i + 2]);
-        g <= levelSearch())
+    if (const double g = boxGap(x0, y0, x1, y1, more[i], more[i + 1], more[i + 2]); g <= search)
       gap = std::min(gap, g);
   return gap;
 }

@@ -497,9 +497,7 @@ private:
   std::vector<std::size_t> part_begin_;
   std::vector<std::uint8_t> part_level_, part_own_level_, laid_part_levels_;
   std::vector<double> part_step_min_; // its elements' shortest step at its last update
-  // each part's box (x, y low, x, y high) and shortest step from its last pass (partsPass), for
-  // choosePartLevels
-  std::vector<double> part_box_, part_pass_step_;
+  std::vector<double> part_box_; // its box (x, y low, x, y high) at its last update (partsPass)
   // each part's nodes (sorted), [part_node_begin_[p], part_node_begin_[p + 1]) in part_nodes_, and
   // its force on them at its last update
   std::vector<std::size_t> part_node_begin_;

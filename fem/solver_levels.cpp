@@ -266,7 +266,6 @@ void Solver::startParts() {
   part_own_level_.assign(parts_.size(), static_cast<std::uint8_t>(s_.max_level));
   part_step_min_.assign(parts_.size(), HUGE_VAL);
   part_box_.assign(4 * parts_.size(), HUGE_VAL);
-  part_pass_step_.assign(parts_.size(), HUGE_VAL);
 }
 
 // A body in parts (one unit): its due parts in order, each from its nodes' velocities over its
@@ -319,7 +318,7 @@ void Solver::partsPass(const Unit &unit, int top, const double *tau, UnitScratch
     }
     for (; i < unit.chunk_end && chunks_[i].part == p; ++i)
       elementPass(chunks_[i], tau[l], nodes, sums_[i]);
-    // the part's box and shortest element step for choosePartLevels, while they are at hand
+    // the part's box and shortest element step (for choosePartLevels), while they are at hand
     double x_lo = HUGE_VAL, y_lo = HUGE_VAL, x_hi = -HUGE_VAL, y_hi = -HUGE_VAL, step = HUGE_VAL;
     for (std::size_t element = parts_[p].element_begin; element < parts_[p].element_end;
          ++element) {
@@ -335,7 +334,7 @@ void Solver::partsPass(const Unit &unit, int top, const double *tau, UnitScratch
     }
     double *box = &part_box_[4 * p];
     box[0] = x_lo, box[1] = y_lo, box[2] = x_hi, box[3] = y_hi;
-    part_pass_step_[p] = step;
+    part_step_min_[p] = step;
     const double ratio = tau[l] / tau[e];
     NodeForce *kept = part_force_.data() + part_node_begin_[p];
     for (std::size_t j = 0; j < count; ++j) {
@@ -361,15 +360,14 @@ void Solver::partsPass(const Unit &unit, int top, const double *tau, UnitScratch
 void Solver::choosePartLevels(std::uint32_t body, int top, std::uint8_t limit) {
   const std::size_t p0 = part_begin_[body], p1 = part_begin_[body + 1];
   // (the parts that did not step keep their level: an empty box; those that did have their box
-  // and shortest step from partsPass)
+  // and shortest step from their pass, partsPass)
   std::vector<double> boxes(4 * (p1 - p0), HUGE_VAL);
   for (std::size_t p = p0; p < p1; ++p) {
     if (part_level_[p] > top)
       continue;
     std::copy_n(&part_box_[4 * p], 4, &boxes[4 * (p - p0)]);
-    part_step_min_[p] = part_pass_step_[p];
     part_own_level_[p] = static_cast<std::uint8_t>(ownLevel(
-        s_.safety * step_scale_ * part_pass_step_[p], dt_, part_own_level_[p], s_.max_level));
+        s_.safety * step_scale_ * part_step_min_[p], dt_, part_own_level_[p], s_.max_level));
   }
   std::vector<std::uint8_t> cap(p1 - p0, static_cast<std::uint8_t>(s_.max_level));
   for (auto *provider : providers_)
