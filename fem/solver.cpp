@@ -638,19 +638,8 @@ void Solver::shareAmongThreads() {
       ++i;
     thread_blocks_[t] = i;
   }
-  if (!levels())
-    return;
-  // With levels, the node blocks of levels 0 to top (those due at a step whose coarsest due level
-  // is top: the first level_blocks_[top + 1]) by node count, for each top (a level's units are not
-  // all the units around their nodes; the units are taken as threads come free, forcesLevels).
-  const auto n_levels = static_cast<std::size_t>(s_.max_level + 1);
-  due_thread_blocks_.resize(n_levels);
-  std::vector<std::size_t> nodes;
-  for (std::size_t top = 0; top < n_levels; ++top) {
-    for (std::size_t i = nodes.size(); i < level_blocks_[top + 1]; ++i)
-      nodes.push_back(node_ranges_[i].end - node_ranges_[i].begin);
-    due_thread_blocks_[top] = shares(nodes, 0);
-  }
+  if (levels())
+    shareLevelsAmongThreads(threads);
 }
 
 // The bodies that move (active_bodies_), their elements and each rank's nodes and elements.

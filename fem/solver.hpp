@@ -344,6 +344,7 @@ private:
   void repartition(const std::vector<double> &load);
   double levelLoad(std::size_t b) const;
   void shareAmongThreads();
+  void shareLevelsAmongThreads(std::size_t threads);
   struct KickSums {
     double gravity = 0.0, kinetic = 0.0, provider = 0.0, friction = 0.0;
   };
@@ -473,15 +474,17 @@ private:
   // Multiple time stepping (levels()): per body its level, the level its own step allows, its
   // shortest element step at its last update (before the safety factor), its kinetic and internal
   // energy then; per level l the time at the last step whose number is a multiple of 2^l; the
-  // work ranges by level (units [level_units_[l], level_units_[l + 1]), node blocks likewise) and
-  // the node blocks of levels 0 to top per thread, for each top; the levels the ranges were laid
-  // out for.
+  // work ranges by level (units [level_units_[l], level_units_[l + 1]), node blocks likewise), the
+  // thread and level of each unit and node block, and both in the order of their nodes
+  // (shareLevelsAmongThreads); the levels the ranges were laid out for.
   std::vector<std::uint8_t> level_, own_level_, laid_levels_;
   std::vector<double> body_step_min_, body_kinetic_, body_internal_, level_start_;
   std::vector<double> level_step_; // per element: its step in its last pass
   double step_end_ = 0.0;          // the time at the end of the step being taken
   std::vector<std::size_t> level_units_, level_blocks_;
-  std::vector<std::vector<std::size_t>> due_thread_blocks_;
+  std::vector<std::uint16_t> unit_thread_, block_thread_;
+  std::vector<std::uint8_t> unit_level_, block_level_;
+  std::vector<std::size_t> unit_order_, block_order_;
   double element_steps_ = 0.0, single_rate_element_steps_ = 0.0;
   double checkpoint_element_steps_ = 0.0; // every process's, at the last collectCheckpoint
   // Bodies stepped in parts (levels(), at least parts_from elements: the projectile): parts of

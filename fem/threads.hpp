@@ -30,6 +30,29 @@ inline std::vector<std::size_t> contiguousShares(const std::vector<std::size_t> 
   return bounds;
 }
 
+// The same with a share of its own for each run: run t takes about targets[t] / (sum of targets)
+// of the weight.
+inline std::vector<std::size_t> contiguousShares(const std::vector<std::size_t> &weights,
+                                                 const std::vector<double> &targets) {
+  double total = 0.0, target_sum = 0.0;
+  for (std::size_t w : weights)
+    total += static_cast<double>(w);
+  for (double t : targets)
+    target_sum += t;
+  const std::size_t parts = targets.size();
+  std::vector<std::size_t> bounds(parts + 1, weights.size());
+  bounds[0] = 0;
+  double before = 0.0, end_of_run = target_sum > 0.0 ? targets[0] / target_sum * total : total;
+  for (std::size_t i = 0, t = 0; i < weights.size(); before += static_cast<double>(weights[i++])) {
+    const double middle = before + 0.5 * static_cast<double>(weights[i]);
+    while (t + 1 < parts && middle >= end_of_run) {
+      bounds[++t] = i;
+      end_of_run += targets[t] / target_sum * total;
+    }
+  }
+  return bounds;
+}
+
 // This thread's run [begin, end) of work split at `bounds` (one bound more than threads); a team
 // of another size splits the whole evenly.
 inline std::pair<std::size_t, std::size_t> threadShare(const std::vector<std::size_t> &bounds) {
