@@ -539,15 +539,13 @@ void Solver::stepLevels() {
 
 // With levels, each level's units split among the threads in contiguous runs, the same runs at
 // every step the level is due, so that a unit's element and node data stay in one core's cache
-// from one update to the next (taken as threads came free, the element pass of run 6 at L = 2
-// cost a fifth more per element). A body in parts goes to one thread (the k-th such body to
-// thread k mod threads), and its parts at level l count in that thread's share of level l: the
-// runs of each level are cut so that every thread has about the same elements at the level, with
-// the parts (no thread less than none), and so at every step. A node block goes with the unit
-// that holds its first node. Each thread takes its due units and blocks in the order of their
-// nodes, not level by level: at a step where every level is due it then reads the node and
-// element arrays once from start to end, as at a single rate (level by level, the element pass
-// and the half-kicks of such a step of run 6 at L = 2 took 1.5 times a single rate's step).
+// from one update to the next (docs/solver.md, "Threads at levels"). A body in parts goes to one
+// thread (the k-th such body to thread k mod threads), and its parts at level l count in that
+// thread's share of level l: the runs of each level are cut so that every thread has about the
+// same elements at the level, with the parts (no thread less than none), and so at every step. A
+// node block goes with the unit that holds its first node. Each thread takes its due units and
+// blocks in the order of their nodes, not level by level: at a step where every level is due it
+// then reads the node and element arrays once from start to end, as at a single rate.
 void Solver::shareLevelsAmongThreads(std::size_t threads) {
   const auto n_levels = static_cast<std::size_t>(s_.max_level) + 1;
   unit_thread_.assign(units_.size(), 0);
