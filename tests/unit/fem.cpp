@@ -1,8 +1,10 @@
 // The finite-element model and solver pieces: model building, the stable step against the exact
-// critical step of an element, the material registry, and skipping bodies at rest.
+// critical step of an element, the material registry, skipping bodies at rest, and the work
+// split among threads.
 #include "materials/hyperelastic.hpp"
 #include "meshes.hpp"
 #include "solver.hpp"
+#include "threads.hpp"
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
@@ -433,4 +435,31 @@ TEST(Solver, StateNotFiniteEndsTheRun) {
     EXPECT_NE(std::string(e.what()).find("the stress of element 5 of body"), std::string::npos)
         << e.what();
   }
+}
+
+// Contiguous runs of items with a share of its own for each run (the levels' units among the
+// threads, Solver::shareLevelsAmongThreads): an item goes to the run whose share holds its middle.
+TEST(Threads, ContiguousSharesFollowTheirTargets) {
+  const std::vector<std::size_t> ten(10, 1);
+  // equal targets: the equal split
+  EXPECT_EQ(fem::contiguousShares(ten, std::vector<double>{1.0, 1.0}),
+            fem::contiguousShares(ten, 2));
+  EXPECT_EQ(fem::contiguousShares(ten, std::vector<double>{1.0, 1.0}),
+            (std::vector<std::size_t>{0, 5, 10}));
+  // three quarters to the first run, none to a run whose target is 0
+  EXPECT_EQ(fem::contiguousShares(ten, std::vector<double>{3.0, 1.0}),
+            (std::vector<std::size_t>{0, 7, 10})); // (item 7 at the boundary: the next run)
+  EXPECT_EQ(fem::contiguousShares(ten, std::vector<double>{0.0, 1.0}),
+            (std::vector<std::size_t>{0, 0, 10}));
+  EXPECT_EQ(fem::contiguousShares(ten, std::vector<double>{1.0, 0.0, 1.0}),
+            (std::vector<std::size_t>{0, 5, 5, 10}));
+  // every target 0 (nothing to share against): all to the first run; no items: empty runs
+  EXPECT_EQ(fem::contiguousShares(ten, std::vector<double>{0.0, 0.0}),
+            (std::vector<std::size_t>{0, 10, 10}));
+  EXPECT_EQ(fem::contiguousShares(std::vector<std::size_t>{}, std::vector<double>{1.0, 1.0}),
+            (std::vector<std::size_t>{0, 0, 0}));
+  // a heavy item goes where its middle lies
+  EXPECT_EQ(
+      fem::contiguousShares(std::vector<std::size_t>{1, 10, 1}, std::vector<double>{1.0, 1.0}),
+      (std::vector<std::size_t>{0, 1, 3}));
 }
