@@ -612,21 +612,11 @@ PartitionReport Solver::partition() const {
 // they came and the blocks in halves, run 6 to 0.4 length took 3 % longer on two threads).
 void Solver::shareAmongThreads() {
   const auto threads = static_cast<std::size_t>(omp_get_max_threads());
-  // Contiguous runs of `weights` (of the items from `first` on) of about equal sums.
-  auto shares = [&](const std::vector<std::size_t> &weights, std::size_t first) {
-    std::vector<std::size_t> bounds = contiguousShares(weights, threads);
-    for (std::size_t &bound : bounds)
-      bound += first;
-    return bounds;
-  };
-  auto unitShares = [&](std::size_t unit_begin, std::size_t unit_end) {
-    std::vector<std::size_t> elements(unit_end - unit_begin, 0);
-    for (std::size_t u = unit_begin; u < unit_end; ++u)
-      for (std::size_t c = units_[u].chunk_begin; c < units_[u].chunk_end; ++c)
-        elements[u - unit_begin] += chunks_[c].end - chunks_[c].begin;
-    return shares(elements, unit_begin);
-  };
-  thread_units_ = unitShares(0, units_.size());
+  std::vector<std::size_t> elements(units_.size(), 0);
+  for (std::size_t u = 0; u < units_.size(); ++u)
+    for (std::size_t c = units_[u].chunk_begin; c < units_[u].chunk_end; ++c)
+      elements[u] += chunks_[c].end - chunks_[c].begin;
+  thread_units_ = contiguousShares(elements, threads);
   // A block goes with the units that hold its first node.
   thread_blocks_.assign(threads + 1, node_ranges_.size());
   thread_blocks_[0] = 0;
@@ -639,7 +629,7 @@ void Solver::shareAmongThreads() {
     thread_blocks_[t] = i;
   }
   if (levels())
-    shareLevelsAmongThreads(threads);
+    shareLevelsAmongThreads(threads, elements);
 }
 
 // The bodies that move (active_bodies_), their elements and each rank's nodes and elements.

@@ -344,7 +344,7 @@ private:
   void repartition(const std::vector<double> &load);
   double levelLoad(std::size_t b) const;
   void shareAmongThreads();
-  void shareLevelsAmongThreads(std::size_t threads);
+  void shareLevelsAmongThreads(std::size_t threads, const std::vector<std::size_t> &elements);
   struct KickSums {
     double gravity = 0.0, kinetic = 0.0, provider = 0.0, friction = 0.0;
   };

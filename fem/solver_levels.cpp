@@ -545,8 +545,10 @@ void Solver::stepLevels() {
 // same elements at the level, with the parts (no thread less than none), and so at every step. A
 // node block goes with the unit that holds its first node. Each thread takes its due units and
 // blocks in the order of their nodes, not level by level: at a step where every level is due it
-// then reads the node and element arrays once from start to end, as at a single rate.
-void Solver::shareLevelsAmongThreads(std::size_t threads) {
+// then reads the node and element arrays once from start to end, as at a single rate. `elements`:
+// each unit's elements.
+void Solver::shareLevelsAmongThreads(std::size_t threads,
+                                     const std::vector<std::size_t> &elements) {
   const auto n_levels = static_cast<std::size_t>(s_.max_level) + 1;
   unit_thread_.assign(units_.size(), 0);
   block_thread_.assign(node_ranges_.size(), 0);
@@ -575,23 +577,19 @@ void Solver::shareLevelsAmongThreads(std::size_t threads) {
         parted[chunks_[c].level][t] += static_cast<double>(chunks_[c].end - chunks_[c].begin);
     }
   for (std::size_t l = 0; l < n_levels; ++l) {
-    std::vector<std::size_t> units, elements;
+    std::vector<std::size_t> units, weights;
     double all = 0.0;
-    for (std::size_t u = level_units_[l]; u < level_units_[l + 1]; ++u) {
-      if (units_[u].in_parts)
-        continue;
-      std::size_t count = 0;
-      for (std::size_t c = units_[u].chunk_begin; c < units_[u].chunk_end; ++c)
-        count += chunks_[c].end - chunks_[c].begin;
-      units.push_back(u), elements.push_back(count);
-      all += static_cast<double>(count);
-    }
+    for (std::size_t u = level_units_[l]; u < level_units_[l + 1]; ++u)
+      if (!units_[u].in_parts) {
+        units.push_back(u), weights.push_back(elements[u]);
+        all += static_cast<double>(elements[u]);
+      }
     for (double p : parted[l])
       all += p;
     std::vector<double> targets(threads);
     for (std::size_t t = 0; t < threads; ++t)
       targets[t] = std::max(0.0, all / static_cast<double>(threads) - parted[l][t]);
-    const std::vector<std::size_t> bounds = contiguousShares(elements, targets);
+    const std::vector<std::size_t> bounds = contiguousShares(weights, targets);
     for (std::size_t t = 0; t < threads; ++t)
       for (std::size_t i = bounds[t]; i < bounds[t + 1]; ++i)
         unit_thread_[units[i]] = static_cast<std::uint16_t>(t);

@@ -11,27 +11,10 @@
 
 namespace mesopen::fem {
 
-// Bounds of `parts` contiguous runs of items with about equal sums of `weights`: run t is
-// [bounds[t], bounds[t + 1]). An item goes to the run whose share holds its middle.
-inline std::vector<std::size_t> contiguousShares(const std::vector<std::size_t> &weights,
-                                                 std::size_t parts) {
-  std::size_t total = 0;
-  for (std::size_t w : weights)
-    total += w;
-  std::vector<std::size_t> bounds(parts + 1, weights.size());
-  bounds[0] = 0;
-  std::size_t before = 0; // the weight of the items before i
-  for (std::size_t i = 0, t = 0; i < weights.size(); before += weights[i++]) {
-    const std::size_t owner = std::min(parts - 1, (2 * before + weights[i]) * parts /
-                                                      (2 * std::max<std::size_t>(total, 1)));
-    while (t < owner)
-      bounds[++t] = i;
-  }
-  return bounds;
-}
-
-// The same with a share of its own for each run: run t takes about targets[t] / (sum of targets)
-// of the weight.
+// Bounds of contiguous runs of items, one run per entry of `targets`, run t taking about
+// targets[t] / (sum of targets) of the sum of `weights`: run t is [bounds[t], bounds[t + 1]). An
+// item goes to the run whose share holds its middle (all to the first run without weight or
+// targets).
 inline std::vector<std::size_t> contiguousShares(const std::vector<std::size_t> &weights,
                                                  const std::vector<double> &targets) {
   double total = 0.0, target_sum = 0.0;
@@ -42,7 +25,9 @@ inline std::vector<std::size_t> contiguousShares(const std::vector<std::size_t> 
   const std::size_t parts = targets.size();
   std::vector<std::size_t> bounds(parts + 1, weights.size());
   bounds[0] = 0;
-  double before = 0.0, end_of_run = target_sum > 0.0 ? targets[0] / target_sum * total : total;
+  if (!(total > 0.0 && target_sum > 0.0))
+    return bounds;
+  double before = 0.0, end_of_run = targets[0] / target_sum * total;
   for (std::size_t i = 0, t = 0; i < weights.size(); before += static_cast<double>(weights[i++])) {
     const double middle = before + 0.5 * static_cast<double>(weights[i]);
     while (t + 1 < parts && middle >= end_of_run) {
@@ -51,6 +36,12 @@ inline std::vector<std::size_t> contiguousShares(const std::vector<std::size_t> 
     }
   }
   return bounds;
+}
+
+// The same with `parts` runs of about equal sums.
+inline std::vector<std::size_t> contiguousShares(const std::vector<std::size_t> &weights,
+                                                 std::size_t parts) {
+  return contiguousShares(weights, std::vector<double>(parts, 1.0));
 }
 
 // This thread's run [begin, end) of work split at `bounds` (one bound more than threads); a team
