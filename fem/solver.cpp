@@ -788,9 +788,10 @@ void Solver::forces(double dt, bool kick) {
   kick_sums_.assign(kick ? units : 0, KickSums{});
   if (measure_body_steps_)
     element_step_.assign(m_.elements.size(), HUGE_VAL);
+  thread_scratch_.resize(static_cast<std::size_t>(omp_get_max_threads()));
 #pragma omp parallel if (units > 1)
   {
-    UnitScratch scratch;
+    UnitScratch &scratch = threadScratch();
     for (auto [u, end] = threadShare(thread_units_); u < end; ++u) {
       const Unit &unit = units_[u];
       const std::size_t base = unit.node_lo;

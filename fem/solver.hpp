@@ -8,6 +8,7 @@
 #include "communicator.hpp"
 #include "model.hpp"
 #include "partitioner.hpp"
+#include "threads.hpp"
 
 #include <array>
 #include <cmath>
@@ -331,6 +332,11 @@ private:
     std::vector<NodeForce> force, part_force; // (part_force: a body in parts, part by part)
     std::vector<double> jacobian;
   };
+  // each thread's, kept from step to step (their memory not given back and touched anew)
+  std::vector<UnitScratch> thread_scratch_;
+  UnitScratch &threadScratch() {
+    return thread_scratch_[static_cast<std::size_t>(omp_get_thread_num())];
+  }
   struct ChunkSums {
     double internal, plastic, viscous, dt_min;
     long inverted; // an inverted element, or -1
@@ -485,6 +491,8 @@ private:
   std::vector<std::uint16_t> unit_thread_, block_thread_;
   std::vector<std::uint8_t> unit_level_, block_level_;
   std::vector<std::size_t> unit_order_, block_order_;
+  // the due units and blocks of a step, listed per thread (forcesLevels, kickAndDriftLevels)
+  WorkLists unit_lists_, block_lists_;
   double element_steps_ = 0.0, single_rate_element_steps_ = 0.0;
   double checkpoint_element_steps_ = 0.0; // every process's, at the last collectCheckpoint
   // Bodies stepped in parts (levels(), at least parts_from elements: the projectile): parts of

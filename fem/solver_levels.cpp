@@ -25,6 +25,22 @@
 
 namespace mesopen::fem {
 
+struct ProbeT {
+  double v[64] = {};
+  ~ProbeT() {
+    const char *n[] = {"kick_wall_t0",   "kick_wall_t1",   "kick_wall_t2",   "kick_busy0_t0",
+                       "kick_busy0_t1",  "kick_busy0_t2",  "kick_busy1_t0",  "kick_busy1_t1",
+                       "kick_busy1_t2",  "force_wall_t0",  "force_wall_t1",  "force_wall_t2",
+                       "force_busy0_t0", "force_busy0_t1", "force_busy0_t2", "force_busy1_t0",
+                       "force_busy1_t1", "force_busy1_t2"};
+    for (int i = 0; i < 18; ++i)
+      std::fprintf(stderr, "PROBE %-16s %.3f\n", n[i], v[i]);
+    std::fprintf(stderr, "PROBE lastgap %.3f %.3f %.3f worker_last %.0f %.0f %.0f\n", v[46], v[47],
+                 v[48], v[52], v[53], v[54]);
+    std::fprintf(stderr, "PROBE skew %.3f %.3f endgap %.3f %.3f\n", v[40], v[41], v[44], v[45]);
+  }
+} probe_;
+static inline double nowS() { return omp_get_wtime(); }
 void Solver::startLevels() {
   if (s_.max_level > 7)
     throw std::invalid_argument("max_level " + std::to_string(s_.max_level) +
@@ -605,20 +621,24 @@ void Solver::shareLevelsAmongThreads(std::size_t threads,
 }
 
 // The first half-kick and the drift of the due bodies' nodes (levels 0 to top, each over its
-// window), in one pass over their blocks, each on its thread (shareLevelsAmongThreads).
+// window), in one pass over their blocks, each listed for its thread (shareLevelsAmongThreads) and
+// taken by another if that one is still busy.
 void Solver::kickAndDriftLevels(int top, const double *tau) {
   Nodes &nd = m_.nodes;
   const std::size_t blocks = level_blocks_[static_cast<std::size_t>(top) + 1];
   kick_sums_.assign(blocks, KickSums{});
+  const auto threads = static_cast<std::size_t>(omp_get_max_threads());
+  block_lists_.reset(threads);
+  for (std::size_t i : block_order_)
+    if (static_cast<int>(block_level_[i]) <= top)
+      block_lists_.list(block_thread_[i] % threads).push_back(i);
+  const double w0 = nowS();
 #pragma omp parallel if (blocks > 1)
   {
+    const double b0 = nowS();
     const auto me = static_cast<std::size_t>(omp_get_thread_num());
-    const auto team = static_cast<std::size_t>(omp_get_num_threads());
-    for (std::size_t i : block_order_) {
-      const std::size_t level = block_level_[i];
-      if (static_cast<int>(level) > top || block_thread_[i] % team != me)
-        continue;
-      const double t = tau[level], half = 0.5 * t;
+    for (std::size_t i; (i = block_lists_.next(me)) != WorkLists::none;) {
+      const double t = tau[block_level_[i]], half = 0.5 * t;
       KickSums sums;
       for (std::size_t a = node_ranges_[i].begin; a < node_ranges_[i].end; ++a) {
         double vx = nd.vx[a], vy = nd.vy[a];
@@ -630,7 +650,9 @@ void Solver::kickAndDriftLevels(int top, const double *tau) {
       }
       kick_sums_[i] = sums;
     }
+    probe_.v[3 + 3 * me + top] += nowS() - b0;
   }
+  probe_.v[top] += nowS() - w0;
   addKickSums(kick_sums_, 1.0);
   applyConstraints(0.5 * tau[0], false);
 }
@@ -642,16 +664,22 @@ void Solver::forcesLevels(int top, const double *tau, double base_dt) {
   Nodes &nd = m_.nodes;
   const std::size_t units_end = level_units_[static_cast<std::size_t>(top) + 1];
   std::vector<KickSums> unit_sums(units_end);
-  // The due levels' units (this process's) in one pass, each on its thread
-  // (shareLevelsAmongThreads; their results do not depend on which thread computes them).
+  // The due levels' units (this process's), each listed for its thread (shareLevelsAmongThreads)
+  // and taken by another if that one is still busy; a body in parts on its thread. Their results
+  // do not depend on which thread computes them.
+  const auto threads = static_cast<std::size_t>(omp_get_max_threads());
+  unit_lists_.reset(threads);
+  std::vector<std::size_t> parted; // the due bodies in parts' units
+  for (std::size_t u : unit_order_)
+    if (unit_level_[u] <= top)
+      (units_[u].in_parts ? parted : unit_lists_.list(unit_thread_[u] % threads)).push_back(u);
+  thread_scratch_.resize(threads);
 #pragma omp parallel if (units_end > 1)
   {
-    UnitScratch scratch;
+    UnitScratch &scratch = threadScratch();
     const auto me = static_cast<std::size_t>(omp_get_thread_num());
     const auto team = static_cast<std::size_t>(omp_get_num_threads());
-    for (std::size_t u : unit_order_) {
-      if (unit_level_[u] > top || unit_thread_[u] % team != me)
-        continue;
+    auto unitForces = [&](std::size_t u) {
       const Unit &unit = units_[u];
       const double dt = tau[unit_level_[u]];
       const std::size_t base = unit.node_lo;
@@ -678,7 +706,12 @@ void Solver::forcesLevels(int top, const double *tau, double base_dt) {
         }
       body_kinetic_[body] = std::exchange(sums.kinetic, 0.0);
       unit_sums[u] = sums;
-    }
+    };
+    for (std::size_t u : parted) // first: the largest units, not to be taken by another thread
+      if (unit_thread_[u] % team == me)
+        unitForces(u);
+    for (std::size_t u; (u = unit_lists_.next(me)) != WorkLists::none;)
+      unitForces(u);
   }
   // This process's sums, in unit order (the same for any thread count), its bodies' energies and
   // shortest steps; the step's one reduction (reduceStep) as in forces. The chunks not due keep
