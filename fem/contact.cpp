@@ -22,7 +22,7 @@ constexpr double touching = 1e-6; // penetration (this fraction of an element) t
 constexpr double deep = 0.5;      // penetration beyond this fraction of an element counts as deep
 constexpr double check_depth = 0.05; // penetration from which a contact is checked by crossings
 constexpr double list_margin = 0.5;  // a pair's lists: margin / the smaller body's element size
-constexpr std::size_t runs_per_thread = 4; // runs of pairs: a thread takes the next one free
+constexpr std::size_t runs_per_thread = 4; // runs of pairs: each thread its own, then the others'
 constexpr std::size_t owner_blocks = 16;   // blocks of bodies, each adding its nodes' forces
 constexpr std::size_t prefetch_ahead = 8;  // contacts and loads ahead whose nodes are fetched
 // With the work shared: a body in part goes to a partner with its segments within this many of its
@@ -206,17 +206,24 @@ void Contact::stepReduced(Model &model, const double *largest) {
 }
 
 // The narrow phase over the runs of pairs, each with its lists and its hits: taken run by run, the
-// hits come in pair order whatever the number of threads.
+// hits come in pair order whatever the number of threads. Each thread takes its own consecutive
+// runs, then those the others have not taken yet: a run's lists stay in one core's cache from step
+// to step, unless that core falls behind.
 void Contact::narrowPhase(const Model &model, double dt) {
   const ContactBoundaries &bd = boundaries_;
   const long runs = static_cast<long>(pairs_.runs());
   const bool levels = !model.due.empty();
   std::size_t refreshed = 0, overlapping = 0, skipped = 0, partial = 0;
+  const auto threads = static_cast<std::size_t>(omp_get_max_threads());
+  run_lists_.reset(threads);
+  for (long r = 0; r < runs; ++r)
+    run_lists_.list(static_cast<std::size_t>(r) * threads / static_cast<std::size_t>(runs))
+        .push_back(static_cast<std::size_t>(r));
 #pragma omp parallel if (pairs_.size() > 64) reduction(+ : refreshed, overlapping, skipped, partial)
   {
     Scratch &scratch = scratch_[omp_get_thread_num()];
-#pragma omp for schedule(dynamic, 1)
-    for (long r = 0; r < runs; ++r) {
+    const auto me = static_cast<std::size_t>(omp_get_thread_num());
+    for (std::size_t r; (r = run_lists_.next(me)) != WorkLists::none;) {
       std::vector<std::uint32_t> &arena = pairs_.arena(r);
       const std::span<Pair> run = pairs_.run(r);
       Hits &hits = run_hits_[r];

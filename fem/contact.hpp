@@ -232,6 +232,7 @@ private:
   ContactBoundaries boundaries_;
   BodyPairs pairs_;
   ContactAllowances allowances_;    // depths not pushed against, let go step by step
+  WorkLists run_lists_;             // the runs of pairs listed per thread (narrowPhase)
   std::vector<Hits> run_hits_;      // per run of pairs (the last also the walls')
   std::vector<Scratch> scratch_;    // per thread
   std::vector<std::uint8_t> block_; // per body: its block of bodies
