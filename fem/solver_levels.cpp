@@ -25,22 +25,6 @@
 
 namespace mesopen::fem {
 
-struct ProbeT {
-  double v[64] = {};
-  ~ProbeT() {
-    const char *n[] = {"kick_wall_t0",   "kick_wall_t1",   "kick_wall_t2",   "kick_busy0_t0",
-                       "kick_busy0_t1",  "kick_busy0_t2",  "kick_busy1_t0",  "kick_busy1_t1",
-                       "kick_busy1_t2",  "force_wall_t0",  "force_wall_t1",  "force_wall_t2",
-                       "force_busy0_t0", "force_busy0_t1", "force_busy0_t2", "force_busy1_t0",
-                       "force_busy1_t1", "force_busy1_t2"};
-    for (int i = 0; i < 18; ++i)
-      std::fprintf(stderr, "PROBE %-16s %.3f\n", n[i], v[i]);
-    std::fprintf(stderr, "PROBE lastgap %.3f %.3f %.3f worker_last %.0f %.0f %.0f\n", v[46], v[47],
-                 v[48], v[52], v[53], v[54]);
-    std::fprintf(stderr, "PROBE skew %.3f %.3f endgap %.3f %.3f\n", v[40], v[41], v[44], v[45]);
-  }
-} probe_;
-static inline double nowS() { return omp_get_wtime(); }
 void Solver::startLevels() {
   if (s_.max_level > 7)
     throw std::invalid_argument("max_level " + std::to_string(s_.max_level) +
@@ -632,10 +616,8 @@ void Solver::kickAndDriftLevels(int top, const double *tau) {
   for (std::size_t i : block_order_)
     if (static_cast<int>(block_level_[i]) <= top)
       block_lists_.list(block_thread_[i] % threads).push_back(i);
-  const double w0 = nowS();
 #pragma omp parallel if (blocks > 1)
   {
-    const double b0 = nowS();
     const auto me = static_cast<std::size_t>(omp_get_thread_num());
     for (std::size_t i; (i = block_lists_.next(me)) != WorkLists::none;) {
       const double t = tau[block_level_[i]], half = 0.5 * t;
@@ -650,9 +632,7 @@ void Solver::kickAndDriftLevels(int top, const double *tau) {
       }
       kick_sums_[i] = sums;
     }
-    probe_.v[3 + 3 * me + top] += nowS() - b0;
   }
-  probe_.v[top] += nowS() - w0;
   addKickSums(kick_sums_, 1.0);
   applyConstraints(0.5 * tau[0], false);
 }

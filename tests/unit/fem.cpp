@@ -463,3 +463,39 @@ TEST(Threads, ContiguousSharesFollowTheirTargets) {
       fem::contiguousShares(std::vector<std::size_t>{1, 10, 1}, std::vector<double>{1.0, 1.0}),
       (std::vector<std::size_t>{0, 1, 3}));
 }
+
+// Work lists: every item taken once, whatever the team (fewer threads than lists, or more), a
+// thread's own list first; and taken again after a reset.
+TEST(Threads, WorkListsTakeEveryItemOnce) {
+  fem::WorkLists lists;
+  for (int round = 0; round < 2; ++round) { // (the lists' cursors reused)
+    EXPECT_EQ((lists.reset(3), lists.size()), 3u);
+    for (int team : {1, 2, 3, 5}) {
+      lists.reset(3); // (the same lists again, none taken)
+      for (std::size_t i = 0; i < 3000; ++i)
+        lists.list(i % 7 == 0 ? 2 : i % 2).push_back(i);
+      std::vector<int> taken(3000, 0);
+      std::vector<std::size_t> order; // (one thread's)
+#pragma omp parallel num_threads(team)
+      {
+        const auto me = static_cast<std::size_t>(omp_get_thread_num());
+        for (std::size_t item; (item = lists.next(me)) != fem::WorkLists::none;) {
+#pragma omp atomic
+          ++taken[item];
+          if (team == 1)
+            order.push_back(item);
+        }
+      }
+      EXPECT_EQ(std::count(taken.begin(), taken.end(), 1), 3000) << team << " threads";
+      EXPECT_EQ(lists.next(0), fem::WorkLists::none);
+      if (team == 1) { // its own list, then the next lists in turn
+        std::vector<std::size_t> expected;
+        for (std::size_t t = 0; t < 3; ++t)
+          expected.insert(expected.end(), lists.list(t).begin(), lists.list(t).end());
+        EXPECT_EQ(order, expected);
+      }
+    }
+  }
+  lists.reset(2); // empty lists: nothing to take
+  EXPECT_EQ(lists.next(1), fem::WorkLists::none);
+}
