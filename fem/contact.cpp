@@ -154,11 +154,13 @@ void Contact::addForces(Model &model, double time, double dt) {
     std::size_t levels = 1;
     for (std::uint8_t l : model.level)
       levels = std::max<std::size_t>(levels, l + 1u);
-    if (levels > pushed_levels_ || pushed_time_.empty()) {
+    if (levels > pushed_levels_ || level_pushed_.empty()) { // (the levels so far kept)
+      const std::size_t before = level_pushed_.empty() ? 0 : pushed_levels_;
+      std::vector<LevelPushed> kept = std::move(level_pushed_);
       pushed_levels_ = std::max(levels, pushed_levels_);
-      pushed_.resize(pushed_levels_ * model.nodes.size(), 0.0);
-      pushed_time_.resize(pushed_.size(), -HUGE_VAL);
-      pushed_penalty_.resize(pushed_.size(), 0.0);
+      level_pushed_.assign(pushed_levels_ * model.nodes.size(), LevelPushed{});
+      for (std::size_t a = 0; before > 0 && a < model.nodes.size(); ++a)
+        std::copy_n(&kept[a * before], before, &levelPushed(a, 0));
     }
   }
   allowances_.release();
@@ -375,13 +377,12 @@ void Contact::addBlock(Model &model, std::size_t k) {
   std::size_t next = 0;
   auto add = [&](const Load &l) {
     if (levels) {
-      const std::size_t at = l.level * nd.size() + l.node;
       if (l.depth > 0.0) { // the softest penalty of the node's contacts of this level and step
-        const bool first = pushed_time_[at] != time_;
-        pushed_penalty_[at] =
-            first ? l.penalty_step : std::max(pushed_penalty_[at], l.penalty_step);
-        if (first || l.depth > pushed_[at])
-          pushed_[at] = l.depth, pushed_time_[at] = time_;
+        LevelPushed &at = levelPushed(l.node, l.level);
+        const bool first = at.time != time_;
+        at.penalty = first ? l.penalty_step : std::max(at.penalty, l.penalty_step);
+        if (first || l.depth > at.depth)
+          at.depth = l.depth, at.time = time_;
       }
     } else if (l.depth > 0.0 && l.depth > pushed_[l.node]) { // (a reaction is pushed at 0)
       if (pushed_[l.node] == 0.0)
@@ -740,8 +741,8 @@ void Contact::bodiesMoving(const Model &model, const std::vector<std::uint32_t> 
                            const std::vector<int> &new_owner) {
   if (!shared())
     return;
-  const bool levels = !pushed_time_.empty();
-  const std::size_t depths = levels ? pushed_levels_ : 1, n_nodes = model.nodes.size();
+  const bool levels = !level_pushed_.empty();
+  const std::size_t depths = levels ? pushed_levels_ : 1;
   // per node: allowance, release per step, the pushed depths (with levels, each with its time
   // and penalty step)
   const std::size_t values = 2 + (levels ? 3 : 1) * depths;
@@ -762,10 +763,11 @@ void Contact::bodiesMoving(const Model &model, const std::vector<std::uint32_t> 
           const auto p = static_cast<std::uint32_t>(a);
           const double allowance = allowances_.of(p);
           *out++ = allowance, *out++ = allowance > 0.0 ? allowances_.rate(p) : 0.0;
-          for (std::size_t l = 0; l < depths; ++l) {
-            *out++ = pushed_[l * n_nodes + a];
-            if (levels)
-              *out++ = pushed_time_[l * n_nodes + a], *out++ = pushed_penalty_[l * n_nodes + a];
+          if (!levels)
+            *out++ = pushed_[a];
+          for (std::size_t l = 0; levels && l < depths; ++l) {
+            const LevelPushed &at = levelPushed(a, l);
+            *out++ = at.depth, *out++ = at.time, *out++ = at.penalty;
           }
         }
       },
@@ -784,10 +786,8 @@ void Contact::bodiesMoving(const Model &model, const std::vector<std::uint32_t> 
             pushed_[a] = *in++;
             continue;
           }
-          for (std::size_t l = 0; l < depths; ++l, in += 3) {
-            const std::size_t at = l * n_nodes + a;
-            pushed_[at] = in[0], pushed_time_[at] = in[1], pushed_penalty_[at] = in[2];
-          }
+          for (std::size_t l = 0; l < depths; ++l, in += 3)
+            levelPushed(a, l) = {in[0], in[1], in[2]};
         }
         bd.place(model, b);
       });
@@ -1126,7 +1126,11 @@ void Contact::prefetchHit(const Model &model, const Found &f) const {
     const std::uint32_t p = bd.nodes[k];
     __builtin_prefetch(&nd.mass[p]), __builtin_prefetch(&nd.vx[p]), __builtin_prefetch(&nd.vy[p]);
   }
-  __builtin_prefetch(&pushed_[pairLevel(model, f.A, f.B) * model.nodes.size() + bd.nodes[f.k]]);
+  if (!model.due.empty()) { // the node's pushed depths, all levels (hit)
+    const LevelPushed *at = &levelPushed(bd.nodes[f.k], 0);
+    __builtin_prefetch(at), __builtin_prefetch(at + pushed_levels_ - 1);
+  } else
+    __builtin_prefetch(&pushed_[bd.nodes[f.k]]);
 }
 
 // The force of a contact (the first `touching` h of the depth is free), relative velocities at
@@ -1174,8 +1178,8 @@ MESOPEN_INLINE void Contact::hit(const Model &model, const Found &f, double dt, 
   // (and the softest penalty it was pushed with then: its contact's, kept)
   double pushed = levels ? 0.0 : pushed_[p], kept = 0.0;
   for (std::size_t l = 0; levels && l < pushed_levels_; ++l)
-    if (const std::size_t at = l * nd.size() + p; pushed_time_[at] >= time_ - dt * (1.0 + 1e-9))
-      pushed = std::max(pushed, pushed_[at]), kept = std::max(kept, pushed_penalty_[at]);
+    if (const LevelPushed &at = levelPushed(p, l); at.time >= time_ - dt * (1.0 + 1e-9))
+      pushed = std::max(pushed, at.depth), kept = std::max(kept, at.penalty);
   if (levels)
     penalty_dt = std::max(dt, kept > 0.0 ? std::min(kept, kept_softer * penalty_dt) : penalty_dt);
   const double reach = approachReach(pushed, h, vn, dt);
@@ -1284,15 +1288,16 @@ Contact::State Contact::state(const Model &model) const {
         st.allowance.push_back(allowance[2 * k]), st.rate.push_back(allowance[2 * k + 1]);
   st.pushed.assign(pushed.begin(), pushed.end());
   st.pushed_depth = pushed_depth;
-  if (!pushed_time_.empty()) { // with levels, in the order of their places l n + node
+  if (!level_pushed_.empty()) { // with levels, in the order of their places l n + node
     st.pushed_levels = pushed_levels_;
     const std::size_t n_nodes = model.nodes.size();
     std::vector<std::int64_t> places;
     std::vector<double> values; // depth, time, penalty step
-    for (std::size_t at = 0; at < pushed_time_.size(); ++at)
-      if (pushed_time_[at] != -HUGE_VAL && mine(body[at % n_nodes]))
-        places.push_back(static_cast<std::int64_t>(at)),
-            values.insert(values.end(), {pushed_[at], pushed_time_[at], pushed_penalty_[at]});
+    for (std::size_t l = 0; l < pushed_levels_; ++l)
+      for (std::size_t a = 0; a < n_nodes; ++a)
+        if (const LevelPushed &at = levelPushed(a, l); at.time != -HUGE_VAL && mine(body[a]))
+          places.push_back(static_cast<std::int64_t>(l * n_nodes + a)),
+              values.insert(values.end(), {at.depth, at.time, at.penalty});
     if (shared()) {
       places = processes_->allGather(std::move(places));
       values = processes_->allGather(std::move(values));
@@ -1348,16 +1353,16 @@ void Contact::restore(const Model &model, const State &st) {
   // one depth per node, or with levels one per level of pair and node
   const std::size_t n_nodes = model.nodes.size();
   pushed_levels_ = std::max<std::size_t>(st.pushed_levels, 1);
-  pushed_.assign(pushed_levels_ * n_nodes, 0.0);
-  pushed_time_.clear(), pushed_penalty_.clear();
+  pushed_.assign(n_nodes, 0.0);
+  level_pushed_.clear();
   if (st.pushed_levels > 0) {
-    pushed_time_.assign(pushed_.size(), -HUGE_VAL), pushed_penalty_.assign(pushed_.size(), 0.0);
+    level_pushed_.assign(pushed_levels_ * n_nodes, LevelPushed{});
     for (std::size_t k = 0; k < st.level_pushed.size(); ++k) {
-      const std::uint64_t at = st.level_pushed[k];
-      if (at >= pushed_.size())
+      const std::uint64_t at = st.level_pushed[k]; // its place l n + node
+      if (at >= level_pushed_.size())
         throw std::invalid_argument("contact state: a pushed depth not of this model");
-      pushed_[at] = st.level_pushed_depth[k], pushed_time_[at] = st.level_pushed_time[k];
-      pushed_penalty_[at] = st.level_pushed_penalty[k];
+      levelPushed(at % n_nodes, at / n_nodes) = {st.level_pushed_depth[k], st.level_pushed_time[k],
+                                                 st.level_pushed_penalty[k]};
     }
   }
   for (auto &nodes : block_pushed_)

@@ -245,16 +245,23 @@ private:
   std::vector<std::vector<Load>> block_received_;
   // The depth each model node was pushed at in the last step (the deepest of its contacts; 0 if
   // none; the nodes where it is not 0 are in block_pushed_).
-  // With levels, one such depth per level of pair, level l's at [l n, (l + 1) n) (n nodes): the
-  // deepest of the node's contacts in the last step its pairs of level l were computed, and in
-  // pushed_time_ when; a pair takes the deepest within its window (hit), so its own last step's
-  // whatever finer pairs pushed the node since.
-  // With levels, beside each such depth the step its penalty was taken from (hit: a contact keeps
-  // it while it lasts).
   std::vector<double> pushed_;
-  std::vector<double> pushed_time_;
-  std::vector<double> pushed_penalty_;
+  // With levels instead, one such depth per level of pair: the deepest of the node's contacts in
+  // the last step its pairs of that level were computed, and when; a pair takes the deepest within
+  // its window (hit), so its own last step's whatever finer pairs pushed the node since. Beside
+  // each the step its penalty was taken from (hit: a contact keeps it while it lasts). Node by
+  // node, its levels side by side (levelPushed): a contact reads them all, in one or two lines.
+  struct LevelPushed {
+    double depth = 0.0, time = -HUGE_VAL, penalty = 0.0;
+  };
+  std::vector<LevelPushed> level_pushed_;
   std::size_t pushed_levels_ = 1;
+  LevelPushed &levelPushed(std::size_t node, std::size_t level) {
+    return level_pushed_[node * pushed_levels_ + level];
+  }
+  const LevelPushed &levelPushed(std::size_t node, std::size_t level) const {
+    return level_pushed_[node * pushed_levels_ + level];
+  }
   double time_ = 0.0;
   // From the last step's reduction: a bound on the largest travel since the last search of the
   // moving bodies at this step (stepFigure); HUGE_VAL: none.

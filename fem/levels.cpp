@@ -8,9 +8,12 @@ namespace mesopen::fem {
 int stepLevel(double body_step, double base_step, int max_level) {
   if (!(body_step < HUGE_VAL))
     return max_level;
-  if (!(body_step >= 2.0 * base_step))
-    return 0;
-  return std::min(max_level, static_cast<int>(std::floor(std::log2(body_step / base_step))));
+  // the largest l with 2^l base_step <= body_step (doubling is exact: no rounding of a quotient,
+  // and no logarithm for each of the bodies that step)
+  int level = 0;
+  for (double reach = 2.0 * base_step; level < max_level && body_step >= reach; reach *= 2.0)
+    ++level;
+  return level;
 }
 
 namespace {

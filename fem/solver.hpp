@@ -484,6 +484,7 @@ private:
   // thread and level of each unit and node block, and both in the order of their nodes
   // (shareLevelsAmongThreads); the levels the ranges were laid out for.
   std::vector<std::uint8_t> level_, own_level_, laid_levels_;
+  std::vector<std::uint8_t> level_reach_, level_cap_; // chooseLevels' per body, kept
   std::vector<double> body_step_min_, body_kinetic_, body_internal_, level_start_;
   std::vector<double> level_step_; // per element: its step in its last pass
   double step_end_ = 0.0;          // the time at the end of the step being taken

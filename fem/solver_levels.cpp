@@ -289,12 +289,14 @@ void Solver::partsPass(const Unit &unit, int top, const double *tau, UnitScratch
   part_force.resize(n);
   scratch.jacobian.resize(unit.averaged_volume ? n : 0);
   const double gx = s_.gravity_x, gy = s_.gravity_y;
-  for (std::size_t a = base; a < unit.node_hi; ++a) {
-    state[a - base] = {nd.x[a], nd.y[a], nd.vx[a], nd.vy[a]};
+  for (std::size_t a = base; a < unit.node_hi; ++a)
     force[a - base] = {nd.mass[a] * gx, nd.mass[a] * gy};
-  }
-  if (unit.averaged_volume)
+  // the positions of the due parts' nodes (below), of every node for the nodal volumes
+  if (unit.averaged_volume) {
+    for (std::size_t a = base; a < unit.node_hi; ++a)
+      state[a - base] = {nd.x[a], nd.y[a], nd.vx[a], nd.vy[a]};
     nodalVolumes(unit, {state.data(), force.data(), scratch.jacobian.data(), base});
+  }
   const UnitNodes nodes{state.data(), part_force.data(), scratch.jacobian.data(), base};
   std::size_t i = unit.chunk_begin;
   for (std::size_t p = part_begin_[b]; p < part_begin_[b + 1]; ++p) {
@@ -310,9 +312,11 @@ void Solver::partsPass(const Unit &unit, int top, const double *tau, UnitScratch
                               &y0 = window_y_[i_body][static_cast<std::size_t>(l)];
     const double inv_tau = 1.0 / tau[l];
     for (std::size_t j = 0; j < count; ++j) {
-      const std::size_t k = part_node[j] - base;
+      const std::uint32_t a = part_node[j];
+      const std::size_t k = a - base;
+      state[k].x = nd.x[a], state[k].y = nd.y[a];
       if (l == e)
-        state[k].vx = nd.vx[part_node[j]], state[k].vy = nd.vy[part_node[j]];
+        state[k].vx = nd.vx[a], state[k].vy = nd.vy[a];
       else
         state[k].vx = (state[k].x - x0[k]) * inv_tau, state[k].vy = (state[k].y - y0[k]) * inv_tau;
       part_force[k] = {0.0, 0.0};
@@ -344,14 +348,11 @@ void Solver::partsPass(const Unit &unit, int top, const double *tau, UnitScratch
       kept[j] = part_force[k];
     }
   }
-  // the nodes' velocities for the second half-kick
-  for (std::size_t a = base; a < unit.node_hi; ++a)
-    state[a - base].vx = nd.vx[a], state[a - base].vy = nd.vy[a];
   for (int l = 1; l <= top; ++l) {
-    std::vector<double> &x0 = window_x_[i_body][static_cast<std::size_t>(l)],
-                        &y0 = window_y_[i_body][static_cast<std::size_t>(l)];
-    for (std::size_t k = 0; k < n; ++k)
-      x0[k] = state[k].x, y0[k] = state[k].y;
+    std::copy_n(nd.x.begin() + static_cast<long>(base), n,
+                window_x_[i_body][static_cast<std::size_t>(l)].begin());
+    std::copy_n(nd.y.begin() + static_cast<long>(base), n,
+                window_y_[i_body][static_cast<std::size_t>(l)].begin());
   }
 }
 
@@ -668,7 +669,6 @@ void Solver::forcesLevels(int top, const double *tau, double base_dt) {
       else
         unitPass(unit, dt, scratch);
       bodySums(u, u + 1); // a unit holds whole bodies
-      const std::vector<NodeState> &state = scratch.state;
       const std::vector<NodeForce> &force = scratch.force;
       KickSums sums; // the kinetic energy body by body into body_kinetic_
       std::uint32_t body = nd.body[unit.node_lo];
@@ -680,7 +680,7 @@ void Solver::forcesLevels(int top, const double *tau, double base_dt) {
           if (nd.is_loaded[a])
             fx += nd.external[a].fx, fy += nd.external[a].fy;
           nd.fx[a] = fx, nd.fy[a] = fy;
-          double vx = state[a - base].vx, vy = state[a - base].vy;
+          double vx = nd.vx[a], vy = nd.vy[a];
           halfKickLevels(a, 0.5 * dt, 0.5 * dt, fx, fy, true, vx, vy, sums);
           nd.vx[a] = vx, nd.vy[a] = vy;
         }
@@ -740,13 +740,18 @@ void Solver::forcesLevels(int top, const double *tau, double base_dt) {
 void Solver::nextPartForces(std::uint32_t body, int top,
                             const std::vector<std::uint8_t> &stepped_at) {
   Nodes &nd = m_.nodes;
-  const Body &bd = m_.bodies[body];
-  for (std::size_t a = bd.node_begin; a < bd.node_end; ++a) {
-    nd.fx[a] = nd.mass[a] * s_.gravity_x, nd.fy[a] = nd.mass[a] * s_.gravity_y;
-    if (nd.is_loaded[a])
-      nd.fx[a] += nd.external[a].fx, nd.fy[a] += nd.external[a].fy;
-  }
+  // (the nodes of no part that stepped have that force already: their second half-kick's)
   const std::size_t p0 = part_begin_[body];
+  for (std::size_t p = p0; p < part_begin_[body + 1]; ++p) {
+    if (stepped_at[p - p0] > top)
+      continue;
+    for (std::size_t j = part_node_begin_[p]; j < part_node_begin_[p + 1]; ++j) {
+      const std::uint32_t a = part_nodes_[j];
+      nd.fx[a] = nd.mass[a] * s_.gravity_x, nd.fy[a] = nd.mass[a] * s_.gravity_y;
+      if (nd.is_loaded[a])
+        nd.fx[a] += nd.external[a].fx, nd.fy[a] += nd.external[a].fy;
+    }
+  }
   for (std::size_t p = p0; p < part_begin_[body + 1]; ++p) {
     if (stepped_at[p - p0] > top)
       continue;
@@ -769,26 +774,26 @@ void Solver::chooseLevels(int top) {
   const std::size_t n = m_.bodies.size();
   const auto max_level = static_cast<std::uint8_t>(s_.max_level);
   shareBodySteps(top);
-  for (std::size_t b = 0; b < n; ++b)
+  // each body's own level; the coarsest level a body may take beside each body (reach): its own
+  // level plus the gap, and beside a body in parts its own level (the projectile's pairs with the
+  // grains it meets at one level)
+  std::vector<std::uint8_t> &reach = level_reach_, &cap = level_cap_;
+  reach.resize(n);
+  for (std::size_t b = 0; b < n; ++b) {
     if (m_.at_rest[b])
       own_level_[b] = max_level;
     else if (level_[b] <= top)
       own_level_[b] = static_cast<std::uint8_t>(
           ownLevel(s_.safety * step_scale_ * body_step_min_[b], dt_, own_level_[b], s_.max_level));
-  // the coarsest level a body may take beside each body: its own level plus the gap, and beside a
-  // body in parts its own level (the projectile's pairs with the grains it meets at one level)
-  std::vector<std::uint8_t> reach(n);
-  for (std::size_t b = 0; b < n; ++b) {
     const int gap = part_begin_[b] < part_begin_[b + 1] ? 0 : s_.level_gap;
     reach[b] = static_cast<std::uint8_t>(std::min(own_level_[b] + gap, s_.max_level));
   }
-  std::vector<std::uint8_t> cap(n, max_level);
+  cap.assign(n, max_level);
   for (auto *provider : providers_)
     provider->capLevels(m_, reach, cap);
-  std::vector<std::uint8_t> constrained(n, max_level); // 0: imposed velocities, its parts too
-  for (const auto &c : m_.constraints)
+  for (const auto &c : m_.constraints) // imposed velocities: level 0, the parts too
     for (std::uint32_t a : c.nodes)
-      cap[m_.nodes.body[a]] = 0, constrained[m_.nodes.body[a]] = 0;
+      cap[m_.nodes.body[a]] = 0;
   std::vector<std::uint32_t> parted_stepped; // the bodies in parts that stepped
   for (std::size_t b = 0; b < n; ++b)
     if (!m_.at_rest[b] && level_[b] <= top) {
@@ -803,8 +808,12 @@ void Solver::chooseLevels(int top) {
       const std::size_t p0 = part_begin_[b], p1 = part_begin_[b + 1];
       const std::vector<std::uint8_t> stepped_at(part_level_.begin() + static_cast<long>(p0),
                                                  part_level_.begin() + static_cast<long>(p1));
+      bool constrained = false;
+      for (const auto &c : m_.constraints)
+        for (std::uint32_t a : c.nodes)
+          constrained = constrained || m_.nodes.body[a] == b;
       choosePartLevels(static_cast<std::uint32_t>(b), top,
-                       std::min(constrained[b], static_cast<std::uint8_t>(top)));
+                       constrained ? std::uint8_t{0} : static_cast<std::uint8_t>(top));
       const auto finest = *std::min_element(part_level_.begin() + static_cast<long>(p0),
                                             part_level_.begin() + static_cast<long>(p1));
       level_[b] = std::min({finest, cap[b], static_cast<std::uint8_t>(top)});

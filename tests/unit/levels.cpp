@@ -28,6 +28,12 @@ TEST(Levels, PowerOfTwoBelowTheBodysStep) {
   EXPECT_EQ(fem::stepLevel(100.0, 1.0, 3), 3);
   EXPECT_EQ(fem::stepLevel(0.5, 1.0, 3), 0);
   EXPECT_EQ(fem::stepLevel(HUGE_VAL, 1.0, 2), 2); // at rest
+  // at and just below each power of two, whatever the base step's own exponent
+  for (const double base : {1.0, 3.7e-11, 0.7e-10})
+    for (int l = 1; l <= 3; ++l) {
+      EXPECT_EQ(fem::stepLevel(std::ldexp(base, l), base, 3), l);
+      EXPECT_EQ(fem::stepLevel(std::nextafter(std::ldexp(base, l), 0.0), base, 3), l - 1);
+    }
 }
 
 // A body's own level falls at once and rises only with a margin of 1.3 over the higher level's
