@@ -16,21 +16,11 @@ int stepLevel(double body_step, double base_step, int max_level) {
   return level;
 }
 
-namespace {
-// A body's own level rises only when its step holds the higher level with this margin, and falls
-// as soon as its step no longer holds its level: its contacts' penalty follows its own level
-// (k ~ m / step^2), and a body whose step lies near a level's bound would otherwise switch to
-// and fro, each fall stiffening its contacts fourfold at their depth and pushing energy into
-// them (run 6 at L = 2: contact energy -61 J/m and balance -1.7e-4 without the margin, -0.06 J/m
-// and -1.5e-6 with 1.3, +4.8 J/m at a single rate).
-constexpr double level_up_margin = 1.3;
-} // namespace
-
-int ownLevel(double body_step, double base_step, int now, int max_level) {
+int ownLevel(double body_step, double base_step, int now, int max_level, double up_margin) {
   const int level = stepLevel(body_step, base_step, max_level);
   if (level <= now)
     return level;
-  return std::max(now, stepLevel(body_step / level_up_margin, base_step, max_level));
+  return std::max(now, stepLevel(body_step / up_margin, base_step, max_level));
 }
 
 LevelCensus::LevelCensus(const Model &model, int max_level) : max_level_(max_level) {

@@ -368,8 +368,9 @@ void Solver::choosePartLevels(std::uint32_t body, int top, std::uint8_t limit) {
     if (part_level_[p] > top)
       continue;
     std::copy_n(&part_box_[4 * p], 4, &boxes[4 * (p - p0)]);
-    part_own_level_[p] = static_cast<std::uint8_t>(ownLevel(
-        s_.safety * step_scale_ * part_step_min_[p], dt_, part_own_level_[p], s_.max_level));
+    part_own_level_[p] =
+        static_cast<std::uint8_t>(ownLevel(s_.safety * step_scale_ * part_step_min_[p], dt_,
+                                           part_own_level_[p], s_.max_level, part_level_up_margin));
   }
   std::vector<std::uint8_t> cap(p1 - p0, static_cast<std::uint8_t>(s_.max_level));
   for (auto *provider : providers_)

@@ -47,6 +47,10 @@ TEST(Levels, OwnLevelRisesWithAMarginAndFallsAtOnce) {
   EXPECT_EQ(fem::ownLevel(3.9, 1.0, 2, 3), 1); // falls at once
   EXPECT_EQ(fem::ownLevel(1.5, 1.0, 3, 3), 0);
   EXPECT_EQ(fem::ownLevel(HUGE_VAL, 1.0, 0, 2), 2); // at rest
+  // a part's: with a margin of 1.1
+  EXPECT_EQ(fem::ownLevel(4.3, 1.0, 1, 3, fem::part_level_up_margin), 1);
+  EXPECT_EQ(fem::ownLevel(4.5, 1.0, 1, 3, fem::part_level_up_margin), 2);
+  EXPECT_EQ(fem::ownLevel(3.9, 1.0, 2, 3, fem::part_level_up_margin), 1); // falls at once
 }
 
 // The least gain of a triangle's critical step on its cheap bound L_s / c, over all shapes: the
