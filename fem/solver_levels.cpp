@@ -809,10 +809,11 @@ void Solver::chooseLevels(int top) {
       const std::size_t p0 = part_begin_[b], p1 = part_begin_[b + 1];
       const std::vector<std::uint8_t> stepped_at(part_level_.begin() + static_cast<long>(p0),
                                                  part_level_.begin() + static_cast<long>(p1));
-      bool constrained = false;
-      for (const auto &c : m_.constraints)
-        for (std::uint32_t a : c.nodes)
-          constrained = constrained || m_.nodes.body[a] == b;
+      const bool constrained = std::any_of(
+          m_.constraints.begin(), m_.constraints.end(), [&](const VelocityConstraint &c) {
+            return std::any_of(c.nodes.begin(), c.nodes.end(),
+                               [&](std::uint32_t a) { return m_.nodes.body[a] == b; });
+          });
       choosePartLevels(static_cast<std::uint32_t>(b), top,
                        constrained ? std::uint8_t{0} : static_cast<std::uint8_t>(top));
       const auto finest = *std::min_element(part_level_.begin() + static_cast<long>(p0),
